@@ -1,0 +1,129 @@
+//! Drive to the goal.
+
+use serde::Deserialize;
+use ubf_core::config::{non_negative, positive};
+use ubf_core::{Action, Behavior, State};
+
+/// Settings of [`GoTo`], as written in a scenario file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoToConfig {
+    /// Forward speed far from the goal, m/s.
+    #[serde(default = "GoToConfig::default_cruise_speed", deserialize_with = "positive")]
+    pub cruise_speed: f64,
+    /// Turn rate per radian of heading error, 1/s.
+    #[serde(default = "GoToConfig::default_turn_gain", deserialize_with = "positive")]
+    pub turn_gain: f64,
+    /// Within this distance of the goal the speed ramps down, m.
+    #[serde(default = "GoToConfig::default_slow_radius", deserialize_with = "non_negative")]
+    pub slow_radius: f64,
+    /// The vote while driving.
+    #[serde(default = "GoToConfig::default_vote", deserialize_with = "non_negative")]
+    pub vote: f64,
+}
+
+impl GoToConfig {
+    fn default_cruise_speed() -> f64 {
+        0.5
+    }
+    fn default_turn_gain() -> f64 {
+        1.5
+    }
+    fn default_slow_radius() -> f64 {
+        1.0
+    }
+    fn default_vote() -> f64 {
+        0.5
+    }
+}
+
+impl Default for GoToConfig {
+    fn default() -> Self {
+        GoToConfig {
+            cruise_speed: Self::default_cruise_speed(),
+            turn_gain: Self::default_turn_gain(),
+            slow_radius: Self::default_slow_radius(),
+            vote: Self::default_vote(),
+        }
+    }
+}
+
+/// Drives towards the state's goal: turns in proportion to the heading error
+/// and slows near the goal and while facing away from it. Silent when there
+/// is no goal or it is reached (a `Stop` on `GoalReached` holds the robot
+/// there).
+#[derive(Clone, Debug)]
+pub struct GoTo {
+    config: GoToConfig,
+}
+
+impl GoTo {
+    /// A go-to behaviour with these settings.
+    pub fn new(config: GoToConfig) -> Self {
+        GoTo { config }
+    }
+}
+
+impl Behavior for GoTo {
+    fn gen_action(&mut self, state: &State) -> Action {
+        let Some(goal) = state.goal else {
+            return Action::none();
+        };
+        let distance = state.pose.distance_to(goal.x, goal.y);
+        if distance <= goal.tolerance {
+            return Action::none();
+        }
+        let error = state.pose.bearing_to(goal.x, goal.y);
+        // Facing away from the goal, turn on the spot rather than drive off.
+        let alignment = error.cos().max(0.0);
+        let ramp = if self.config.slow_radius > 0.0 { (distance / self.config.slow_radius).min(1.0) } else { 1.0 };
+        Action::with_vote(self.config.vote)
+            .velocity(self.config.cruise_speed * alignment * ramp)
+            .rot_velocity(self.config.turn_gain * error)
+    }
+
+    fn name(&self) -> &str {
+        "GoTo"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+    use ubf_core::{Goal, Pose2};
+
+    fn state_at(pose: Pose2, goal: Option<Goal>) -> State {
+        State { pose, goal, ..State::default() }
+    }
+
+    #[test]
+    fn silent_without_goal_or_at_goal() {
+        let mut go = GoTo::new(GoToConfig::default());
+        assert!(!go.gen_action(&state_at(Pose2::default(), None)).is_voting());
+        let goal = Goal { x: 0.1, y: 0.0, tolerance: 0.2 };
+        assert!(!go.gen_action(&state_at(Pose2::default(), Some(goal))).is_voting());
+    }
+
+    #[test]
+    fn drives_straight_at_a_goal_ahead_and_turns_towards_one_behind() {
+        let mut go = GoTo::new(GoToConfig::default());
+        let ahead = go.gen_action(&state_at(Pose2::default(), Some(Goal { x: 5.0, y: 0.0, tolerance: 0.2 })));
+        assert_eq!(ahead.motion.velocity, Some(0.5));
+        assert_eq!(ahead.motion.rot_velocity, Some(0.0));
+        let left_behind =
+            go.gen_action(&state_at(Pose2::new(0.0, 0.0, 0.0), Some(Goal { x: -5.0, y: 1.0, tolerance: 0.2 })));
+        assert_eq!(left_behind.motion.velocity, Some(0.0));
+        assert!(left_behind.motion.rot_velocity.unwrap() > 0.0);
+        let right =
+            go.gen_action(&state_at(Pose2::new(0.0, 0.0, PI / 2.0), Some(Goal { x: 5.0, y: 0.0, tolerance: 0.2 })));
+        assert!(right.motion.rot_velocity.unwrap() < 0.0);
+    }
+
+    #[test]
+    fn slows_near_the_goal() {
+        let mut go = GoTo::new(GoToConfig::default());
+        let near = go.gen_action(&state_at(Pose2::default(), Some(Goal { x: 0.5, y: 0.0, tolerance: 0.2 })));
+        assert!((near.motion.velocity.unwrap() - 0.25).abs() < 1e-12);
+    }
+}

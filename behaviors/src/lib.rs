@@ -1,0 +1,25 @@
+//! # ubf-behaviors: the stock behaviours
+//!
+//! | name in a file | behaviour |
+//! | --- | --- |
+//! | `GoTo` | [`GoTo`]: drive to the state's goal |
+//! | `Stop` | [`Stop`]: stop while a condition holds |
+//!
+//! [`register`] adds them all to a [`Registry`].
+
+#![warn(missing_docs)]
+
+mod go_to;
+mod stop;
+
+pub use go_to::{GoTo, GoToConfig};
+pub use stop::{Stop, StopConfig};
+
+use ubf_core::Registry;
+
+/// Registers every stock behaviour under its file name.
+pub fn register(registry: &mut Registry) -> &mut Registry {
+    registry
+        .register("GoTo", |c: &GoToConfig, _| GoTo::new(c.clone()))
+        .register("Stop", |c: &StopConfig, _| Stop::new(c.clone()))
+}

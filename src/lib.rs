@@ -1,0 +1,25 @@
+//! # ubf: run behaviour trees on simulated and real robots
+//!
+//! This package turns scenario files into running controllers and reports:
+//!
+//! - [`registry`]: every stock behaviour, ready for a user's own additions;
+//! - [`scenario`]: the scenario file format and its loader, whose errors
+//!   name the file, line and column;
+//! - [`run`]: a scenario run headless on the simulator;
+//! - [`cli`]: the `ubf` command line, which a user's crate can reuse with its
+//!   own registry so that its behaviours work from scenario files by name.
+
+#![warn(missing_docs)]
+
+pub mod cli;
+pub mod run;
+pub mod scenario;
+
+pub use ubf_core::Registry;
+
+/// A registry holding `Composite` and every stock behaviour.
+pub fn registry() -> Registry {
+    let mut registry = Registry::new();
+    ubf_behaviors::register(&mut registry);
+    registry
+}

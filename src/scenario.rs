@@ -1,0 +1,91 @@
+//! Scenario files: a robot, a goal, a behaviour tree, run headless.
+//!
+//! ```ron
+//! Scenario(
+//!     name: "go-to-open-floor",
+//!     max_time_s: 60.0,
+//!     goal: (x: 8.0, y: 3.0),
+//!     root: Composite(
+//!         arbiter: HighestPriority,
+//!         children: [
+//!             (behavior: Stop(), weight: 2.0),
+//!             (behavior: GoTo(cruise_speed: 0.5)),
+//!         ],
+//!     ),
+//! )
+//! ```
+//!
+//! `docs/scenario-format.md` describes every field with its unit and default.
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use ubf_core::config::{positive, RonError};
+use ubf_core::{BehaviorSpec, Goal, Registry};
+use ubf_robots::sim::SimRobotConfig;
+
+/// A headless run: a simulated robot, a goal and the behaviour tree.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// A short name for reports.
+    pub name: String,
+    /// What the scenario is for.
+    #[serde(default)]
+    pub description: String,
+    /// The seed of every random draw; `ubf run --seed` overrides it.
+    #[serde(default)]
+    pub seed: u64,
+    /// Seconds between control ticks.
+    #[serde(default = "Scenario::default_period_s", deserialize_with = "positive")]
+    pub period_s: f64,
+    /// The run ends after this many simulated seconds if the goal is not
+    /// reached first.
+    #[serde(deserialize_with = "positive")]
+    pub max_time_s: f64,
+    /// The simulated robot.
+    #[serde(default)]
+    pub robot: SimRobotConfig,
+    /// Where the robot should go; without one the run lasts `max_time_s`.
+    #[serde(default)]
+    pub goal: Option<Goal>,
+    /// The behaviour tree.
+    pub root: BehaviorSpec,
+}
+
+impl Scenario {
+    fn default_period_s() -> f64 {
+        0.1
+    }
+
+    /// Reads a scenario from RON text.
+    pub fn from_ron(registry: &Registry, text: &str) -> Result<Scenario, RonError> {
+        registry.from_ron(text)
+    }
+
+    /// Reads a scenario file.
+    pub fn load(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
+        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
+        Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })
+    }
+}
+
+/// A scenario file that could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file is not a valid scenario: `FILE:LINE:COL: message`.
+    #[error("{}:{error}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Where and what.
+        error: RonError,
+    },
+}

@@ -1,0 +1,101 @@
+//! The behaviour trait: state in, action out.
+
+use crate::{Action, Composite, State};
+
+/// A robot behaviour: looks at the state, says what it wants and how much.
+///
+/// Only [`Behavior::gen_action`] is required. It must not block (it runs
+/// inside the control tick) and returns [`Action::none`] when it has nothing
+/// to say.
+pub trait Behavior: Send {
+    /// The action this behaviour wants for this tick.
+    fn gen_action(&mut self, state: &State) -> Action;
+
+    /// A short name for logs and records; defaults to the type's name.
+    fn name(&self) -> &str {
+        short_type_name(std::any::type_name::<Self>())
+    }
+
+    /// Forgets everything learnt so far, as if newly built.
+    fn reset(&mut self) {}
+
+    /// The composite behind this behaviour, if it is one. The controller uses
+    /// it to record every node of the tree; leaf behaviours keep the default.
+    fn as_composite(&self) -> Option<&Composite> {
+        None
+    }
+}
+
+impl<B: Behavior + ?Sized> Behavior for Box<B> {
+    fn gen_action(&mut self, state: &State) -> Action {
+        (**self).gen_action(state)
+    }
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+    fn reset(&mut self) {
+        (**self).reset()
+    }
+    fn as_composite(&self) -> Option<&Composite> {
+        (**self).as_composite()
+    }
+}
+
+/// `a::b::Wander<c::D>` → `Wander<c::D>`: the path adds noise to records.
+fn short_type_name(full: &str) -> &str {
+    let generic_start = full.find('<').unwrap_or(full.len());
+    let start = full[..generic_start].rfind("::").map_or(0, |i| i + 2);
+    &full[start..]
+}
+
+/// A behaviour made from a closure, for tests, benchmarks and one-liners.
+///
+/// ```
+/// use ubf_core::{from_fn, Action, Behavior, State};
+/// let mut creep = from_fn("creep", |_state: &State| Action::with_vote(1.0).velocity(0.1));
+/// assert_eq!(creep.gen_action(&State::default()).motion.velocity, Some(0.1));
+/// assert_eq!(creep.name(), "creep");
+/// ```
+pub fn from_fn<F>(name: impl Into<String>, f: F) -> FnBehavior<F>
+where
+    F: FnMut(&State) -> Action + Send,
+{
+    FnBehavior { name: name.into(), f }
+}
+
+/// See [`from_fn`].
+pub struct FnBehavior<F> {
+    name: String,
+    f: F,
+}
+
+impl<F> Behavior for FnBehavior<F>
+where
+    F: FnMut(&State) -> Action + Send,
+{
+    fn gen_action(&mut self, state: &State) -> Action {
+        (self.f)(state)
+    }
+    fn name(&self) -> &str {
+        &self.name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Plain;
+    impl Behavior for Plain {
+        fn gen_action(&mut self, _: &State) -> Action {
+            Action::none()
+        }
+    }
+
+    #[test]
+    fn default_name_is_the_short_type_name() {
+        assert_eq!(Plain.name(), "Plain");
+        assert_eq!(short_type_name("a::b::W<c::D>"), "W<c::D>");
+        assert_eq!(short_type_name("W"), "W");
+    }
+}

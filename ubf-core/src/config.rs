@@ -1,0 +1,102 @@
+//! Reading configuration: RON with positions in every error, and checked
+//! numbers.
+//!
+//! The checkers plug into serde's `deserialize_with`, so a bad number is
+//! reported at its line and column, with the field's name:
+//!
+//! ```
+//! # use serde::Deserialize;
+//! #[derive(Deserialize)]
+//! #[serde(deny_unknown_fields)]
+//! struct WanderConfig {
+//!     #[serde(deserialize_with = "ubf_core::config::positive")]
+//!     speed: f64,
+//! }
+//! let err = ubf_core::config::from_ron::<WanderConfig>("(speed: -1.0)").unwrap_err();
+//! assert_eq!((err.line, err.column), (1, 9));
+//! assert!(err.message.contains("must be > 0"), "{}", err.message);
+//! ```
+
+use serde::de::{DeserializeOwned, Error as _};
+use serde::{Deserialize, Deserializer};
+use std::fmt;
+
+/// A RON document that could not be read, with the position of the fault.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub struct RonError {
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for RonError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}: {}", self.line, self.column, self.message)
+    }
+}
+
+impl From<ron::error::SpannedError> for RonError {
+    fn from(e: ron::error::SpannedError) -> Self {
+        RonError { line: e.span.start.line, column: e.span.start.col, message: e.code.to_string() }
+    }
+}
+
+/// The RON dialect of scenario and robot files: `Name(field: ..)` for
+/// behaviours with a config, and `field: value` for optional fields.
+pub fn ron_options() -> ron::Options {
+    use ron::extensions::Extensions;
+    ron::Options::default().with_default_extension(Extensions::UNWRAP_VARIANT_NEWTYPES | Extensions::IMPLICIT_SOME)
+}
+
+/// Reads a value from RON text. Documents that contain behaviour trees are
+/// read with [`crate::Registry::from_ron`] instead.
+pub fn from_ron<T: DeserializeOwned>(text: &str) -> Result<T, RonError> {
+    ron_options().from_str(text).map_err(RonError::from)
+}
+
+fn checked<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str) -> Result<f64, D::Error> {
+    let v = f64::deserialize(d)?;
+    if ok(v) {
+        Ok(v)
+    } else {
+        Err(D::Error::custom(format!("{v} is out of range: must be {rule}")))
+    }
+}
+
+/// A finite number > 0.
+pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    checked(d, |v| v.is_finite() && v > 0.0, "> 0")
+}
+
+/// A finite number ≥ 0.
+pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    checked(d, |v| v.is_finite() && v >= 0.0, "≥ 0")
+}
+
+/// Any finite number.
+pub fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    checked(d, f64::is_finite, "a finite number")
+}
+
+/// A number in [0, 1].
+pub fn unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    checked(d, |v| (0.0..=1.0).contains(&v), "within [0, 1]")
+}
+
+/// A [`crate::Condition`] whose numbers are checked.
+pub fn condition<'de, D: Deserializer<'de>>(d: D) -> Result<crate::Condition, D::Error> {
+    let condition = crate::Condition::deserialize(d)?;
+    condition.check().map_err(D::Error::custom)?;
+    Ok(condition)
+}
+
+/// An optional finite number ≥ 0.
+pub fn optional_non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    match Option::<f64>::deserialize(d)? {
+        Some(v) if !(v.is_finite() && v >= 0.0) => Err(D::Error::custom(format!("{v} is out of range: must be ≥ 0"))),
+        v => Ok(v),
+    }
+}

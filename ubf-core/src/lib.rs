@@ -1,0 +1,72 @@
+//! # ubf-core: the Unified Behavior Framework
+//!
+//! Behaviours look at the robot's [`State`] and answer with an [`Action`]: the
+//! command channels they want (each optional) and a vote saying how much.
+//! A [`Composite`] asks its children and lets an [`Arbiter`] combine their
+//! actions; a composite is itself a behaviour, so trees nest to any depth. A
+//! [`Controller`] runs the tree against a [`Robot`] once per tick of its
+//! [`Clock`], and every tick leaves a [`TickRecord`].
+//!
+//! A complete behaviour, registered by name and driven from RON:
+//!
+//! ```
+//! use serde::Deserialize;
+//! use ubf_core::{Action, Behavior, BehaviorSpec, BuildContext, Registry, State};
+//!
+//! /// Drives forward, turning away from anything closer than `clearance`.
+//! struct Shy { speed: f64, clearance: f64 }
+//!
+//! impl Behavior for Shy {
+//!     fn gen_action(&mut self, state: &State) -> Action {
+//!         match state.nearest_range() {
+//!             Some(r) if r < self.clearance => Action::with_vote(1.0).velocity(0.0).rot_velocity(0.5),
+//!             _ => Action::with_vote(0.5).velocity(self.speed),
+//!         }
+//!     }
+//! }
+//!
+//! #[derive(Deserialize)]
+//! #[serde(deny_unknown_fields)]
+//! struct ShyConfig { speed: f64, clearance: f64 }
+//!
+//! let mut registry = Registry::new();
+//! registry.register("Shy", |c: &ShyConfig, _: &BuildContext| Shy { speed: c.speed, clearance: c.clearance });
+//! let spec: BehaviorSpec = registry.from_ron("Shy(speed: 0.4, clearance: 0.5)").unwrap();
+//! let mut shy = spec.build(&BuildContext::new(7));
+//! assert_eq!(shy.gen_action(&State::default()).motion.velocity, Some(0.4));
+//! ```
+//!
+//! Units are SI throughout (metres, seconds, radians); angles are
+//! counter-clockwise positive. Randomness comes from [`BuildContext::rng`],
+//! seeded from the run's seed, so a run is exactly repeatable.
+
+#![warn(missing_docs)]
+
+mod action;
+pub mod arbiter;
+mod behavior;
+mod clock;
+mod command;
+mod composite;
+mod condition;
+pub mod config;
+mod controller;
+mod geometry;
+mod registry;
+mod robot;
+mod state;
+
+pub use action::{Action, Channel, Motion};
+pub use arbiter::{Arbiter, ArbiterSpec, Arbitration, Bid};
+pub use behavior::{from_fn, Behavior, FnBehavior};
+pub use clock::{Clock, SimClock, Stopwatch, WallClock};
+pub use command::{Command, Limits, Turn};
+pub use composite::Composite;
+pub use condition::Condition;
+pub use controller::{
+    Controller, ControllerError, NodeInfo, NodeOutcome, StateSummary, TickRecord, TickSink, TracingSink, TreeLayout,
+};
+pub use geometry::{angle_difference, wrap_angle, Pose2};
+pub use registry::{BehaviorSpec, BuildContext, Registry};
+pub use robot::{NullRobot, Robot, RobotError, VelocityLimiter};
+pub use state::{Bumpers, Goal, RangeReading, State};

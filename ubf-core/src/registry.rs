@@ -1,0 +1,294 @@
+//! Behaviour trees from RON, by name.
+//!
+//! A [`Registry`] maps the name written in a file (`GoTo(cruise_speed: 0.5)`)
+//! to a typed config and a constructor. Reading a file yields
+//! [`BehaviorSpec`]s: checked, typed, not yet built. Building a spec with a
+//! [`BuildContext`] (which carries the run's seed) gives the behaviour, so a
+//! sweep reads a file once and builds it once per seed.
+
+use crate::arbiter::ArbiterSpec;
+use crate::config::{self, RonError};
+use crate::{Behavior, Composite};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::de::{self, DeserializeOwned, Deserializer, EnumAccess, VariantAccess, Visitor};
+use serde::Deserialize;
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+type Factory = dyn Fn(&BuildContext) -> Box<dyn Behavior> + Send + Sync;
+type Parser = dyn Fn(&mut dyn erased_serde::Deserializer) -> Result<Arc<Factory>, erased_serde::Error> + Send + Sync;
+
+/// What a behaviour's constructor may know: the run's seed and where in the
+/// tree it sits.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BuildContext {
+    seed: u64,
+    path: String,
+}
+
+impl BuildContext {
+    /// The context of the root of a run with this seed.
+    pub fn new(seed: u64) -> Self {
+        BuildContext { seed, path: "root".to_owned() }
+    }
+
+    /// The run's seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Slash-separated child names from the root.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    /// The context of the child `name` below this node.
+    pub fn child(&self, name: &str) -> BuildContext {
+        BuildContext { seed: self.seed, path: format!("{}/{}", self.path, name) }
+    }
+
+    /// A generator for this node: seeded by the run's seed, on a stream of
+    /// its own chosen by the node's path, so that adding a behaviour elsewhere
+    /// in the tree does not change this one's draws.
+    pub fn rng(&self) -> ChaCha8Rng {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(fnv1a(self.path.as_bytes()));
+        rng
+    }
+}
+
+/// FNV-1a: a stable hash (std's hashers may change between releases).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+}
+
+/// A behaviour read from a file: its kind and its checked config, ready to
+/// build.
+#[derive(Clone)]
+pub struct BehaviorSpec {
+    kind: String,
+    factory: Arc<Factory>,
+}
+
+impl BehaviorSpec {
+    /// The registered name it was written as.
+    pub fn kind(&self) -> &str {
+        &self.kind
+    }
+
+    /// Builds the behaviour.
+    pub fn build(&self, ctx: &BuildContext) -> Box<dyn Behavior> {
+        (self.factory)(ctx)
+    }
+}
+
+impl fmt::Debug for BehaviorSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("BehaviorSpec").field("kind", &self.kind).finish_non_exhaustive()
+    }
+}
+
+/// Maps behaviour names to their configs and constructors.
+///
+/// `Composite` is always registered. Registering a name again replaces the
+/// earlier entry, so a user's crate may override a stock behaviour.
+#[derive(Clone)]
+pub struct Registry {
+    entries: BTreeMap<String, Arc<Parser>>,
+}
+
+impl Default for Registry {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Registry {
+    /// A registry that knows only `Composite`.
+    pub fn new() -> Self {
+        let mut registry = Registry { entries: BTreeMap::new() };
+        registry.entries.insert("Composite".to_owned(), Arc::new(parse_composite));
+        registry
+    }
+
+    /// Registers a behaviour under `name`: its config type `C` (use
+    /// `#[serde(deny_unknown_fields)]` and the checkers of
+    /// [`crate::config`]) and a constructor from the config.
+    pub fn register<C, B, F>(&mut self, name: &str, build: F) -> &mut Self
+    where
+        C: DeserializeOwned + Send + Sync + 'static,
+        B: Behavior + 'static,
+        F: Fn(&C, &BuildContext) -> B + Send + Sync + 'static,
+    {
+        let build = Arc::new(build);
+        let parser = move |d: &mut dyn erased_serde::Deserializer| {
+            let config: C = erased_serde::deserialize(d)?;
+            let build = Arc::clone(&build);
+            let factory: Arc<Factory> =
+                Arc::new(move |ctx: &BuildContext| Box::new(build(&config, ctx)) as Box<dyn Behavior>);
+            Ok(factory)
+        };
+        self.entries.insert(name.to_owned(), Arc::new(parser));
+        self
+    }
+
+    /// The registered names, sorted.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.entries.keys().map(String::as_str)
+    }
+
+    /// Whether `name` is registered.
+    pub fn contains(&self, name: &str) -> bool {
+        self.entries.contains_key(name)
+    }
+
+    /// Reads a document that contains behaviour trees (fields of type
+    /// [`BehaviorSpec`]) from RON text, with this registry resolving names.
+    pub fn from_ron<T: DeserializeOwned>(&self, text: &str) -> Result<T, RonError> {
+        let _active = ActiveRegistry::install(self.clone());
+        config::from_ron(text)
+    }
+}
+
+thread_local! {
+    /// The registry resolving behaviour names while a document is read.
+    /// serde has no way to hand context to a derived `Deserialize`, and
+    /// behaviour specs sit deep inside user-defined documents.
+    static ACTIVE: RefCell<Option<Registry>> = const { RefCell::new(None) };
+}
+
+struct ActiveRegistry(Option<Registry>);
+
+impl ActiveRegistry {
+    fn install(registry: Registry) -> Self {
+        ActiveRegistry(ACTIVE.with(|a| a.replace(Some(registry))))
+    }
+}
+
+impl Drop for ActiveRegistry {
+    fn drop(&mut self) {
+        ACTIVE.with(|a| *a.borrow_mut() = self.0.take());
+    }
+}
+
+impl<'de> Deserialize<'de> for BehaviorSpec {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_enum("Behavior", &[], SpecVisitor)
+    }
+}
+
+struct SpecVisitor;
+
+impl<'de> Visitor<'de> for SpecVisitor {
+    type Value = BehaviorSpec;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a behaviour, written `Name(config fields)`")
+    }
+
+    fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<BehaviorSpec, A::Error> {
+        let (Identifier(kind), variant) = data.variant::<Identifier>()?;
+        let parser = ACTIVE.with(|active| match active.borrow().as_ref() {
+            None => Err(de::Error::custom("behaviour trees must be read through Registry::from_ron")),
+            Some(registry) => registry.entries.get(&kind).cloned().ok_or_else(|| {
+                let known: Vec<&str> = registry.names().collect();
+                de::Error::custom(format!("unknown behaviour `{kind}`; known behaviours: {}", known.join(", ")))
+            }),
+        })?;
+        let factory = variant.newtype_variant_seed(ConfigSeed(parser.as_ref()))?;
+        Ok(BehaviorSpec { kind, factory })
+    }
+}
+
+struct ConfigSeed<'a>(&'a Parser);
+
+impl<'de> de::DeserializeSeed<'de> for ConfigSeed<'_> {
+    type Value = Arc<Factory>;
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<Arc<Factory>, D::Error> {
+        let mut erased = <dyn erased_serde::Deserializer>::erase(deserializer);
+        (self.0)(&mut erased).map_err(de::Error::custom)
+    }
+}
+
+struct Identifier(String);
+
+impl<'de> Deserialize<'de> for Identifier {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct IdentVisitor;
+        impl Visitor<'_> for IdentVisitor {
+            type Value = Identifier;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a behaviour name")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Identifier, E> {
+                Ok(Identifier(v.to_owned()))
+            }
+        }
+        deserializer.deserialize_identifier(IdentVisitor)
+    }
+}
+
+/// One child of a composite in a file:
+/// `(behavior: GoTo(..), weight: 2.0, name: "go")`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ChildSpec {
+    behavior: BehaviorSpec,
+    #[serde(default = "unit_weight", deserialize_with = "config::non_negative")]
+    weight: f64,
+    #[serde(default)]
+    name: Option<String>,
+}
+
+fn unit_weight() -> f64 {
+    1.0
+}
+
+/// `Composite(name: .., arbiter: .., vote: .., children: [..])`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CompositeConfig {
+    #[serde(default)]
+    name: Option<String>,
+    arbiter: ArbiterSpec,
+    #[serde(default, deserialize_with = "config::optional_non_negative")]
+    vote: Option<f64>,
+    children: Vec<ChildSpec>,
+}
+
+fn parse_composite(d: &mut dyn erased_serde::Deserializer) -> Result<Arc<Factory>, erased_serde::Error> {
+    use serde::de::Error as _;
+    let config: CompositeConfig = erased_serde::deserialize(d)?;
+    config.arbiter.check(config.children.len()).map_err(erased_serde::Error::custom)?;
+    let names = unique_names(&config.children);
+    let factory: Arc<Factory> = Arc::new(move |ctx: &BuildContext| {
+        let name = config.name.clone().unwrap_or_else(|| "root".to_owned());
+        let mut composite = Composite::with_arbiter(name, config.arbiter.build(ctx.child("arbiter").rng()));
+        for (child, name) in config.children.iter().zip(&names) {
+            composite.push_child(name.clone(), child.behavior.build(&ctx.child(name)), child.weight);
+        }
+        composite.set_vote(config.vote);
+        Box::new(composite) as Box<dyn Behavior>
+    });
+    Ok(factory)
+}
+
+/// Child names default to the behaviour's kind; repeats get `_2`, `_3`… so
+/// that every column of a trajectory file is unambiguous.
+fn unique_names(children: &[ChildSpec]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::with_capacity(children.len());
+    for child in children {
+        let base = child.name.clone().unwrap_or_else(|| child.behavior.kind().to_owned());
+        let mut name = base.clone();
+        let mut n = 2;
+        while names.contains(&name) {
+            name = format!("{base}_{n}");
+            n += 1;
+        }
+        names.push(name);
+    }
+    names
+}

@@ -1,0 +1,126 @@
+//! What the robot senses this tick, as one read-only snapshot.
+
+use crate::geometry::Pose2;
+use serde::{Deserialize, Serialize};
+
+/// Where the robot has been asked to go. A mission field: the controller sets
+/// it, robots never touch it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Goal {
+    /// Metres, world frame.
+    #[serde(deserialize_with = "crate::config::finite")]
+    pub x: f64,
+    /// Metres, world frame.
+    #[serde(deserialize_with = "crate::config::finite")]
+    pub y: f64,
+    /// Distance in metres within which the goal counts as reached.
+    #[serde(default = "Goal::default_tolerance", deserialize_with = "crate::config::positive")]
+    pub tolerance: f64,
+}
+
+impl Goal {
+    fn default_tolerance() -> f64 {
+        0.2
+    }
+
+    /// Whether `pose` is within the goal's tolerance.
+    pub fn reached_by(&self, pose: &Pose2) -> bool {
+        pose.distance_to(self.x, self.y) <= self.tolerance
+    }
+}
+
+/// One range sensor's reading (a sonar transducer, an infrared ranger).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RangeReading {
+    /// The sensor's position and pointing direction in the robot frame.
+    pub pose_robot_sensor: Pose2,
+    /// Metres from the sensor to the nearest echo; `None` when nothing echoed
+    /// within `max_range`.
+    pub range: Option<f64>,
+    /// The farthest range in metres the sensor reports.
+    pub max_range: f64,
+}
+
+/// The bumper rings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Bumpers {
+    /// Any front bumper segment pressed.
+    pub front: bool,
+    /// Any rear bumper segment pressed.
+    pub rear: bool,
+}
+
+impl Bumpers {
+    /// Whether any segment is pressed.
+    pub fn any(&self) -> bool {
+        self.front || self.rear
+    }
+}
+
+/// Everything a behaviour may know this tick.
+///
+/// Robots fill the sensor fields in [`crate::Robot::sense`]; the controller
+/// fills `time` and the mission fields. The buffers (`ranges`) are reused
+/// from tick to tick so that sensing allocates nothing once warm.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct State {
+    /// Seconds since the controller started, from its clock.
+    pub time: f64,
+    /// The robot's own estimate of its pose in the world frame (odometry, or
+    /// odometry fused with egomotion). Never ground truth.
+    pub pose: Pose2,
+    /// Measured forward velocity, m/s.
+    pub velocity: f64,
+    /// Measured rotational velocity, rad/s, counter-clockwise positive.
+    pub rot_velocity: f64,
+    /// Range sensors in a fixed order (the robot's sonar ring, say).
+    pub ranges: Vec<RangeReading>,
+    /// Bumper contacts.
+    pub bumpers: Bumpers,
+    /// A drive wheel is stalled (pushing against something).
+    pub stalled: bool,
+    /// The motors are powered and accept motion commands.
+    pub motors_enabled: bool,
+    /// The robot's emergency stop is engaged.
+    pub estop: bool,
+    /// Battery voltage, when the robot reports one.
+    pub battery_volts: Option<f64>,
+    /// Seconds since the robot last delivered fresh sensor data; zero when the
+    /// data is from this tick. Lets a behaviour notice a lost sensor stream.
+    pub sensor_age: f64,
+    /// Where the robot has been asked to go, if anywhere.
+    pub goal: Option<Goal>,
+}
+
+impl State {
+    /// Copies every sensor field of `other` (not `time`, not the goal),
+    /// reusing this state's buffers.
+    pub fn copy_sensors_from(&mut self, other: &State) {
+        self.pose = other.pose;
+        self.velocity = other.velocity;
+        self.rot_velocity = other.rot_velocity;
+        self.ranges.clone_from(&other.ranges);
+        self.bumpers = other.bumpers;
+        self.stalled = other.stalled;
+        self.motors_enabled = other.motors_enabled;
+        self.estop = other.estop;
+        self.battery_volts = other.battery_volts;
+        self.sensor_age = other.sensor_age;
+    }
+
+    /// Distance to the goal from the estimated pose, if there is a goal.
+    pub fn distance_to_goal(&self) -> Option<f64> {
+        self.goal.map(|g| self.pose.distance_to(g.x, g.y))
+    }
+
+    /// Whether the estimated pose is within the goal's tolerance.
+    pub fn goal_reached(&self) -> bool {
+        self.goal.is_some_and(|g| g.reached_by(&self.pose))
+    }
+
+    /// The shortest range any range sensor reports, in metres.
+    pub fn nearest_range(&self) -> Option<f64> {
+        self.ranges.iter().filter_map(|r| r.range).min_by(f64::total_cmp)
+    }
+}
