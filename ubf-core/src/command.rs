@@ -19,9 +19,10 @@ pub enum Turn {
 }
 
 /// A command for a [`crate::Robot`]: every value already within limits.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub enum Command {
     /// Stop now.
+    #[default]
     Stop,
     /// Drive at a forward velocity while turning.
     Drive {
@@ -30,12 +31,6 @@ pub enum Command {
         /// How to turn.
         turn: Turn,
     },
-}
-
-impl Default for Command {
-    fn default() -> Self {
-        Command::Stop
-    }
 }
 
 /// The robot's own speed limits, which every command respects.

@@ -6,7 +6,7 @@
 //!
 //! ```
 //! # use serde::Deserialize;
-//! #[derive(Deserialize)]
+//! #[derive(Debug, Deserialize)]
 //! #[serde(deny_unknown_fields)]
 //! struct WanderConfig {
 //!     #[serde(deserialize_with = "ubf_core::config::positive")]

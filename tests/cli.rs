@@ -1,0 +1,147 @@
+//! The `ubf` binary end to end: runs, checks, and every kind of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn ubf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ubf")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// A scenario file with `body` in a fresh temporary directory.
+fn scenario_file(dir: &tempfile::TempDir, body: &str) -> PathBuf {
+    let path = dir.path().join("bad.ron");
+    std::fs::write(&path, body).unwrap();
+    path
+}
+
+const GOOD: &str = r#"Scenario(
+    name: "t",
+    max_time_s: 30.0,
+    goal: (x: 3.0, y: 0.0),
+    root: Composite(
+        arbiter: HighestPriority,
+        children: [
+            (behavior: Stop(), weight: 2.0),
+            (behavior: GoTo(cruise_speed: 0.5)),
+        ],
+    ),
+)"#;
+
+/// Runs `ubf check` on `body` and returns (exit code, stderr).
+fn check(body: &str) -> (i32, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = scenario_file(&dir, body);
+    let out = ubf(&["check", path.to_str().unwrap()]);
+    (out.status.code().unwrap(), text(&out.stderr).replace(path.to_str().unwrap(), "FILE"))
+}
+
+#[test]
+fn every_shipped_scenario_checks() {
+    let files: Vec<String> = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    assert!(!files.is_empty());
+    let args: Vec<&str> = std::iter::once("check").chain(files.iter().map(String::as_str)).collect();
+    let out = ubf(&args);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn the_good_scenario_checks() {
+    assert_eq!(check(GOOD), (0, String::new()));
+}
+
+#[test]
+fn malformed_file_gives_file_line_column_and_exit_2() {
+    let (code, err) = check("Scenario(\n    name: \"t\",\n    max_time_s 30.0,\n)");
+    assert_eq!(code, 2);
+    assert!(err.starts_with("error: FILE:3:15: Expected colon"), "{err}");
+}
+
+#[test]
+fn unknown_field_is_named_with_its_position() {
+    let (code, err) = check(&GOOD.replace("cruise_speed: 0.5", "cruise_sped: 0.5"));
+    assert_eq!(code, 2);
+    assert!(err.starts_with("error: FILE:9:29: "), "{err}");
+    assert!(err.contains("cruise_sped"), "{err}");
+}
+
+#[test]
+fn unknown_scenario_field_is_refused() {
+    let (code, err) = check(&GOOD.replace("max_time_s: 30.0,", "max_time_s: 30.0, speed_up: 2,"));
+    assert_eq!(code, 2);
+    assert!(err.contains("FILE:3:") && err.contains("speed_up"), "{err}");
+}
+
+#[test]
+fn unknown_behaviour_is_named() {
+    let (code, err) = check(&GOOD.replace("GoTo(", "Wander("));
+    assert_eq!(code, 2);
+    assert!(err.contains("FILE:9:") && err.contains("unknown behaviour `Wander`"), "{err}");
+}
+
+#[test]
+fn nan_and_negative_values_are_refused_where_they_make_no_sense() {
+    for (from, to, says) in [
+        ("max_time_s: 30.0", "max_time_s: NaN", "NaN is out of range"),
+        ("max_time_s: 30.0", "max_time_s: -5.0", "-5 is out of range"),
+        ("goal: (x: 3.0, y: 0.0)", "goal: (x: 3.0, y: 0.0, tolerance: -0.1)", "-0.1 is out of range"),
+        ("weight: 2.0", "weight: -2.0", "-2 is out of range"),
+        ("cruise_speed: 0.5", "cruise_speed: inf", "inf is out of range"),
+    ] {
+        let (code, err) = check(&GOOD.replace(from, to));
+        assert_eq!(code, 2, "{to}");
+        assert!(err.starts_with("error: FILE:") && err.contains(says), "{to}: {err}");
+    }
+}
+
+#[test]
+fn missing_file_and_bad_arguments_exit_2_without_panicking() {
+    let out = ubf(&["check", "no/such/file.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("no/such/file.ron"));
+    for args in [&["run", "scenarios/goto-open-floor.ron", "--seed", "minus-one"][..], &["fly"], &["run"]] {
+        let out = ubf(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(!text(&out.stderr).contains("panicked"), "{args:?}");
+    }
+}
+
+#[test]
+fn run_reaches_the_goal_and_prints_json() {
+    let out = ubf(&["run", "scenarios/goto-open-floor.ron", "--json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["reached_goal"], true);
+    assert_eq!(report["end"], "goal_reached");
+    let distance = report["distance_m"].as_f64().unwrap();
+    // The straight line is √(8² + 3²) = 8.54 m less the 0.2 m tolerance.
+    assert!(distance > 8.3 && distance < 9.5, "{distance}");
+}
+
+#[test]
+fn same_scenario_and_seed_give_identical_reports() {
+    let strip = |out: Output| {
+        let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v.as_object_mut().unwrap().remove("wall_time_s");
+        v.to_string()
+    };
+    let a = strip(ubf(&["run", "scenarios/goto-open-floor.ron", "--json", "--seed", "5"]));
+    let b = strip(ubf(&["run", "scenarios/goto-open-floor.ron", "--json", "--seed", "5"]));
+    assert_eq!(a, b);
+}
+
+#[test]
+fn the_stock_binary_does_not_know_a_users_behaviour() {
+    // Wander is registered by the example crate's own binary, not by ubf.
+    let out = ubf(&["check", "examples/wander/wander.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("unknown behaviour `Wander`"));
+}

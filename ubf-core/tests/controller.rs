@@ -1,0 +1,100 @@
+//! The control loop: records, sinks, shutdown.
+
+use std::sync::{Arc, Mutex};
+use ubf_core::arbiter::{CommandFusion, HighestPriority};
+use ubf_core::{
+    from_fn, Action, Command, Composite, Controller, NullRobot, SimClock, State, TickRecord, TickSink, TreeLayout, Turn,
+};
+
+#[derive(Default)]
+struct Log {
+    layout: Option<TreeLayout>,
+    records: Vec<TickRecord>,
+    finished: bool,
+}
+
+struct SharedSink(Arc<Mutex<Log>>);
+
+impl TickSink for SharedSink {
+    fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.0.lock().unwrap().layout = Some(layout.clone());
+        Ok(())
+    }
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        self.0.lock().unwrap().records.push(record.clone());
+        Ok(())
+    }
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.0.lock().unwrap().finished = true;
+        Ok(())
+    }
+}
+
+fn tree() -> Composite {
+    let drive = Composite::new("drive", CommandFusion)
+        .child(from_fn("fast", |_: &State| Action::with_vote(1.0).velocity(0.8)), 3.0)
+        .child(from_fn("slow", |_: &State| Action::with_vote(1.0).velocity(0.4).rot_velocity(0.1)), 1.0);
+    Composite::new("root", HighestPriority)
+        .child(from_fn("halt", |s: &State| if s.time >= 0.25 { Action::stop(1.0) } else { Action::none() }), 2.0)
+        .child(drive, 1.0)
+}
+
+#[test]
+fn every_tick_records_every_node_and_the_command() {
+    let log = Arc::new(Mutex::new(Log::default()));
+    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    controller.add_sink(Box::new(SharedSink(log.clone())));
+    for _ in 0..4 {
+        controller.tick().unwrap();
+    }
+    controller.shutdown().unwrap();
+
+    let log = log.lock().unwrap();
+    let layout = log.layout.as_ref().unwrap();
+    let paths: Vec<&str> = layout.nodes.iter().map(|n| n.path.as_str()).collect();
+    assert_eq!(paths, ["root", "root/halt", "root/drive", "root/drive/fast", "root/drive/slow"]);
+    assert!(log.finished);
+    assert_eq!(log.records.len(), 4);
+
+    let first = &log.records[0];
+    assert_eq!((first.tick, first.time), (0, 0.0));
+    // Fused velocity (3·0.8 + 1·0.4) / 4 = 0.7; only "slow" sets a turn, so
+    // the turn is its 0.1 undiluted.
+    match first.command {
+        Command::Drive { velocity, turn: Turn::Rate(rate) } => {
+            assert!((velocity - 0.7).abs() < 1e-12);
+            assert!((rate - 0.1).abs() < 1e-12);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(!first.nodes[1].won && first.nodes[2].won && first.nodes[3].won);
+    assert_eq!(first.nodes[3].weight, 0.75);
+    assert_eq!(layout.winning_leaf(first), Some(3));
+
+    let last = &log.records[3];
+    assert!((last.time - 0.3).abs() < 1e-12);
+    assert_eq!(last.command, Command::Stop);
+    assert_eq!(layout.winning_leaf(last), Some(1));
+}
+
+#[test]
+fn shutdown_stops_the_robot_and_flushes_sinks_even_when_a_sink_fails() {
+    struct Broken;
+    impl TickSink for Broken {
+        fn record(&mut self, _: &TickRecord) -> std::io::Result<()> {
+            Err(std::io::Error::other("disk full"))
+        }
+        fn finish(&mut self) -> std::io::Result<()> {
+            Err(std::io::Error::other("disk still full"))
+        }
+    }
+    let log = Arc::new(Mutex::new(Log::default()));
+    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    controller.add_sink(Box::new(Broken));
+    controller.add_sink(Box::new(SharedSink(log.clone())));
+    assert!(controller.tick().unwrap_err().to_string().contains("disk full"));
+    assert!(controller.shutdown().is_err());
+    assert!(controller.robot().shut_down);
+    assert_eq!(controller.robot().last_command, Command::Stop);
+    assert!(log.lock().unwrap().finished, "the healthy sink was still flushed");
+}
