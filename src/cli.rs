@@ -11,7 +11,7 @@
 //! }
 //! ```
 
-use crate::run::{run, EndReason, RunSummary};
+use crate::run::{run, EndReason, RunReport};
 use crate::scenario::Scenario;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -43,7 +43,10 @@ enum Command {
         /// Use this seed instead of the scenario's.
         #[arg(long)]
         seed: Option<u64>,
-        /// Print the summary as JSON on stdout.
+        /// Write report.json, trajectory.csv and plot.png into this directory.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print the report as JSON on stdout.
         #[arg(long)]
         json: bool,
     },
@@ -71,7 +74,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     };
     match cli.command {
-        Command::Run { file, seed, json } => run_command(&registry, file, seed, json),
+        Command::Run { file, seed, out, json } => run_command(&registry, file, seed, out, json),
         Command::Check { files } => check_command(&registry, &files),
         Command::Behaviors => {
             for name in registry.names() {
@@ -88,7 +91,7 @@ fn init_tracing() {
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
 }
 
-fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, json: bool) -> ExitCode {
+fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Option<PathBuf>, json: bool) -> ExitCode {
     let scenario = match Scenario::load(registry, &file) {
         Ok(s) => s,
         Err(e) => {
@@ -97,7 +100,7 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, json: bool
         }
     };
     let seed = seed.unwrap_or(scenario.seed);
-    match run(&scenario, seed, Vec::new()) {
+    match run(&scenario, seed, out.as_deref()) {
         Ok(summary) if json => match serde_json::to_string_pretty(&summary) {
             Ok(text) => {
                 println!("{text}");
@@ -110,6 +113,9 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, json: bool
         },
         Ok(summary) => {
             print_summary(&summary);
+            if let Some(dir) = &out {
+                println!("outputs         {}/{{report.json, trajectory.csv, plot.png}}", dir.display());
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -137,7 +143,7 @@ fn pose_text(p: &Pose2) -> String {
     format!("({:.3}, {:.3}) m, {:.1}°", p.x, p.y, p.theta.to_degrees())
 }
 
-fn print_summary(s: &RunSummary) {
+fn print_summary(s: &RunReport) {
     let ending = match s.end {
         EndReason::GoalReached => "robot believes it reached the goal",
         EndReason::TimeLimit => "time limit",
@@ -146,6 +152,7 @@ fn print_summary(s: &RunSummary) {
     println!("ended           {ending} after {:.1} s simulated, {} ticks", s.sim_time_s, s.ticks);
     println!("goal reached    {}", if s.reached_goal { "yes" } else { "no" });
     println!("distance        {:.2} m", s.distance_m);
+    println!("collisions      {}", s.collisions);
     println!("true pose       {}", pose_text(&s.final_true_pose));
     println!("estimated pose  {}", pose_text(&s.final_estimated_pose));
     println!("wall time       {:.3} s", s.wall_time_s);

@@ -12,8 +12,10 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod plot;
 pub mod run;
 pub mod scenario;
+pub mod trajectory;
 
 pub use ubf_core::Registry;
 

@@ -19,9 +19,9 @@
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use ubf_core::config::{positive, RonError};
+use ubf_core::config::{checked, positive, RonError};
 use ubf_core::{BehaviorSpec, Goal, Registry};
-use ubf_robots::sim::SimRobotConfig;
+use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 
 /// A headless run: a simulated robot, a goal and the behaviour tree.
 #[derive(Clone, Debug, Deserialize)]
@@ -45,6 +45,9 @@ pub struct Scenario {
     /// The simulated robot.
     #[serde(default)]
     pub robot: SimRobotConfig,
+    /// Walls, boxes, landmarks and people; an open floor by default.
+    #[serde(default, deserialize_with = "checked")]
+    pub world: WorldConfig,
     /// Where the robot should go; without one the run lasts `max_time_s`.
     #[serde(default)]
     pub goal: Option<Goal>,

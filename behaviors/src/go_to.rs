@@ -14,6 +14,10 @@ pub struct GoToConfig {
     /// Turn rate per radian of heading error, 1/s.
     #[serde(default = "GoToConfig::default_turn_gain", deserialize_with = "positive")]
     pub turn_gain: f64,
+    /// Largest turn rate it asks for, °/s. Bounded so that a large heading
+    /// error does not swamp the other children of a fusing arbiter.
+    #[serde(default = "GoToConfig::default_max_turn", deserialize_with = "positive")]
+    pub max_turn_deg: f64,
     /// Within this distance of the goal the speed ramps down, m.
     #[serde(default = "GoToConfig::default_slow_radius", deserialize_with = "non_negative")]
     pub slow_radius: f64,
@@ -29,6 +33,9 @@ impl GoToConfig {
     fn default_turn_gain() -> f64 {
         1.5
     }
+    fn default_max_turn() -> f64 {
+        45.0
+    }
     fn default_slow_radius() -> f64 {
         1.0
     }
@@ -42,6 +49,7 @@ impl Default for GoToConfig {
         GoToConfig {
             cruise_speed: Self::default_cruise_speed(),
             turn_gain: Self::default_turn_gain(),
+            max_turn_deg: Self::default_max_turn(),
             slow_radius: Self::default_slow_radius(),
             vote: Self::default_vote(),
         }
@@ -74,12 +82,13 @@ impl Behavior for GoTo {
             return Action::none();
         }
         let error = state.pose.bearing_to(goal.x, goal.y);
+        let max_turn = self.config.max_turn_deg.to_radians();
         // Facing away from the goal, turn on the spot rather than drive off.
         let alignment = error.cos().max(0.0);
         let ramp = if self.config.slow_radius > 0.0 { (distance / self.config.slow_radius).min(1.0) } else { 1.0 };
         Action::with_vote(self.config.vote)
             .velocity(self.config.cruise_speed * alignment * ramp)
-            .rot_velocity(self.config.turn_gain * error)
+            .rot_velocity((self.config.turn_gain * error).clamp(-max_turn, max_turn))
     }
 
     fn name(&self) -> &str {

@@ -4,17 +4,21 @@
 //! | --- | --- |
 //! | `GoTo` | [`GoTo`]: drive to the state's goal |
 //! | `Stop` | [`Stop`]: stop while a condition holds |
+//! | `AvoidCollision` | [`AvoidCollision`]: keep clear of what the sonar sees |
 //!
 //! [`register`] adds them all to a [`Registry`].
 
 #![warn(missing_docs)]
 
+mod avoid;
 mod go_to;
 mod stop;
 
+pub use avoid::{AvoidCollision, AvoidCollisionConfig};
 pub use go_to::{GoTo, GoToConfig};
 pub use stop::{Stop, StopConfig};
 
+use ubf_core::config::Checked;
 use ubf_core::Registry;
 
 /// Registers every stock behaviour under its file name.
@@ -22,4 +26,5 @@ pub fn register(registry: &mut Registry) -> &mut Registry {
     registry
         .register("GoTo", |c: &GoToConfig, _| GoTo::new(c.clone()))
         .register("Stop", |c: &StopConfig, _| Stop::new(c.clone()))
+        .register("AvoidCollision", |c: &Checked<AvoidCollisionConfig>, _| AvoidCollision::new(c.0.clone()))
 }

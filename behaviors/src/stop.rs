@@ -10,7 +10,7 @@ use ubf_core::{Action, Behavior, Condition, State};
 pub struct StopConfig {
     /// When to stop. By default: at the goal, on a bumper, on a stall, on an
     /// emergency stop, or when sensor data is older than half a second.
-    #[serde(default = "StopConfig::default_when", deserialize_with = "ubf_core::config::condition")]
+    #[serde(default = "StopConfig::default_when", deserialize_with = "ubf_core::config::checked")]
     pub when: Condition,
     /// The vote of the stop request.
     #[serde(default = "StopConfig::default_vote", deserialize_with = "non_negative")]

@@ -1,7 +1,13 @@
 //! # ubf-perception: what stereo vision tells the robot
 //!
-//! Stereo triangulation, the landmark egomotion error model, CV fusion and
-//! the egomotion estimators live here, shared by the simulated and the real
-//! robot. This crate is filled in by the action-aiding work; it exists now so
-//! that the dependency direction `behaviors`/`robots` → `perception` →
-//! `ubf-core` is fixed from the start.
+//! - [`stereo`]: the stereo camera: projection, triangulation (thesis eq.
+//!   12–14), frames and mounting.
+//!
+//! Shared by the simulated and the real robot, so that both feed the same
+//! landmark observations to the behaviours.
+
+#![warn(missing_docs)]
+
+pub mod stereo;
+
+pub use stereo::{CameraMount, StereoCamera};

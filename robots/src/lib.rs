@@ -1,7 +1,9 @@
 //! # ubf-robots: what the controller can drive
 //!
 //! - [`sim`]: a headless simulated robot, deterministic for a given seed.
+//! - [`model`]: robot types (geometry, limits, sonar) read from RON files.
 
 #![warn(missing_docs)]
 
+pub mod model;
 pub mod sim;

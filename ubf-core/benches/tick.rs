@@ -16,7 +16,10 @@ fn leaves() -> [Box<dyn Behavior>; 4] {
             Some(r) if r < 1.0 => Action::with_vote(0.9).rot_velocity(0.4).max_velocity(r * 0.5),
             _ => Action::none(),
         })),
-        Box::new(from_fn("stop", |s: &State| if s.goal_reached() || s.bumpers.any() { Action::stop(1.0) } else { Action::none() })),
+        Box::new(from_fn(
+            "stop",
+            |s: &State| if s.goal_reached() || s.bumpers.any() { Action::stop(1.0) } else { Action::none() },
+        )),
         Box::new(from_fn("aim", |_: &State| Action::with_vote(0.3).heading(0.2))),
     ]
 }
@@ -24,8 +27,9 @@ fn leaves() -> [Box<dyn Behavior>; 4] {
 fn robot() -> NullRobot {
     let mut robot = NullRobot::default();
     // The Powerbot's 32 sonars, so that sensing copies a realistic state.
-    robot.reported.ranges =
-        (0..32).map(|i| RangeReading { range: Some(0.8 + i as f64 * 0.1), max_range: 5.0, ..Default::default() }).collect();
+    robot.reported.ranges = (0..32)
+        .map(|i| RangeReading { range: Some(0.8 + i as f64 * 0.1), max_range: 5.0, ..Default::default() })
+        .collect();
     robot
 }
 

@@ -53,10 +53,11 @@ impl Condition {
             Condition::All(all) => all.iter().all(|c| c.holds(state)),
         }
     }
+}
 
-    /// Checks the numbers in the condition: distances and times must be
-    /// finite and non-negative.
-    pub fn check(&self) -> Result<(), String> {
+impl crate::config::Check for Condition {
+    /// Distances and times must be finite and non-negative.
+    fn check(&self) -> Result<(), String> {
         match self {
             Condition::ObstacleWithin { range: v } | Condition::SensorsOlderThan { seconds: v }
                 if !(v.is_finite() && *v >= 0.0) =>
@@ -73,6 +74,7 @@ impl Condition {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::Check;
     use crate::{Bumpers, Goal, RangeReading};
 
     #[test]

@@ -57,7 +57,7 @@ pub fn from_ron<T: DeserializeOwned>(text: &str) -> Result<T, RonError> {
     ron_options().from_str(text).map_err(RonError::from)
 }
 
-fn checked<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str) -> Result<f64, D::Error> {
+fn number_where<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str) -> Result<f64, D::Error> {
     let v = f64::deserialize(d)?;
     if ok(v) {
         Ok(v)
@@ -68,29 +68,49 @@ fn checked<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str
 
 /// A finite number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    checked(d, |v| v.is_finite() && v > 0.0, "> 0")
+    number_where(d, |v| v.is_finite() && v > 0.0, "> 0")
 }
 
 /// A finite number ≥ 0.
 pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    checked(d, |v| v.is_finite() && v >= 0.0, "≥ 0")
+    number_where(d, |v| v.is_finite() && v >= 0.0, "≥ 0")
 }
 
 /// Any finite number.
 pub fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    checked(d, f64::is_finite, "a finite number")
+    number_where(d, f64::is_finite, "a finite number")
 }
 
 /// A number in [0, 1].
 pub fn unit_interval<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    checked(d, |v| (0.0..=1.0).contains(&v), "within [0, 1]")
+    number_where(d, |v| (0.0..=1.0).contains(&v), "within [0, 1]")
 }
 
-/// A [`crate::Condition`] whose numbers are checked.
-pub fn condition<'de, D: Deserializer<'de>>(d: D) -> Result<crate::Condition, D::Error> {
-    let condition = crate::Condition::deserialize(d)?;
-    condition.check().map_err(D::Error::custom)?;
-    Ok(condition)
+/// A config that can check itself beyond what its field types say: numbers
+/// that must agree with each other, lists that must not be empty.
+pub trait Check {
+    /// Why the config is wrong, if it is.
+    fn check(&self) -> Result<(), String>;
+}
+
+/// Reads a [`Check`] config and checks it, so the error carries a position
+/// (the end of the config): `#[serde(deserialize_with = "ubf_core::config::checked")]`.
+pub fn checked<'de, D: Deserializer<'de>, T: Deserialize<'de> + Check>(d: D) -> Result<T, D::Error> {
+    let value = T::deserialize(d)?;
+    value.check().map_err(D::Error::custom)?;
+    Ok(value)
+}
+
+/// A [`Check`] config checked as it is read, for registering a behaviour
+/// whose config needs more than per-field checks:
+/// `registry.register("Avoid", |c: &Checked<AvoidConfig>, _| Avoid::new(&c.0))`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checked<T>(pub T);
+
+impl<'de, T: Deserialize<'de> + Check> Deserialize<'de> for Checked<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        checked(d).map(Checked)
+    }
 }
 
 /// An optional finite number ≥ 0.

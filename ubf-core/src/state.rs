@@ -1,6 +1,7 @@
 //! What the robot senses this tick, as one read-only snapshot.
 
 use crate::geometry::Pose2;
+use crate::landmark::StereoFrame;
 use serde::{Deserialize, Serialize};
 
 /// Where the robot has been asked to go. A mission field: the controller sets
@@ -86,6 +87,8 @@ pub struct State {
     pub estop: bool,
     /// Battery voltage, when the robot reports one.
     pub battery_volts: Option<f64>,
+    /// The latest stereo frame from the camera, if the robot has one.
+    pub stereo: StereoFrame,
     /// Seconds since the robot last delivered fresh sensor data; zero when the
     /// data is from this tick. Lets a behaviour notice a lost sensor stream.
     pub sensor_age: f64,
@@ -106,6 +109,9 @@ impl State {
         self.motors_enabled = other.motors_enabled;
         self.estop = other.estop;
         self.battery_volts = other.battery_volts;
+        self.stereo.number = other.stereo.number;
+        self.stereo.time = other.stereo.time;
+        self.stereo.landmarks.clone_from(&other.stereo.landmarks);
         self.sensor_age = other.sensor_age;
     }
 

@@ -54,11 +54,8 @@ fn highest_activation_takes_the_largest_utility() {
 #[test]
 fn activation_fusion_takes_each_channel_from_the_most_activated_child_that_set_it() {
     // Utilities 0.2 (velocity only), 0.1 (velocity and turn), 0.3 (silent).
-    let bids = [
-        bid(0.4, 0.5, v(1.0)),
-        bid(0.4, 0.25, v(2.0).rot_velocity(0.5)),
-        bid(0.0, 0.25, v(3.0).rot_velocity(-0.5)),
-    ];
+    let bids =
+        [bid(0.4, 0.5, v(1.0)), bid(0.4, 0.25, v(2.0).rot_velocity(0.5)), bid(0.0, 0.25, v(3.0).rot_velocity(-0.5))];
     let r = arbitrate(&mut ActivationFusion, &bids);
     assert_eq!(r.action.motion.velocity, Some(1.0));
     assert_eq!(r.action.motion.rot_velocity, Some(0.5));
@@ -140,12 +137,8 @@ fn conditional_switches_on_the_state() {
 fn aria_resolver_documented_example() {
     // A at priority 4 wants −400 at strength 0.25; B and C at priority 3
     // average to 0 at strength 1; D at priority 1 is ignored.
-    let bids = [
-        bid(0.25, 0.25, v(-400.0)),
-        bid(0.5, 0.25, v(100.0)),
-        bid(0.5, 0.25, v(-100.0)),
-        bid(1.0, 0.25, v(5000.0)),
-    ];
+    let bids =
+        [bid(0.25, 0.25, v(-400.0)), bid(0.5, 0.25, v(100.0)), bid(0.5, 0.25, v(-100.0)), bid(1.0, 0.25, v(5000.0))];
     let mut resolver = PriorityResolver::new(vec![4, 3, 3, 1]);
     let r = arbitrate(&mut resolver, &bids);
     assert!((r.action.motion.velocity.unwrap() + 100.0).abs() < 1e-9, "{:?}", r.action);
@@ -269,7 +262,8 @@ fn a_stop_from_any_voter_wins_every_arbiter() {
 
 #[test]
 fn the_vote_override_bids_only_when_there_is_an_opinion() {
-    let mut loud = Composite::new("loud", HighestPriority).child(fixed("a", Action::with_vote(0.1).velocity(1.0)), 1.0).vote(0.9);
+    let mut loud =
+        Composite::new("loud", HighestPriority).child(fixed("a", Action::with_vote(0.1).velocity(1.0)), 1.0).vote(0.9);
     assert_eq!(loud.gen_action(&State::default()).vote, 0.9);
     let mut silent = Composite::new("silent", HighestPriority).child(fixed("a", Action::none()), 1.0).vote(0.9);
     assert!(!silent.gen_action(&State::default()).is_voting());

@@ -48,7 +48,9 @@ fn leaves() -> [Box<dyn Behavior>; 4] {
 
 fn robot() -> NullRobot {
     let mut robot = NullRobot::default();
-    robot.reported.ranges = (0..32).map(|i| RangeReading { range: Some(0.5 + i as f64 * 0.1), max_range: 5.0, ..Default::default() }).collect();
+    robot.reported.ranges = (0..32)
+        .map(|i| RangeReading { range: Some(0.5 + i as f64 * 0.1), max_range: 5.0, ..Default::default() })
+        .collect();
     robot
 }
 
@@ -78,7 +80,9 @@ fn a_warm_tick_allocates_nothing() {
         ArbiterSpec::UtilityFusion,
         ArbiterSpec::CommandFusion,
         ArbiterSpec::PriorityResolver { priorities: vec![3, 2, 2, 1] },
-        ArbiterSpec::Conditional { when: Condition::Any(vec![Condition::Bumped, Condition::ObstacleWithin { range: 0.3 }]) },
+        ArbiterSpec::Conditional {
+            when: Condition::Any(vec![Condition::Bumped, Condition::ObstacleWithin { range: 0.3 }]),
+        },
     ];
     for spec in specs {
         let mut tree = Composite::with_arbiter("root", spec.build(ChaCha8Rng::seed_from_u64(1)));

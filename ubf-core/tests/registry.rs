@@ -73,7 +73,8 @@ fn a_later_registration_replaces_an_earlier_one() {
 
 #[test]
 fn unknown_behaviour_names_the_known_ones() {
-    let (line, col, msg) = error_of("Composite(arbiter: CommandFusion, children: [\n  (behavior: Crusie(speed: 1.0))])");
+    let (line, col, msg) =
+        error_of("Composite(arbiter: CommandFusion, children: [\n  (behavior: Crusie(speed: 1.0))])");
     assert_eq!(line, 2);
     assert!(col > 1);
     assert!(msg.contains("unknown behaviour `Crusie`") && msg.contains("Composite, Cruise"), "{msg}");
@@ -90,7 +91,8 @@ fn unknown_field_is_reported_where_it_stands() {
 fn nan_and_negative_numbers_are_refused() {
     let (_, _, msg) = error_of("Cruise(speed: NaN)");
     assert!(msg.contains("NaN is out of range: must be > 0"), "{msg}");
-    let (_, _, msg) = error_of("Composite(arbiter: CommandFusion, children: [(behavior: Cruise(speed: 1.0), weight: -2.0)])");
+    let (_, _, msg) =
+        error_of("Composite(arbiter: CommandFusion, children: [(behavior: Cruise(speed: 1.0), weight: -2.0)])");
     assert!(msg.contains("-2 is out of range"), "{msg}");
     let (_, _, msg) = error_of("Composite(arbiter: CommandFusion, vote: -1.0, children: [])");
     assert!(msg.contains("-1 is out of range"), "{msg}");
@@ -100,9 +102,12 @@ fn nan_and_negative_numbers_are_refused() {
 
 #[test]
 fn arbiters_that_need_a_shape_check_it() {
-    let (_, _, msg) = error_of("Composite(arbiter: Conditional(when: Bumped), children: [(behavior: Cruise(speed: 1.0))])");
+    let (_, _, msg) =
+        error_of("Composite(arbiter: Conditional(when: Bumped), children: [(behavior: Cruise(speed: 1.0))])");
     assert!(msg.contains("exactly 2 children"), "{msg}");
-    let (_, _, msg) = error_of("Composite(arbiter: PriorityResolver(priorities: [1, 2]), children: [(behavior: Cruise(speed: 1.0))])");
+    let (_, _, msg) = error_of(
+        "Composite(arbiter: PriorityResolver(priorities: [1, 2]), children: [(behavior: Cruise(speed: 1.0))])",
+    );
     assert!(msg.contains("2 priorities for 1 children"), "{msg}");
     let (_, _, msg) = error_of("Composite(arbiter: MonteCarlo(hold_ticks: 0), children: [])");
     assert!(msg.contains("at least 1"), "{msg}");
@@ -110,7 +115,14 @@ fn arbiters_that_need_a_shape_check_it() {
 
 #[test]
 fn malformed_text_is_reported_not_panicked_on() {
-    for text in ["", "Composite(", "Cruise(speed: 1.0", "[[[[", "Cruise(speed: 1.0) trailing", "Composite(arbiter: Nope, children: [])"] {
+    for text in [
+        "",
+        "Composite(",
+        "Cruise(speed: 1.0",
+        "[[[[",
+        "Cruise(speed: 1.0) trailing",
+        "Composite(arbiter: Nope, children: [])",
+    ] {
         assert!(registry().from_ron::<BehaviorSpec>(text).is_err(), "{text:?}");
     }
 }

@@ -133,7 +133,7 @@ pub enum ArbiterSpec {
     /// See [`Conditional`]; needs exactly two children.
     Conditional {
         /// Child 0 acts while this holds, child 1 otherwise.
-        #[serde(deserialize_with = "crate::config::condition")]
+        #[serde(deserialize_with = "crate::config::checked")]
         when: Condition,
     },
     /// See [`PriorityResolver`]; one priority per child.

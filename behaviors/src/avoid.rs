@@ -1,0 +1,259 @@
+//! Keep clear of obstacles the range sensors see.
+
+use serde::Deserialize;
+use std::f64::consts::FRAC_PI_2;
+use ubf_core::config::{non_negative, positive, Check};
+use ubf_core::{wrap_angle, Action, Behavior, State};
+
+/// Settings of [`AvoidCollision`], as written in a scenario file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AvoidCollisionConfig {
+    /// An echo ahead nearer than this makes the robot slow and turn, m.
+    #[serde(default = "AvoidCollisionConfig::default_slow", deserialize_with = "positive")]
+    pub slow_distance: f64,
+    /// With an echo ahead nearer than this the robot may not drive forward, m.
+    #[serde(default = "AvoidCollisionConfig::default_stop", deserialize_with = "non_negative")]
+    pub stop_distance: f64,
+    /// Forward speed allowed per metre of clearance ahead beyond
+    /// `stop_distance`, 1/s: the robot stays this many seconds from contact.
+    #[serde(default = "AvoidCollisionConfig::default_speed_gain", deserialize_with = "positive")]
+    pub speed_per_metre: f64,
+    /// Half the width of the strip ahead that the robot will sweep, m: echoes
+    /// ahead within this distance of the centreline are in its way. The
+    /// default is the Powerbot's half-width (0.34 m) and a 16 cm margin.
+    #[serde(default = "AvoidCollisionConfig::default_path_half_width", deserialize_with = "positive")]
+    pub path_half_width: f64,
+    /// Distance from the centre of rotation to the front of the robot, m
+    /// (the Powerbot's 0.369 m by default).
+    #[serde(default = "AvoidCollisionConfig::default_body_front", deserialize_with = "non_negative")]
+    pub body_front: f64,
+    /// Turn rate per radian between the current and the chosen heading, 1/s.
+    #[serde(default = "AvoidCollisionConfig::default_turn_gain", deserialize_with = "positive")]
+    pub turn_gain: f64,
+    /// Largest turn rate it asks for, °/s.
+    #[serde(default = "AvoidCollisionConfig::default_turn", deserialize_with = "positive")]
+    pub max_turn_deg: f64,
+    /// Vote when an obstacle is at `stop_distance`; it falls to 0 at
+    /// `slow_distance`.
+    #[serde(default = "AvoidCollisionConfig::default_vote", deserialize_with = "non_negative")]
+    pub vote: f64,
+}
+
+impl AvoidCollisionConfig {
+    fn default_slow() -> f64 {
+        1.2
+    }
+    fn default_stop() -> f64 {
+        0.25
+    }
+    fn default_speed_gain() -> f64 {
+        0.5
+    }
+    fn default_path_half_width() -> f64 {
+        0.5
+    }
+    fn default_turn() -> f64 {
+        45.0
+    }
+    fn default_body_front() -> f64 {
+        0.369
+    }
+    fn default_turn_gain() -> f64 {
+        1.5
+    }
+    fn default_vote() -> f64 {
+        1.0
+    }
+}
+
+impl Default for AvoidCollisionConfig {
+    fn default() -> Self {
+        AvoidCollisionConfig {
+            slow_distance: Self::default_slow(),
+            stop_distance: Self::default_stop(),
+            speed_per_metre: Self::default_speed_gain(),
+            path_half_width: Self::default_path_half_width(),
+            body_front: Self::default_body_front(),
+            turn_gain: Self::default_turn_gain(),
+            max_turn_deg: Self::default_turn(),
+            vote: Self::default_vote(),
+        }
+    }
+}
+
+impl Check for AvoidCollisionConfig {
+    fn check(&self) -> Result<(), String> {
+        if self.stop_distance >= self.slow_distance {
+            return Err(format!(
+                "stop_distance {} must be less than slow_distance {}",
+                self.stop_distance, self.slow_distance
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Keeps the robot off obstacles seen by its range sensors (sonar).
+///
+/// It looks along candidate headings every 5° from −90° to +90° of the
+/// current one and measures how far the robot could drive along each before
+/// its swept strip (`path_half_width` either side) meets an echo. While the
+/// way straight ahead is clear for `slow_distance` it is silent, so walls
+/// alongside never fight a go-to behaviour. Otherwise it:
+///
+/// - limits the forward speed in proportion to the clearance straight ahead,
+///   down to zero at `stop_distance`, through the `max_velocity` limit
+///   channel that every arbiter respects;
+/// - turns towards the clear heading nearest the goal's bearing (or nearest
+///   straight ahead without a goal), or when none is free that far towards
+///   the freest; it keeps that heading (in the world) while it stays free,
+///   so that sonar noise does not make it dither;
+/// - votes more the nearer the obstacle ahead.
+#[derive(Clone, Debug)]
+pub struct AvoidCollision {
+    config: AvoidCollisionConfig,
+    /// The world heading it chose, kept while it stays free so that sonar
+    /// noise does not make it dither.
+    committed: Option<f64>,
+    /// Echo points in the robot frame (reused every tick).
+    points: Vec<(f64, f64)>,
+}
+
+/// Candidate headings, relative to the robot's, every 5° over ±90°.
+const CANDIDATES: usize = 37;
+
+fn candidate(i: usize) -> f64 {
+    (i as f64 * 5.0 - 90.0).to_radians()
+}
+
+impl AvoidCollision {
+    /// An avoider with these settings.
+    pub fn new(config: AvoidCollisionConfig) -> Self {
+        AvoidCollision { config, committed: None, points: Vec::new() }
+    }
+
+    /// The free heading (robot frame) nearest the goal's bearing, or nearest
+    /// straight ahead without a goal; if none is free for `needed` metres,
+    /// the freest.
+    fn choose(&self, state: &State, needed: f64) -> f64 {
+        let preferred = state.goal.map_or(0.0, |g| state.pose.bearing_to(g.x, g.y)).clamp(-FRAC_PI_2, FRAC_PI_2);
+        let free: [f64; CANDIDATES] = std::array::from_fn(|i| self.free_distance(candidate(i)));
+        let freest = free.iter().copied().fold(0.0, f64::max);
+        let needed = needed.min(freest);
+        (0..CANDIDATES)
+            .filter(|&i| free[i] >= needed)
+            .map(candidate)
+            .min_by(|a, b| (a - preferred).abs().total_cmp(&(b - preferred).abs()))
+            .unwrap_or(0.0)
+    }
+
+    /// How far the robot's strip along `heading` (robot frame) is free.
+    fn free_distance(&self, heading: f64) -> f64 {
+        let (s, c) = heading.sin_cos();
+        self.points
+            .iter()
+            .filter_map(|&(x, y)| {
+                let along = x * c + y * s;
+                let lateral = -x * s + y * c;
+                (along > 0.0 && lateral.abs() <= self.config.path_half_width).then_some(along)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+impl Behavior for AvoidCollision {
+    fn gen_action(&mut self, state: &State) -> Action {
+        self.points.clear();
+        self.points.extend(
+            state.ranges.iter().filter_map(|r| r.range.map(|range| r.pose_robot_sensor.transform_point(range, 0.0))),
+        );
+        let c = &self.config;
+        // Clearance ahead is measured from the robot's front, where the
+        // forward sonars sit: the echo's distance along the heading less the
+        // nearest echo-free offset of the ring.
+        let ahead = self.free_distance(0.0) - c.body_front;
+        if ahead >= c.slow_distance {
+            self.committed = None;
+            return Action::none();
+        }
+        let nearness = ((c.slow_distance - ahead) / (c.slow_distance - c.stop_distance)).clamp(0.0, 1.0);
+        let needed = c.slow_distance + c.body_front;
+        let kept = self
+            .committed
+            .map(|world| wrap_angle(world - state.pose.theta))
+            .filter(|h| h.abs() <= FRAC_PI_2 && self.free_distance(*h) >= needed);
+        let target = match kept {
+            Some(heading) => heading,
+            None => self.choose(state, needed),
+        };
+        self.committed = Some(wrap_angle(state.pose.theta + target));
+        let max_turn = c.max_turn_deg.to_radians();
+        let limit = (ahead - c.stop_distance).max(0.0) * c.speed_per_metre;
+        Action::with_vote(c.vote * nearness)
+            .rot_velocity((c.turn_gain * target).clamp(-max_turn, max_turn))
+            .max_velocity(limit)
+    }
+
+    fn name(&self) -> &str {
+        "AvoidCollision"
+    }
+
+    fn reset(&mut self) {
+        self.committed = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ubf_core::{Pose2, RangeReading};
+
+    fn reading(bearing_deg: f64, range: f64) -> RangeReading {
+        RangeReading {
+            pose_robot_sensor: Pose2::new(0.0, 0.0, bearing_deg.to_radians()),
+            range: Some(range),
+            max_range: 5.0,
+        }
+    }
+
+    fn state(readings: &[(f64, f64)]) -> State {
+        State { ranges: readings.iter().map(|&(b, r)| reading(b, r)).collect(), ..State::default() }
+    }
+
+    #[test]
+    fn silent_unless_something_is_in_the_way() {
+        let mut avoid = AvoidCollision::new(AvoidCollisionConfig::default());
+        assert!(
+            !avoid.gen_action(&state(&[(0.0, 3.0), (90.0, 0.6), (-90.0, 0.6)])).is_voting(),
+            "walls alongside are left alone"
+        );
+        assert!(!avoid.gen_action(&state(&[(180.0, 0.3)])).is_voting(), "echoes behind are ignored");
+    }
+
+    #[test]
+    fn slows_and_turns_to_a_free_heading() {
+        let mut avoid = AvoidCollision::new(AvoidCollisionConfig::default());
+        // A post 1 m ahead, slightly left, and a wall close on the left:
+        // go right, slowly.
+        let a = avoid.gen_action(&state(&[(5.0, 1.0), (60.0, 0.7), (80.0, 0.7)]));
+        assert!(a.motion.rot_velocity.unwrap() < 0.0, "{a:?}");
+        let ahead = 1.0 * 5f64.to_radians().cos() - 0.369;
+        assert!((a.motion.max_velocity.unwrap() - (ahead - 0.25) * 0.5).abs() < 1e-9);
+        // Nearer means a stronger vote.
+        assert!(avoid.gen_action(&state(&[(5.0, 0.8)])).vote > a.vote);
+        // At the stop distance, no forward speed at all.
+        assert_eq!(avoid.gen_action(&state(&[(0.0, 0.5)])).motion.max_velocity, Some(0.0));
+    }
+
+    #[test]
+    fn heads_for_the_side_of_the_goal() {
+        let mut avoid = AvoidCollision::new(AvoidCollisionConfig::default());
+        let mut s = state(&[(0.0, 1.0)]);
+        s.goal = Some(ubf_core::Goal { x: 5.0, y: -2.0, tolerance: 0.2 });
+        assert!(avoid.gen_action(&s).motion.rot_velocity.unwrap() < 0.0);
+        // Once it has chosen right, a goal slightly left does not flip it.
+        s.goal = Some(ubf_core::Goal { x: 5.0, y: 0.3, tolerance: 0.2 });
+        assert!(avoid.gen_action(&s).motion.rot_velocity.unwrap() < 0.0);
+    }
+}

@@ -1,0 +1,205 @@
+//! The stereo camera: where a point appears in both images, and where a
+//! matched pair of pixels says the point is.
+//!
+//! Frames. The *camera frame* is the thesis's: origin midway between the two
+//! cameras, x to the right, y ahead along the optical axes, z up. The *robot
+//! frame* is x forward, y left, z up, at the robot's centre of rotation on
+//! the floor. Images are rectified: both cameras share the focal length, the
+//! principal point and the rows. Pixels count from the top-left corner.
+
+use serde::{Deserialize, Serialize};
+use ubf_core::config::{finite, positive};
+use ubf_core::StereoPixels;
+
+/// Where the camera pair sits on the robot, looking straight ahead.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraMount {
+    /// Metres ahead of the centre of rotation. The thesis mounted its
+    /// cameras over the wheel axle (§3.5.1.4): 0.
+    #[serde(default, deserialize_with = "finite")]
+    pub forward: f64,
+    /// Metres to the left of the centreline.
+    #[serde(default, deserialize_with = "finite")]
+    pub left: f64,
+    /// Metres above the floor.
+    #[serde(default = "CameraMount::default_height", deserialize_with = "finite")]
+    pub height: f64,
+}
+
+impl CameraMount {
+    fn default_height() -> f64 {
+        1.0
+    }
+
+    /// A point in the robot frame, in the camera frame.
+    pub fn robot_to_cam(&self, p: [f64; 3]) -> [f64; 3] {
+        [-(p[1] - self.left), p[0] - self.forward, p[2] - self.height]
+    }
+
+    /// A point in the camera frame, in the robot frame.
+    pub fn cam_to_robot(&self, p: [f64; 3]) -> [f64; 3] {
+        [p[1] + self.forward, -p[0] + self.left, p[2] + self.height]
+    }
+}
+
+impl Default for CameraMount {
+    fn default() -> Self {
+        CameraMount { forward: 0.0, left: 0.0, height: Self::default_height() }
+    }
+}
+
+/// A calibrated, rectified stereo pair.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StereoCamera {
+    /// Image width, pixels.
+    #[serde(default = "StereoCamera::default_width")]
+    pub width_px: u32,
+    /// Image height, pixels.
+    #[serde(default = "StereoCamera::default_height")]
+    pub height_px: u32,
+    /// Focal length, pixels. The default gives a 60° horizontal field of
+    /// view at 640 pixels.
+    #[serde(default = "StereoCamera::default_focal", deserialize_with = "positive")]
+    pub focal_px: f64,
+    /// Distance between the two cameras' centres, m. The default is the
+    /// thesis's 60 cm (§4.4.10.1, figure 39).
+    #[serde(default = "StereoCamera::default_baseline", deserialize_with = "positive")]
+    pub baseline_m: f64,
+    /// Where the pair sits on the robot.
+    #[serde(default)]
+    pub mount: CameraMount,
+}
+
+impl Default for StereoCamera {
+    fn default() -> Self {
+        StereoCamera {
+            width_px: Self::default_width(),
+            height_px: Self::default_height(),
+            focal_px: Self::default_focal(),
+            baseline_m: Self::default_baseline(),
+            mount: CameraMount::default(),
+        }
+    }
+}
+
+impl StereoCamera {
+    fn default_width() -> u32 {
+        640
+    }
+    fn default_height() -> u32 {
+        480
+    }
+    fn default_focal() -> f64 {
+        320.0 / 30f64.to_radians().tan()
+    }
+    fn default_baseline() -> f64 {
+        0.6
+    }
+
+    /// Principal point column: the image centre.
+    pub fn cx(&self) -> f64 {
+        f64::from(self.width_px) / 2.0
+    }
+
+    /// Principal point row: the image centre.
+    pub fn cy(&self) -> f64 {
+        f64::from(self.height_px) / 2.0
+    }
+
+    /// The horizontal field of view of one camera, radians.
+    pub fn horizontal_fov(&self) -> f64 {
+        2.0 * (self.cx() / self.focal_px).atan()
+    }
+
+    /// Where `p` (camera frame) appears in both images, or `None` when it is
+    /// not in front of the cameras. The pixels may lie outside the images:
+    /// see [`StereoCamera::in_images`].
+    pub fn project(&self, p: [f64; 3]) -> Option<StereoPixels> {
+        let [x, y, z] = p;
+        if y <= 0.0 {
+            return None;
+        }
+        let half = self.baseline_m / 2.0;
+        let f = self.focal_px;
+        Some(StereoPixels {
+            u_left: f * (x + half) / y + self.cx(),
+            u_right: f * (x - half) / y + self.cx(),
+            v: -f * z / y + self.cy(),
+        })
+    }
+
+    /// Whether both pixels fall inside the images.
+    pub fn in_images(&self, px: &StereoPixels) -> bool {
+        let w = f64::from(self.width_px);
+        let h = f64::from(self.height_px);
+        let inside = |u: f64| (0.0..w).contains(&u);
+        inside(px.u_left) && inside(px.u_right) && (0.0..h).contains(&px.v)
+    }
+
+    /// Where a matched pair of pixels puts the point, camera frame (thesis
+    /// eq. 12–14, with the origin moved from the left camera to the middle of
+    /// the pair). `None` for a disparity that is not positive.
+    pub fn triangulate(&self, px: &StereoPixels) -> Option<[f64; 3]> {
+        let disparity = px.disparity();
+        if disparity <= 0.0 || !disparity.is_finite() {
+            return None;
+        }
+        let depth = self.focal_px * self.baseline_m / disparity;
+        let x = (px.u_left - self.cx()) * depth / self.focal_px - self.baseline_m / 2.0;
+        let z = -(px.v - self.cy()) * depth / self.focal_px;
+        Some([x, depth, z])
+    }
+
+    /// The standard deviation of a triangulated depth at `depth` metres when
+    /// each image column has Gaussian noise of `pixel_sigma`: the disparity's
+    /// σ is √2·pixel_sigma, and depth σ ≈ depth² σ_d / (f T).
+    pub fn depth_sigma(&self, depth: f64, pixel_sigma: f64) -> f64 {
+        depth * depth * std::f64::consts::SQRT_2 * pixel_sigma / (self.focal_px * self.baseline_m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn a_point_ahead_projects_symmetrically() {
+        let cam = StereoCamera::default();
+        let px = cam.project([0.0, 10.0, 0.0]).unwrap();
+        assert!((px.u_left - cam.cx() - (cam.cx() - px.u_right)).abs() < 1e-9);
+        assert!((px.disparity() - cam.focal_px * 0.6 / 10.0).abs() < 1e-9);
+        assert_eq!(px.v, cam.cy());
+        assert!(cam.project([0.0, -1.0, 0.0]).is_none());
+    }
+
+    #[test]
+    fn default_field_of_view_is_sixty_degrees() {
+        assert!((StereoCamera::default().horizontal_fov().to_degrees() - 60.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn mount_round_trips() {
+        let mount = CameraMount { forward: 0.2, left: -0.1, height: 1.1 };
+        let p = [3.0, 1.0, 0.4];
+        let back = mount.cam_to_robot(mount.robot_to_cam(p));
+        assert!(p.iter().zip(back).all(|(a, b)| (a - b).abs() < 1e-12));
+        // A point ahead of the robot is ahead of the camera (y), and one to
+        // the robot's left is to the camera's left (negative x).
+        let ahead_left = mount.robot_to_cam([5.0, 1.0, 1.1]);
+        assert!(ahead_left[1] > 0.0 && ahead_left[0] < 0.0);
+    }
+
+    proptest! {
+        #[test]
+        fn triangulation_inverts_projection(x in -5.0..5.0f64, y in 0.5..60.0f64, z in -2.0..2.0f64) {
+            let cam = StereoCamera::default();
+            let p = cam.triangulate(&cam.project([x, y, z]).unwrap()).unwrap();
+            prop_assert!((p[0] - x).abs() < 1e-9 * y.max(1.0));
+            prop_assert!((p[1] - y).abs() < 1e-9 * y * y);
+            prop_assert!((p[2] - z).abs() < 1e-9 * y.max(1.0));
+        }
+    }
+}

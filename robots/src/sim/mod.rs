@@ -1,0 +1,282 @@
+//! A headless simulated robot: a differential-drive body in a world of
+//! walls, boxes, landmarks and people, with a sonar ring, bumpers and a
+//! stereo camera.
+//!
+//! Everything random (the landmark layout unless it has a seed of its own,
+//! odometry slip, sonar noise, pixel noise) is drawn from `ChaCha8Rng`
+//! streams seeded by the run's seed, one stream per source, so the same
+//! scenario and seed always give the same run, and turning one noise source
+//! off does not change the others' draws.
+
+mod body;
+mod camera;
+pub mod geometry;
+mod sonar;
+mod world;
+
+pub use body::{integrate, MotionProfile, OdometryErrors, StartPose};
+pub use camera::{descriptor_from, SimCameraConfig};
+pub use sonar::SonarConfig;
+pub use world::{
+    Anchor, BoxConfig, CorridorConfig, FeaturelessConfig, LandmarkConfig, PersonConfig, RandomLandmarks, Side,
+    WallConfig, World, WorldConfig, WorldLandmark, Xy,
+};
+
+use crate::model::{Footprint, RobotModel};
+use body::{Body, BodyConfig};
+use camera::SimCamera;
+use geometry::Circle;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Deserialize;
+use sonar::Sonar;
+use ubf_core::config::positive;
+use ubf_core::{Bumpers, Command, Limits, Pose2, Robot, RobotError, State};
+
+/// The simulated robot's settings, as written in a scenario file. The
+/// geometry and the sonar ring default to the Powerbot's.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimRobotConfig {
+    /// Where the robot starts.
+    #[serde(default)]
+    pub start: StartPose,
+    /// Largest forward speed, m/s. The default is the thesis robot's reduced
+    /// top speed (§4.4.6).
+    #[serde(default = "SimRobotConfig::default_max_velocity", deserialize_with = "positive")]
+    pub max_velocity: f64,
+    /// Largest turn rate, °/s.
+    #[serde(default = "SimRobotConfig::default_max_rot_velocity_deg", deserialize_with = "positive")]
+    pub max_rot_velocity_deg: f64,
+    /// Largest change of forward speed, m/s².
+    #[serde(default = "SimRobotConfig::default_max_acceleration", deserialize_with = "positive")]
+    pub max_acceleration: f64,
+    /// Largest change of turn rate, °/s².
+    #[serde(default = "SimRobotConfig::default_max_rot_acceleration_deg", deserialize_with = "positive")]
+    pub max_rot_acceleration_deg: f64,
+    /// Turn rate per radian of error when a command gives a heading, 1/s.
+    #[serde(default = "SimRobotConfig::default_heading_gain", deserialize_with = "positive")]
+    pub heading_gain: f64,
+    /// How drive commands are executed.
+    #[serde(default)]
+    pub motion: MotionProfile,
+    /// How odometry errs; perfect by default.
+    #[serde(default)]
+    pub odometry: OdometryErrors,
+    /// The outline; by default the Powerbot's.
+    #[serde(default)]
+    pub footprint: Option<Footprint>,
+    /// The sonar ring.
+    #[serde(default)]
+    pub sonar: SonarConfig,
+    /// The stereo camera; none by default.
+    #[serde(default)]
+    pub camera: Option<SimCameraConfig>,
+}
+
+impl SimRobotConfig {
+    fn default_max_velocity() -> f64 {
+        0.6
+    }
+    fn default_max_rot_velocity_deg() -> f64 {
+        60.0
+    }
+    fn default_max_acceleration() -> f64 {
+        0.5
+    }
+    fn default_max_rot_acceleration_deg() -> f64 {
+        120.0
+    }
+    fn default_heading_gain() -> f64 {
+        2.0
+    }
+}
+
+impl Default for SimRobotConfig {
+    fn default() -> Self {
+        SimRobotConfig {
+            start: StartPose::default(),
+            max_velocity: Self::default_max_velocity(),
+            max_rot_velocity_deg: Self::default_max_rot_velocity_deg(),
+            max_acceleration: Self::default_max_acceleration(),
+            max_rot_acceleration_deg: Self::default_max_rot_acceleration_deg(),
+            heading_gain: Self::default_heading_gain(),
+            motion: MotionProfile::default(),
+            odometry: OdometryErrors::default(),
+            footprint: None,
+            sonar: SonarConfig::default(),
+            camera: None,
+        }
+    }
+}
+
+/// The random streams, one per source of randomness.
+#[derive(Clone, Copy)]
+enum Stream {
+    World = 1,
+    Motion = 2,
+    Sonar = 3,
+    Camera = 4,
+}
+
+fn stream(seed: u64, which: Stream) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(which as u64);
+    rng
+}
+
+/// A simulated robot. Each [`Robot::act`] advances the simulation by one
+/// period.
+#[derive(Clone, Debug)]
+pub struct SimRobot {
+    body: Body,
+    world: World,
+    sonar: Sonar,
+    camera: Option<SimCamera>,
+    period: f64,
+    time: f64,
+    reach: f64,
+    motion_rng: ChaCha8Rng,
+    sonar_rng: ChaCha8Rng,
+    camera_rng: ChaCha8Rng,
+    people: Vec<Circle>,
+    bumpers: Bumpers,
+    stalled: bool,
+    collisions: u32,
+}
+
+impl SimRobot {
+    /// A robot at its configured start in the world, stepping `period`
+    /// seconds per act, with every random draw seeded by `seed`.
+    pub fn new(config: &SimRobotConfig, world: &WorldConfig, period: f64, seed: u64) -> Self {
+        let model = RobotModel::powerbot();
+        let footprint = config.footprint.unwrap_or(model.footprint);
+        let body = Body::new(BodyConfig {
+            start: config.start.pose(),
+            limits: Limits::new(config.max_velocity, config.max_rot_velocity_deg.to_radians()),
+            max_acceleration: config.max_acceleration,
+            max_rot_acceleration: config.max_rot_acceleration_deg.to_radians(),
+            heading_gain: config.heading_gain,
+            motion: config.motion,
+            odometry: config.odometry,
+            track_width: model.track_width,
+            footprint,
+        });
+        let units = config.sonar.units.clone().unwrap_or(model.sonar);
+        let world = World::build(world, &mut stream(seed, Stream::World));
+        SimRobot {
+            body,
+            world,
+            sonar: Sonar::new(config.sonar.clone(), units),
+            camera: config.camera.clone().map(SimCamera::new),
+            period,
+            time: 0.0,
+            reach: footprint.radius(),
+            motion_rng: stream(seed, Stream::Motion),
+            sonar_rng: stream(seed, Stream::Sonar),
+            camera_rng: stream(seed, Stream::Camera),
+            people: Vec::new(),
+            bumpers: Bumpers::default(),
+            stalled: false,
+            collisions: 0,
+        }
+    }
+
+    /// Where the robot really is.
+    pub fn true_pose(&self) -> Pose2 {
+        self.body.true_pose
+    }
+
+    /// Where its odometry says it is.
+    pub fn odometry_pose(&self) -> Pose2 {
+        self.body.odometry
+    }
+
+    /// Metres driven so far (true path length).
+    pub fn distance_travelled(&self) -> f64 {
+        self.body.distance
+    }
+
+    /// How many times the robot has come into contact with something.
+    pub fn collisions(&self) -> u32 {
+        self.collisions
+    }
+
+    /// The world it drives in.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The robot's outline at `pose`, in the world, counter-clockwise.
+    pub fn footprint_at(&self, pose: &Pose2) -> [(f64, f64); 4] {
+        self.body.footprint_at(pose).0
+    }
+
+    /// The camera's settings, if the robot has one.
+    pub fn camera(&self) -> Option<&SimCameraConfig> {
+        self.camera.as_ref().map(SimCamera::config)
+    }
+
+    fn touches(&self, pose: &Pose2) -> bool {
+        let quad = self.body.footprint_at(pose);
+        self.world.segments.iter().any(|s| quad.touches_segment(s))
+            || self.people.iter().any(|c| quad.touches_circle(c))
+    }
+}
+
+impl Robot for SimRobot {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        self.world.people_at(self.time, &mut self.people);
+        let pose = self.body.true_pose;
+        state.pose = self.body.odometry;
+        state.velocity = self.body.velocity;
+        state.rot_velocity = self.body.rot_velocity;
+        self.sonar.sense(&pose, self.reach, &self.world.segments, &self.people, &mut self.sonar_rng, &mut state.ranges);
+        state.bumpers = self.bumpers;
+        state.stalled = self.stalled;
+        state.motors_enabled = true;
+        state.estop = false;
+        state.sensor_age = 0.0;
+        if let Some(camera) = &mut self.camera {
+            let landmarks = &mut state.stereo.landmarks;
+            if let Some(number) = camera.capture(self.time, &pose, &self.world, &mut self.camera_rng, landmarks) {
+                state.stereo.number = number;
+                state.stereo.time = self.time;
+            }
+        }
+        Ok(())
+    }
+
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        let intended = self.body.velocity;
+        let planned = self.body.plan(command, self.period, &mut self.motion_rng);
+        // A move into contact is refused: the wheels stall against the
+        // obstacle. A robot already in contact (a person walked into it) may
+        // move, so that it can get away.
+        let blocked = self.touches(&planned.true_pose()) && !self.touches(&self.body.true_pose);
+        if blocked {
+            if !self.stalled {
+                self.collisions += 1;
+            }
+            let forwards = self.body.velocity.max(intended) >= 0.0;
+            self.bumpers = Bumpers { front: forwards, rear: !forwards };
+            self.stalled = true;
+            self.body.block();
+        } else {
+            self.body.commit(planned);
+            self.bumpers = Bumpers::default();
+            self.stalled = false;
+        }
+        self.time += self.period;
+        Ok(())
+    }
+
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        self.body.block();
+        Ok(())
+    }
+
+    fn limits(&self) -> Limits {
+        self.body.limits()
+    }
+}

@@ -1,0 +1,144 @@
+//! `plot.png`: the world and the run seen from above, as in the thesis's
+//! figure 31: walls, landmarks, the true and the estimated paths, and the
+//! points where the robot changed its mind.
+
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+use ubf_core::Goal;
+use ubf_robots::sim::{Anchor, World};
+
+/// What a run plot shows.
+pub struct RunPlot<'a> {
+    /// The caption.
+    pub title: &'a str,
+    /// Walls, boxes, landmarks, people.
+    pub world: &'a World,
+    /// Where the robot really went.
+    pub true_path: &'a [(f64, f64)],
+    /// Where it believed it went.
+    pub estimated_path: &'a [(f64, f64)],
+    /// Where the winning behaviour changed, on the true path.
+    pub decisions: &'a [(f64, f64)],
+    /// The goal.
+    pub goal: Option<Goal>,
+}
+
+/// Why a plot could not be drawn.
+#[derive(Debug, thiserror::Error)]
+#[error("drawing {path}: {message}")]
+pub struct PlotError {
+    path: String,
+    message: String,
+}
+
+static FONT: Once = Once::new();
+
+/// The font ships inside a crate, so plots need no system font libraries.
+fn register_font() {
+    FONT.call_once(|| {
+        // Registering a valid built-in font cannot fail; if it somehow did,
+        // text would be missing, not the plot.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT);
+    });
+}
+
+fn bounds(plot: &RunPlot) -> (f64, f64, f64, f64) {
+    let mut points: Vec<(f64, f64)> = plot.true_path.iter().chain(plot.estimated_path).copied().collect();
+    for s in &plot.world.segments {
+        points.extend([s.a, s.b]);
+    }
+    for lm in &plot.world.landmarks {
+        let (p, _) = plot.world.landmark_at(lm, 0.0);
+        points.push((p[0], p[1]));
+    }
+    if let Some(g) = plot.goal {
+        points.push((g.x, g.y));
+    }
+    let finite = points.into_iter().filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for (x, y) in finite {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    if !x0.is_finite() {
+        return (-1.0, 1.0, -1.0, 1.0);
+    }
+    let margin = 0.05 * (x1 - x0).max(y1 - y0).max(1.0);
+    (x0 - margin, x1 + margin, y0 - margin, y1 + margin)
+}
+
+/// Draws the plot into a PNG at `path`.
+pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
+    let fail = |e: &dyn std::fmt::Display| PlotError { path: path.display().to_string(), message: e.to_string() };
+    register_font();
+    let (x0, x1, y0, y1) = bounds(plot);
+    // Equal scales on both axes, so a corridor looks like one.
+    let width = 1400u32;
+    let plot_width = f64::from(width - 90);
+    let height = ((plot_width * (y1 - y0) / (x1 - x0)) as u32 + 110).clamp(260, 1400);
+    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(plot.title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(50)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| fail(&e))?;
+    chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").light_line_style(WHITE).draw().map_err(|e| fail(&e))?;
+
+    let wall = ShapeStyle::from(&BLACK).stroke_width(2);
+    chart
+        .draw_series(plot.world.segments.iter().map(|s| PathElement::new(vec![s.a, s.b], wall)))
+        .map_err(|e| fail(&e))?;
+    let landmark_style = ShapeStyle::from(&RED).filled();
+    chart
+        .draw_series(plot.world.landmarks.iter().filter_map(|lm| match lm.anchor {
+            Anchor::Fixed { position, .. } => Some(Circle::new((position[0], position[1]), 4, landmark_style)),
+            Anchor::Person { .. } => None,
+        }))
+        .map_err(|e| fail(&e))?
+        .label("landmark")
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, landmark_style));
+    let person_style = ShapeStyle::from(&RGBColor(230, 140, 0)).stroke_width(2);
+    chart
+        .draw_series(
+            (0..plot.world.people.len()).map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person_style)),
+        )
+        .map_err(|e| fail(&e))?;
+
+    let truth = RGBColor(30, 80, 200);
+    let estimate = RGBColor(20, 150, 60);
+    chart
+        .draw_series(LineSeries::new(plot.true_path.iter().copied(), truth.stroke_width(2)))
+        .map_err(|e| fail(&e))?
+        .label("true path")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], truth.stroke_width(2)));
+    chart
+        .draw_series(LineSeries::new(plot.estimated_path.iter().copied(), estimate.stroke_width(1)))
+        .map_err(|e| fail(&e))?
+        .label("estimated path")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], estimate.stroke_width(1)));
+    chart
+        .draw_series(plot.decisions.iter().map(|&p| Cross::new(p, 5, truth.stroke_width(2))))
+        .map_err(|e| fail(&e))?
+        .label("decision point")
+        .legend(move |(x, y)| Cross::new((x + 10, y), 5, truth.stroke_width(2)));
+    if let Some(g) = plot.goal {
+        let goal_style = ShapeStyle::from(&BLACK).stroke_width(2);
+        chart
+            .draw_series([TriangleMarker::new((g.x, g.y), 8, goal_style)])
+            .map_err(|e| fail(&e))?
+            .label("goal")
+            .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 8, goal_style));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.85))
+        .draw()
+        .map_err(|e| fail(&e))?;
+    root.present().map_err(|e| fail(&e))?;
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! The simulator end to end: avoidance over many seeds, determinism of every
+//! output, and what a run leaves behind.
+
+use std::path::Path;
+use ubf::run::{run, EndReason};
+use ubf::scenario::Scenario;
+
+fn load(name: &str) -> Scenario {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(name);
+    Scenario::load(&ubf::registry(), &path).unwrap()
+}
+
+#[test]
+fn goes_round_a_box_to_the_goal_without_touching_anything_in_30_seeds() {
+    let scenario = load("corridor-box.ron");
+    let mut times = Vec::new();
+    for seed in 0..30 {
+        let report = run(&scenario, seed, None).unwrap();
+        assert_eq!(report.collisions, 0, "seed {seed}: {report:?}");
+        assert_eq!(report.end, EndReason::GoalReached, "seed {seed}: {report:?}");
+        assert!(report.reached_goal, "seed {seed}: {report:?}");
+        times.push(report.ticks);
+    }
+    // The seeds really drive differently (sonar noise), or this proves little.
+    times.sort_unstable();
+    times.dedup();
+    assert!(times.len() > 5, "{times:?}");
+}
+
+#[test]
+fn without_avoidance_the_same_robot_hits_the_box() {
+    // The check above can fail: drop AvoidCollision and the box is hit.
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/corridor-box.ron")).unwrap();
+    let text = text.replace("(behavior: AvoidCollision(), weight: 2.0),", "");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let report = run(&scenario, 0, None).unwrap();
+    assert!(report.collisions > 0, "{report:?}");
+    assert!(!report.reached_goal);
+}
+
+fn outputs(scenario: &Scenario, seed: u64, dir: &Path) -> (String, String, Vec<u8>) {
+    run(scenario, seed, Some(dir)).unwrap();
+    let mut report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    report.as_object_mut().unwrap().remove("wall_time_s");
+    let trajectory = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let plot = std::fs::read(dir.join("plot.png")).unwrap();
+    (report.to_string(), trajectory, plot)
+}
+
+#[test]
+fn same_scenario_and_seed_give_byte_identical_outputs() {
+    let scenario = load("corridor-box.ron");
+    let dir = tempfile::tempdir().unwrap();
+    let a = outputs(&scenario, 7, &dir.path().join("a"));
+    let b = outputs(&scenario, 7, &dir.path().join("b"));
+    assert_eq!(a.0, b.0, "report.json");
+    assert!(a.1 == b.1, "trajectory.csv differs");
+    assert!(a.2 == b.2, "plot.png differs");
+    let c = outputs(&scenario, 8, &dir.path().join("c"));
+    assert_ne!(a.1, c.1, "another seed, another run");
+}
+
+#[test]
+fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
+    let scenario = load("corridor-box.ron");
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&scenario, 1, Some(dir.path())).unwrap();
+
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("report.json")).unwrap()).unwrap();
+    for field in [
+        "scenario",
+        "seed",
+        "ticks",
+        "sim_time_s",
+        "distance_m",
+        "reached_goal",
+        "collisions",
+        "final_true_pose",
+        "final_estimated_pose",
+        "wall_time_s",
+    ] {
+        assert!(json.get(field).is_some(), "report.json lacks {field}");
+    }
+
+    let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    assert!(header.starts_with("time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta"), "{header}");
+    assert!(header.ends_with("winner,vote:root/Stop,vote:root/AvoidCollision,vote:root/GoTo"), "{header}");
+    assert_eq!(lines.count() as u64, report.ticks);
+
+    let png = std::fs::read(dir.path().join("plot.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}
