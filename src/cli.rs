@@ -50,6 +50,24 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run every scenario with every seed in parallel and summarise.
+    Sweep {
+        /// The scenario files (RON).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
+        #[arg(long, value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Runs at once; by default one per core.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Where the reports and the summary go.
+        #[arg(long)]
+        out: PathBuf,
+        /// Also write every run's trajectory.csv and plot.png.
+        #[arg(long)]
+        trajectories: bool,
+    },
     /// Check scenario files without running them; exit code 2 on the first
     /// bad one.
     Check {
@@ -76,6 +94,9 @@ pub fn main_with(registry: Registry) -> ExitCode {
     match cli.command {
         Command::Run { file, seed, out, json } => run_command(&registry, file, seed, out, json),
         Command::Check { files } => check_command(&registry, &files),
+        Command::Sweep { files, seeds, jobs, out, trajectories } => {
+            sweep_command(&registry, &files, seeds, jobs, &out, trajectories)
+        }
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -120,6 +141,82 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
         }
         Err(e) => {
             eprintln!("error: {}: {e}", file.display());
+            ExitCode::from(EXIT_FAILURE)
+        }
+    }
+}
+
+/// Parses `A..B`, `A..=B` or `N` into a range of seeds.
+fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
+    let number = |s: &str| s.trim().parse::<u64>().map_err(|_| format!("`{s}` is not a seed (a whole number ≥ 0)"));
+    let range = if let Some((a, b)) = text.split_once("..=") {
+        let end = number(b)?.checked_add(1).ok_or("the last seed is too large")?;
+        number(a)?..end
+    } else if let Some((a, b)) = text.split_once("..") {
+        number(a)?..number(b)?
+    } else {
+        let n = number(text)?;
+        n..n.checked_add(1).ok_or("the seed is too large")?
+    };
+    if range.is_empty() {
+        return Err(format!("`{text}` holds no seed"));
+    }
+    Ok(range)
+}
+
+fn sweep_command(
+    registry: &Registry,
+    files: &[PathBuf],
+    seeds: std::ops::Range<u64>,
+    jobs: Option<usize>,
+    out: &std::path::Path,
+    trajectories: bool,
+) -> ExitCode {
+    let mut items: Vec<crate::sweep::SweepItem> = Vec::new();
+    for file in files {
+        let scenario = match Scenario::load(registry, file) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        };
+        let stem = file.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned());
+        let mut label = stem.clone();
+        let mut n = 2;
+        while items.iter().any(|i| i.label == label) {
+            label = format!("{stem}_{n}");
+            n += 1;
+        }
+        items.push(crate::sweep::SweepItem { scenario, label });
+    }
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let stopwatch = ubf_core::Stopwatch::start();
+    match crate::sweep::sweep(&items, seeds.clone(), jobs, out, trajectories) {
+        Ok(summary) => {
+            let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
+            let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
+            println!(
+                "{runs} runs of {} scenario(s) × seeds {}..{} in {:.2} s on {jobs} job(s); {failed} failed",
+                items.len(),
+                seeds.start,
+                seeds.end,
+                stopwatch.elapsed_s()
+            );
+            println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
+            for (label, s) in &summary.scenarios {
+                for (seed, error) in &s.failed {
+                    eprintln!("error: {label} seed {seed}: {error}");
+                }
+            }
+            if failed > 0 {
+                ExitCode::from(EXIT_FAILURE)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
             ExitCode::from(EXIT_FAILURE)
         }
     }

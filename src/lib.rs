@@ -15,6 +15,7 @@ pub mod cli;
 pub mod plot;
 pub mod run;
 pub mod scenario;
+pub mod sweep;
 pub mod trajectory;
 
 pub use ubf_core::Registry;

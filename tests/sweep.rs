@@ -1,0 +1,65 @@
+//! `ubf sweep`: the summary does not depend on the number of jobs, every run
+//! leaves a report, and bad arguments are refused.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn ubf(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ubf")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
+}
+
+fn sweep(out: &Path, jobs: &str) -> Output {
+    ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "3..=14",
+        "--jobs",
+        jobs,
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn the_summary_is_byte_identical_whatever_the_number_of_jobs() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one");
+    let three = dir.path().join("three");
+    let a = sweep(&one, "1");
+    let b = sweep(&three, "3");
+    assert!(a.status.success() && b.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    // Not a terminal: no progress bar, nothing on stderr.
+    assert!(a.stderr.is_empty(), "{}", String::from_utf8_lossy(&a.stderr));
+    for file in ["summary.csv", "summary.json"] {
+        let x = std::fs::read(one.join(file)).unwrap();
+        let y = std::fs::read(three.join(file)).unwrap();
+        assert!(x == y, "{file} differs between 1 and 3 jobs");
+    }
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(one.join("summary.json")).unwrap()).unwrap();
+    let boxes = &summary["scenarios"]["corridor-box"];
+    assert_eq!(boxes["runs"], 12);
+    assert_eq!(boxes["fields"]["collisions"]["mean"], 0.0);
+    assert_eq!(boxes["fields"]["reached_goal"]["mean"], 1.0);
+    let distance = &boxes["fields"]["distance_m"];
+    let (lo, mean, hi) = (
+        distance["ci95"][0].as_f64().unwrap(),
+        distance["mean"].as_f64().unwrap(),
+        distance["ci95"][1].as_f64().unwrap(),
+    );
+    assert!(lo < mean && mean < hi);
+    for seed in 3..=14 {
+        assert!(one.join(format!("corridor-box/seed-{seed}/report.json")).exists());
+    }
+    assert!(!one.join("corridor-box/seed-15").exists());
+}
+
+#[test]
+fn bad_seed_ranges_are_refused() {
+    for seeds in ["5..5", "x..3", "3..-1", "9..2"] {
+        let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", seeds, "--out", "unused"]);
+        assert_eq!(out.status.code(), Some(2), "{seeds}");
+    }
+    assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("unused").exists());
+}
