@@ -77,6 +77,48 @@ enum Command {
     },
     /// List the behaviours this build can read from scenario files.
     Behaviors,
+    /// The landmark egomotion error model of a camera (thesis §3.3.3).
+    Model {
+        #[command(subcommand)]
+        action: ModelCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum ModelCommand {
+    /// Fit the exponential model (eq. 24) to the geometric one (eq. 16–23)
+    /// and report the fit's quality.
+    Fit {
+        #[command(flatten)]
+        camera: CameraArgs,
+        /// Print the fit as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Draw the model as a heat map over the field of view (thesis figure 16).
+    Heatmap {
+        #[command(flatten)]
+        camera: CameraArgs,
+        /// Draw the fitted exponential model instead of the geometric one.
+        #[arg(long)]
+        exponential: bool,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+#[derive(Debug, clap::Args)]
+struct CameraArgs {
+    /// Take the camera from this scenario's robot (default: the default camera).
+    #[arg(long)]
+    scenario: Option<PathBuf>,
+    /// The step the model assumes, m (the thesis: 1 m).
+    #[arg(long, default_value_t = 1.0)]
+    step: f64,
+    /// Nearest and farthest depth of the fit, m, as `NEAR..FAR`.
+    #[arg(long, default_value = "1.2..40", value_parser = parse_depths)]
+    depths: [f64; 2],
 }
 
 /// Runs the command line with `registry` resolving behaviour names.
@@ -97,6 +139,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Sweep { files, seeds, jobs, out, trajectories } => {
             sweep_command(&registry, &files, seeds, jobs, &out, trajectories)
         }
+        Command::Model { action } => model_command(&registry, action),
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -144,6 +187,95 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
             ExitCode::from(EXIT_FAILURE)
         }
     }
+}
+
+fn parse_depths(text: &str) -> Result<[f64; 2], String> {
+    let (a, b) = text.split_once("..").ok_or("expected NEAR..FAR, in metres")?;
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a depth in metres"));
+    let (near, far) = (number(a)?, number(b)?);
+    if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far) {
+        return Err(format!("`{text}`: need 0 < NEAR < FAR"));
+    }
+    Ok([near, far])
+}
+
+fn model_command(registry: &Registry, action: ModelCommand) -> ExitCode {
+    use ubf_perception::error_model::{fit_exponential, GeometricModel};
+    let args = match &action {
+        ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
+    };
+    if !(args.step.is_finite() && args.step > 0.0) {
+        eprintln!("error: --step must be a positive number of metres");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let camera = match &args.scenario {
+        None => ubf_perception::StereoCamera::default(),
+        Some(file) => match Scenario::load(registry, file) {
+            Ok(s) => s.robot.camera.map(|c| c.stereo).unwrap_or_default(),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        },
+    };
+    let geometric = GeometricModel::new(&camera, args.step);
+    let depths = [args.depths[0].max(geometric.min_depth()), args.depths[1]];
+    let fit = fit_exponential(|x, y| geometric.cv(x, y), &camera, depths, 0.25);
+    match action {
+        ModelCommand::Fit { json: true, .. } => {
+            println!("{}", serde_json::to_string_pretty(&fit).expect("a fit report always serialises"));
+        }
+        ModelCommand::Fit { .. } => {
+            println!(
+                "camera          f = {:.1} px, T = {:.3} m, {}×{} px",
+                camera.focal_px, camera.baseline_m, camera.width_px, camera.height_px
+            );
+            println!(
+                "model step      {} m; fitted over depths {:.2}–{:.2} m, {} points of the field of view",
+                args.step, depths[0], depths[1], fit.samples
+            );
+            println!("CV(x, y)        α·exp(β·y)·exp(−γ·|x|)");
+            println!("α               {:.6e}", fit.model.alpha);
+            println!("β               {:.5} 1/m", fit.model.beta);
+            println!("γ               {:.5} 1/m", fit.model.gamma);
+            println!("R² of ln CV     {:.4}", fit.r_squared_log);
+            println!(
+                "relative error  median {:.1} %, 95th percentile {:.1} %",
+                100.0 * fit.median_relative_error,
+                100.0 * fit.p95_relative_error
+            );
+            println!(
+                "pair ordering   {:.1} % of landmark pairs ranked as the geometric model ranks them",
+                100.0 * fit.pair_order_agreement
+            );
+        }
+        ModelCommand::Heatmap { exponential, out, .. } => {
+            let result = if exponential {
+                let m = fit.model;
+                crate::plot::draw_error_model(
+                    "Fitted exponential model (eq. 24)",
+                    |x, y| m.cv(x, y),
+                    &camera,
+                    depths[1],
+                    &out,
+                )
+            } else {
+                crate::plot::draw_error_model(
+                    "Geometric error model (eq. 16-23)",
+                    |x, y| geometric.cv(x, y),
+                    &camera,
+                    depths[1],
+                    &out,
+                )
+            };
+            if let Err(e) = result {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_FAILURE);
+            }
+            println!("wrote {}", out.display());
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 /// Parses `A..B`, `A..=B` or `N` into a range of seeds.

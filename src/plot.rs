@@ -142,3 +142,81 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     root.present().map_err(|e| fail(&e))?;
     Ok(())
 }
+
+/// Draws the CV of `cv` over the floor ahead of the camera as a heat map
+/// (thesis figure 16): lateral position across, depth up, log₁₀ CV as
+/// colour from blue (best) to red (worst); outside the stereo field of view
+/// is left white.
+pub fn draw_error_model(
+    title: &str,
+    cv: impl Fn(f64, f64) -> f64,
+    camera: &ubf_perception::StereoCamera,
+    max_depth: f64,
+    path: &Path,
+) -> Result<(), PlotError> {
+    let fail = |e: &dyn std::fmt::Display| PlotError { path: path.display().to_string(), message: e.to_string() };
+    register_font();
+    let half_fov = camera.horizontal_fov() / 2.0;
+    let x_max = max_depth * half_fov.tan();
+    let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(50)
+        .build_cartesian_2d(-x_max..x_max, 0.0..max_depth)
+        .map_err(|e| fail(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("lateral x (m, right positive)")
+        .y_desc("depth y (m)")
+        .light_line_style(WHITE)
+        .draw()
+        .map_err(|e| fail(&e))?;
+    let cell = max_depth / 150.0;
+    let inside = |x: f64, y: f64| x.abs() + camera.baseline_m / 2.0 <= y * half_fov.tan() && y > 1.0;
+    let mut cells = Vec::new();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut y = cell / 2.0;
+    while y < max_depth {
+        let mut x = -x_max + cell / 2.0;
+        while x < x_max {
+            if inside(x, y) {
+                let v = cv(x, y).log10();
+                (lo, hi) = (lo.min(v), hi.max(v));
+                cells.push((x, y, v));
+            }
+            x += cell;
+        }
+        y += cell;
+    }
+    let colour = |v: f64| {
+        let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.0 };
+        // Blue (low CV, good) through white-ish to red (high CV, poor).
+        let (r, g, b) = if t < 0.5 {
+            let u = t * 2.0;
+            (40.0 + 200.0 * u, 80.0 + 160.0 * u, 220.0 + 20.0 * u)
+        } else {
+            let u = (t - 0.5) * 2.0;
+            (240.0, 240.0 - 190.0 * u, 240.0 - 200.0 * u)
+        };
+        RGBColor(r as u8, g as u8, b as u8)
+    };
+    chart
+        .draw_series(cells.iter().map(|&(x, y, v)| {
+            Rectangle::new([(x - cell / 2.0, y - cell / 2.0), (x + cell / 2.0, y + cell / 2.0)], colour(v).filled())
+        }))
+        .map_err(|e| fail(&e))?;
+    let edge = ShapeStyle::from(&BLACK).stroke_width(1);
+    for side in [-1.0, 1.0] {
+        let top = (side * (max_depth * half_fov.tan() - camera.baseline_m / 2.0), max_depth);
+        // Both images overlap from the depth where |x| + T/2 = y·tan(fov/2).
+        let apex = (0.0, camera.baseline_m / 2.0 / half_fov.tan());
+        chart.draw_series([PathElement::new(vec![apex, top], edge)]).map_err(|e| fail(&e))?;
+    }
+    let caption = format!("log10 CV from {lo:.2} (blue) to {hi:.2} (red)");
+    root.draw(&Text::new(caption, (70, 870), ("sans-serif", 16))).map_err(|e| fail(&e))?;
+    root.present().map_err(|e| fail(&e))?;
+    Ok(())
+}

@@ -2,12 +2,17 @@
 //!
 //! - [`stereo`]: the stereo camera: projection, triangulation (thesis eq.
 //!   12–14), frames and mounting.
+//! - [`error_model`]: the landmark egomotion error model (eq. 16–24), its
+//!   fit and its look-up table.
+//! - [`fusion`]: combining CVs (eq. 5–7).
 //!
 //! Shared by the simulated and the real robot, so that both feed the same
 //! landmark observations to the behaviours.
 
 #![warn(missing_docs)]
 
+pub mod error_model;
+pub mod fusion;
 pub mod stereo;
 
 pub use stereo::{CameraMount, StereoCamera};

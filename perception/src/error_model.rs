@@ -1,0 +1,300 @@
+//! The landmark egomotion error model (thesis §3.3.3): how uncertain a step
+//! of egomotion measured from one landmark is, given where the landmark sits
+//! relative to the camera.
+//!
+//! Positions are in the camera frame's floor plane: `x` to the right, `y`
+//! ahead (depth), metres. CVs are relative measures, comparable with each
+//! other, not absolute errors (thesis §3.3.3).
+
+use crate::stereo::StereoCamera;
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// The geometric model (thesis eq. 16–23): the CV of a landmark is the
+/// inverse of the image motion a forward step of `step` metres causes in the
+/// two images, `P_s = |δP_L| + |δP_R|`.
+///
+/// With the cameras at `x = ∓T/2`, the equations reduce to
+/// `P_s = f·s·(|x + T/2| + |T/2 − x|) / (y·(y − s))`, so
+/// `CV = y·(y − s) / (f·s·max(T, 2|x|))`: it grows like `y²` and falls like
+/// `1/|x|` once the landmark is wider than the baseline.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GeometricModel {
+    /// Focal length, pixels.
+    pub focal_px: f64,
+    /// Baseline, m.
+    pub baseline_m: f64,
+    /// The step the model assumes, m (the thesis: 1 m).
+    pub step_m: f64,
+}
+
+impl GeometricModel {
+    /// The model of `camera` for steps of `step_m`.
+    pub fn new(camera: &StereoCamera, step_m: f64) -> Self {
+        GeometricModel { focal_px: camera.focal_px, baseline_m: camera.baseline_m, step_m }
+    }
+
+    /// The nearest depth the model is evaluated at: a landmark nearer than
+    /// one step would be passed during the step. Nearer depths are read at
+    /// this one.
+    pub fn min_depth(&self) -> f64 {
+        1.05 * self.step_m
+    }
+
+    /// The CV of a landmark at `(x, y)`, straight from eq. 16–23.
+    pub fn cv(&self, x: f64, y: f64) -> f64 {
+        let y = y.max(self.min_depth());
+        let (f, t, s) = (self.focal_px, self.baseline_m, self.step_m);
+        let (x_left, x_right) = (-t / 2.0, t / 2.0);
+        let p_l1 = f * (x - x_left) / y;
+        let p_r1 = f * (x_right - x) / y;
+        let p_l2 = f * (x - x_left) / (y - s);
+        let p_r2 = f * (x_right - x) / (y - s);
+        let signal = (p_l1 - p_l2).abs() + (p_r1 - p_r2).abs();
+        1.0 / signal
+    }
+}
+
+/// The exponential model (thesis eq. 24): `CV = α·e^{βy}·e^{−γ|x|}`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExponentialModel {
+    /// The CV of a landmark straight ahead at zero depth.
+    pub alpha: f64,
+    /// Growth of the CV with depth, 1/m.
+    pub beta: f64,
+    /// Decay of the CV with lateral offset, 1/m.
+    pub gamma: f64,
+}
+
+impl ExponentialModel {
+    /// The CV of a landmark at `(x, y)`.
+    pub fn cv(&self, x: f64, y: f64) -> f64 {
+        self.alpha * (self.beta * y - self.gamma * x.abs()).exp()
+    }
+}
+
+/// How well an exponential model fits the geometric one.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FitReport {
+    /// The fitted model.
+    pub model: ExponentialModel,
+    /// Points of the field of view the fit used.
+    pub samples: usize,
+    /// Depth range fitted, m.
+    pub depth_range_m: [f64; 2],
+    /// Coefficient of determination of the fit of ln CV.
+    pub r_squared_log: f64,
+    /// Median of |fitted/geometric − 1|.
+    pub median_relative_error: f64,
+    /// 95th percentile of |fitted/geometric − 1|.
+    pub p95_relative_error: f64,
+    /// Spearman-like check: the share of sample pairs the two models order
+    /// the same way (what the decision engine relies on).
+    pub pair_order_agreement: f64,
+}
+
+/// The field of view's floor-plane sample points between two depths: every
+/// `cell` metres in depth and across, inside both cameras' views.
+fn field_of_view_samples(camera: &StereoCamera, depths: [f64; 2], cell: f64) -> Vec<(f64, f64)> {
+    let half_fov = camera.horizontal_fov() / 2.0;
+    let mut points = Vec::new();
+    let mut y = depths[0];
+    while y <= depths[1] + 1e-9 {
+        // Inside both images: |x| + T/2 ≤ y·tan(half FOV).
+        let half_width = (y * half_fov.tan() - camera.baseline_m / 2.0).max(0.0);
+        let mut x = -half_width;
+        while x <= half_width + 1e-9 {
+            points.push((x, y));
+            x += cell;
+        }
+        y += cell;
+    }
+    points
+}
+
+/// Fits α, β, γ by least squares on ln CV to the model `target` (usually
+/// [`GeometricModel::cv`]) over the camera's field of view between
+/// `depths`, sampling every `cell` metres.
+pub fn fit_exponential(
+    target: impl Fn(f64, f64) -> f64,
+    camera: &StereoCamera,
+    depths: [f64; 2],
+    cell: f64,
+) -> FitReport {
+    let points = field_of_view_samples(camera, depths, cell);
+    // Normal equations of ln CV = a + β y − γ |x|.
+    let mut ata = Matrix3::<f64>::zeros();
+    let mut atb = Vector3::<f64>::zeros();
+    for &(x, y) in &points {
+        let row = Vector3::new(1.0, y, -x.abs());
+        ata += row * row.transpose();
+        atb += row * target(x, y).ln();
+    }
+    let solution = ata.lu().solve(&atb).unwrap_or_else(Vector3::zeros);
+    let model = ExponentialModel { alpha: solution[0].exp(), beta: solution[1], gamma: solution[2] };
+
+    let logs: Vec<(f64, f64)> = points.iter().map(|&(x, y)| (target(x, y).ln(), model.cv(x, y).ln())).collect();
+    let mean = logs.iter().map(|l| l.0).sum::<f64>() / logs.len() as f64;
+    let total: f64 = logs.iter().map(|l| (l.0 - mean).powi(2)).sum();
+    let residual: f64 = logs.iter().map(|l| (l.0 - l.1).powi(2)).sum();
+    let mut relative: Vec<f64> = logs.iter().map(|l| ((l.1 - l.0).exp() - 1.0).abs()).collect();
+    relative.sort_by(f64::total_cmp);
+    let quantile = |q: f64| relative[((relative.len() - 1) as f64 * q).round() as usize];
+    // Order agreement over a deterministic subsample of pairs.
+    let stride = (logs.len() / 400).max(1);
+    let subset: Vec<&(f64, f64)> = logs.iter().step_by(stride).collect();
+    let (mut same, mut pairs) = (0usize, 0usize);
+    for i in 0..subset.len() {
+        for j in i + 1..subset.len() {
+            let a = subset[i].0 - subset[j].0;
+            let b = subset[i].1 - subset[j].1;
+            if a != 0.0 {
+                pairs += 1;
+                same += usize::from(a * b > 0.0);
+            }
+        }
+    }
+    FitReport {
+        model,
+        samples: points.len(),
+        depth_range_m: depths,
+        r_squared_log: 1.0 - residual / total,
+        median_relative_error: quantile(0.5),
+        p95_relative_error: quantile(0.95),
+        pair_order_agreement: same as f64 / pairs.max(1) as f64,
+    }
+}
+
+/// Which model a behaviour or an estimator uses, as written in a scenario
+/// file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ErrorModelKind {
+    /// The geometric model of the camera (eq. 16–23).
+    #[default]
+    Geometric,
+    /// The exponential model with α, β, γ fitted to the geometric one.
+    FittedExponential,
+    /// The exponential model with given parameters.
+    Exponential(ExponentialModel),
+}
+
+/// A precomputed table of a model's CV over the floor plane, read by
+/// bilinear interpolation of ln CV (the thesis precomputes one for speed).
+/// It is symmetric in `x`; outside its range positions are clamped to the
+/// nearest edge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CvTable {
+    x_max: f64,
+    y_min: f64,
+    y_max: f64,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    ln_cv: Vec<f64>,
+}
+
+impl CvTable {
+    /// Tabulates `cv` over `0 ≤ |x| ≤ x_max`, `y_min ≤ y ≤ y_max`, every
+    /// `cell` metres.
+    pub fn new(cv: impl Fn(f64, f64) -> f64, x_max: f64, y_min: f64, y_max: f64, cell: f64) -> Self {
+        let nx = (x_max / cell).ceil() as usize + 1;
+        let ny = ((y_max - y_min) / cell).ceil() as usize + 1;
+        let mut ln_cv = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                ln_cv.push(cv(i as f64 * cell, y_min + j as f64 * cell).ln());
+            }
+        }
+        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv }
+    }
+
+    /// A table of the chosen model for `camera`, steps of `step_m`, out to
+    /// `max_depth` metres.
+    pub fn for_camera(kind: ErrorModelKind, camera: &StereoCamera, step_m: f64, max_depth: f64) -> Self {
+        let geometric = GeometricModel::new(camera, step_m);
+        let x_max = max_depth * (camera.horizontal_fov() / 2.0).tan();
+        let (y_min, cell) = (geometric.min_depth(), 0.05);
+        match kind {
+            ErrorModelKind::Geometric => CvTable::new(|x, y| geometric.cv(x, y), x_max, y_min, max_depth, cell),
+            ErrorModelKind::Exponential(model) => CvTable::new(|x, y| model.cv(x, y), x_max, y_min, max_depth, cell),
+            ErrorModelKind::FittedExponential => {
+                let model = fit_exponential(|x, y| geometric.cv(x, y), camera, [y_min, max_depth], 0.25).model;
+                CvTable::new(|x, y| model.cv(x, y), x_max, y_min, max_depth, cell)
+            }
+        }
+    }
+
+    /// The CV at `(x, y)`.
+    pub fn cv(&self, x: f64, y: f64) -> f64 {
+        let fx = (x.abs().min(self.x_max) / self.cell).min((self.nx - 1) as f64);
+        let fy = ((y.clamp(self.y_min, self.y_max) - self.y_min) / self.cell).min((self.ny - 1) as f64);
+        let (i, j) = (fx.floor() as usize, fy.floor() as usize);
+        let (i1, j1) = ((i + 1).min(self.nx - 1), (j + 1).min(self.ny - 1));
+        let (tx, ty) = (fx - i as f64, fy - j as f64);
+        let at = |i: usize, j: usize| self.ln_cv[j * self.nx + i];
+        let low = at(i, j) * (1.0 - tx) + at(i1, j) * tx;
+        let high = at(i, j1) * (1.0 - tx) + at(i1, j1) * tx;
+        (low * (1.0 - ty) + high * ty).exp()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model() -> GeometricModel {
+        GeometricModel::new(&StereoCamera::default(), 1.0)
+    }
+
+    #[test]
+    fn geometric_model_matches_its_closed_form() {
+        let m = model();
+        for (x, y) in [(0.0, 5.0), (0.2, 3.0), (-2.0, 10.0), (4.0, 20.0)] {
+            let closed = y * (y - 1.0) / (m.focal_px * 1.0 * m.baseline_m.max(2.0 * f64::abs(x)));
+            assert!((m.cv(x, y) / closed - 1.0).abs() < 1e-9, "({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn near_and_wide_landmarks_are_better() {
+        let m = model();
+        assert!(m.cv(0.0, 5.0) < m.cv(0.0, 10.0));
+        assert!(m.cv(3.0, 10.0) < m.cv(0.0, 10.0));
+        assert_eq!(m.cv(0.1, 10.0), m.cv(-0.1, 10.0));
+        assert_eq!(m.cv(0.0, 0.5), m.cv(0.0, m.min_depth()));
+    }
+
+    #[test]
+    fn the_fit_recovers_an_exponential_exactly() {
+        let truth = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3 };
+        let report = fit_exponential(|x, y| truth.cv(x, y), &StereoCamera::default(), [1.2, 40.0], 0.5);
+        assert!((report.model.alpha / truth.alpha - 1.0).abs() < 1e-9, "{report:?}");
+        assert!((report.model.beta - truth.beta).abs() < 1e-9 && (report.model.gamma - truth.gamma).abs() < 1e-9);
+        assert!((report.r_squared_log - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_fit_to_the_geometric_model_keeps_its_shape() {
+        // The geometric CV grows like y², not exponentially, so the fit is
+        // only approximate (its quality is reported by `ubf model fit`);
+        // what must hold is the shape: worse with depth, better off-centre,
+        // and mostly the same ordering of landmarks.
+        let m = model();
+        let report = fit_exponential(|x, y| m.cv(x, y), &StereoCamera::default(), [1.2, 40.0], 0.25);
+        assert!(report.model.beta > 0.0 && report.model.gamma > 0.0, "{report:?}");
+        assert!(report.pair_order_agreement > 0.85, "{report:?}");
+    }
+
+    #[test]
+    fn table_reproduces_the_model_between_its_nodes() {
+        let m = model();
+        let table = CvTable::for_camera(ErrorModelKind::Geometric, &StereoCamera::default(), 1.0, 60.0);
+        for (x, y) in [(0.03, 4.02), (1.234, 7.77), (-5.5, 30.1)] {
+            assert!((table.cv(x, y) / m.cv(x, y) - 1.0).abs() < 0.01, "({x}, {y})");
+        }
+        // Beyond the table, clamped to its edge.
+        assert_eq!(table.cv(0.0, 500.0), table.cv(0.0, 60.0));
+    }
+}
