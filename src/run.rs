@@ -7,6 +7,8 @@ use crate::trajectory::TrajectoryWriter;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch};
+use ubf_perception::egomotion::Tracker;
+use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
 
 /// Why a run ended.
@@ -44,6 +46,22 @@ pub struct RunReport {
     pub final_estimated_pose: Pose2,
     /// Distance between the two, m.
     pub estimate_error_m: f64,
+    /// Egomotion's sum of step CVs (thesis eq. 7), when the robot runs it.
+    pub journey_cv: Option<f64>,
+    /// Egomotion steps (frame pairs) estimated.
+    pub egomotion_steps: Option<u32>,
+    /// Egomotion steps that failed for want of usable landmarks.
+    pub egomotion_failures: Option<u32>,
+    /// |true stop − egomotion stop|, m (thesis §4.4.3).
+    pub endpoint_error_m: Option<f64>,
+    /// The end-point error as a share of the distance driven, %.
+    pub endpoint_error_pct: Option<f64>,
+    /// How much longer the path was than the straight line from start to
+    /// goal, %.
+    pub path_overhead_pct: Option<f64>,
+    /// How much longer the run took than driving that straight line at top
+    /// speed, %.
+    pub time_overhead_pct: Option<f64>,
     /// Real seconds the run took: the only field that differs between two
     /// runs of the same scenario and seed.
     pub wall_time_s: f64,
@@ -77,7 +95,12 @@ fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 /// `trajectory.csv` and `plot.png` there (creating the directory).
 pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunReport, RunError> {
     let stopwatch = Stopwatch::start();
-    let robot = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
+    let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
+    let tracker = match (&scenario.robot.egomotion, &scenario.robot.camera) {
+        (Some(config), Some(camera)) => Some(Tracker::new(*config, camera.stereo, sim.true_pose(), seed)),
+        _ => None,
+    };
+    let robot = EgomotionRobot::new(sim, tracker);
     let root = scenario.root.build(&BuildContext::new(seed));
     let mut controller = Controller::new(robot, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
@@ -104,7 +127,8 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
             failure = Some(RunError::from(e));
             break;
         }
-        let (truth, odometry) = (controller.robot().true_pose(), controller.robot().odometry_pose());
+        let sim = controller.robot().inner();
+        let (truth, odometry) = (sim.true_pose(), sim.odometry_pose());
         if let Some((writer, path)) = &mut trajectory {
             if let Err(e) = writer.write(controller.last_record(), controller.layout(), &truth, &odometry) {
                 failure = Some(output_error(path)(e));
@@ -135,20 +159,32 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     }
     shutdown?;
 
-    let robot = controller.robot();
+    let robot = controller.robot().inner();
     let (truth, estimate) = (robot.true_pose(), robot.odometry_pose());
+    let egomotion = controller.robot().tracker().map(|t| t.state());
+    let endpoint_error = egomotion.and_then(|e| e.pose).map(|p| truth.distance_to(p.x, p.y));
+    let distance = robot.distance_travelled();
+    let start = scenario.robot.start.pose();
+    let straight = scenario.goal.map(|g| start.distance_to(g.x, g.y)).filter(|d| *d > 0.0);
     let report = RunReport {
         scenario: scenario.name.clone(),
         seed,
         ticks: controller.last_record().tick + 1,
         sim_time_s: controller.now(),
-        distance_m: robot.distance_travelled(),
+        distance_m: distance,
         reached_goal: scenario.goal.is_some_and(|g| g.reached_by(&truth)),
         collisions: robot.collisions(),
         end,
         final_true_pose: truth,
         final_estimated_pose: estimate,
         estimate_error_m: truth.distance_to(estimate.x, estimate.y),
+        journey_cv: egomotion.map(|e| e.journey_cv),
+        egomotion_steps: egomotion.map(|e| e.steps),
+        egomotion_failures: egomotion.map(|e| e.failures),
+        endpoint_error_m: endpoint_error,
+        endpoint_error_pct: endpoint_error.filter(|_| distance > 0.0).map(|e| 100.0 * e / distance),
+        path_overhead_pct: straight.map(|s| 100.0 * (distance / s - 1.0)),
+        time_overhead_pct: straight.map(|s| 100.0 * (controller.now() / (s / scenario.robot.max_velocity) - 1.0)),
         wall_time_s: stopwatch.elapsed_s(),
     };
     if let Some(dir) = out {

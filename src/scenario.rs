@@ -43,7 +43,7 @@ pub struct Scenario {
     #[serde(deserialize_with = "positive")]
     pub max_time_s: f64,
     /// The simulated robot.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "checked")]
     pub robot: SimRobotConfig,
     /// Walls, boxes, landmarks and people; an open floor by default.
     #[serde(default, deserialize_with = "checked")]

@@ -5,12 +5,14 @@
 //! - [`error_model`]: the landmark egomotion error model (eq. 16–24), its
 //!   fit and its look-up table.
 //! - [`fusion`]: combining CVs (eq. 5–7).
+//! - [`egomotion`]: frame matching and the two egomotion estimators.
 //!
 //! Shared by the simulated and the real robot, so that both feed the same
 //! landmark observations to the behaviours.
 
 #![warn(missing_docs)]
 
+pub mod egomotion;
 pub mod error_model;
 pub mod fusion;
 pub mod stereo;

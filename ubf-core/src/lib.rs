@@ -71,4 +71,4 @@ pub use geometry::{angle_difference, wrap_angle, Pose2};
 pub use landmark::{Descriptor, LandmarkObservation, StereoFrame, StereoPixels};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
 pub use robot::{NullRobot, Robot, RobotError, VelocityLimiter};
-pub use state::{Bumpers, Goal, RangeReading, State};
+pub use state::{Bumpers, EgomotionState, Goal, RangeReading, State};

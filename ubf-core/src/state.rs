@@ -59,6 +59,24 @@ impl Bumpers {
     }
 }
 
+/// What visual egomotion has made of the stereo frames so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct EgomotionState {
+    /// The pose integrated from egomotion alone, in the world frame of
+    /// [`State::pose`]; `None` when the robot runs no estimator.
+    pub pose: Option<Pose2>,
+    /// The fused CV of the latest frame-to-frame step (thesis eq. 6), if it
+    /// succeeded.
+    pub last_step_cv: Option<f64>,
+    /// The sum of the step CVs so far, each scaled by the distance of its
+    /// step over the error model's step (thesis eq. 7).
+    pub journey_cv: f64,
+    /// Frame-to-frame steps estimated.
+    pub steps: u32,
+    /// Steps that failed for want of usable landmarks while the robot moved.
+    pub failures: u32,
+}
+
 /// Everything a behaviour may know this tick.
 ///
 /// Robots fill the sensor fields in [`crate::Robot::sense`]; the controller
@@ -89,6 +107,9 @@ pub struct State {
     pub battery_volts: Option<f64>,
     /// The latest stereo frame from the camera, if the robot has one.
     pub stereo: StereoFrame,
+    /// What egomotion has made of the stereo frames, if the robot runs an
+    /// estimator.
+    pub egomotion: EgomotionState,
     /// Seconds since the robot last delivered fresh sensor data; zero when the
     /// data is from this tick. Lets a behaviour notice a lost sensor stream.
     pub sensor_age: f64,
@@ -112,6 +133,7 @@ impl State {
         self.stereo.number = other.stereo.number;
         self.stereo.time = other.stereo.time;
         self.stereo.landmarks.clone_from(&other.stereo.landmarks);
+        self.egomotion = other.egomotion;
         self.sensor_age = other.sensor_age;
     }
 

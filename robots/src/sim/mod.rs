@@ -30,8 +30,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use sonar::Sonar;
-use ubf_core::config::positive;
+use ubf_core::config::{positive, Check};
 use ubf_core::{Bumpers, Command, Limits, Pose2, Robot, RobotError, State};
+use ubf_perception::egomotion::EgomotionConfig;
 
 /// The simulated robot's settings, as written in a scenario file. The
 /// geometry and the sonar ring default to the Powerbot's.
@@ -72,6 +73,19 @@ pub struct SimRobotConfig {
     /// The stereo camera; none by default.
     #[serde(default)]
     pub camera: Option<SimCameraConfig>,
+    /// Visual egomotion on the camera's frames; none by default. Needs a
+    /// camera.
+    #[serde(default)]
+    pub egomotion: Option<EgomotionConfig>,
+}
+
+impl Check for SimRobotConfig {
+    fn check(&self) -> Result<(), String> {
+        if self.egomotion.is_some() && self.camera.is_none() {
+            return Err("egomotion needs a stereo camera: add `camera: ()` to the robot".into());
+        }
+        Ok(())
+    }
 }
 
 impl SimRobotConfig {
@@ -106,6 +120,7 @@ impl Default for SimRobotConfig {
             footprint: None,
             sonar: SonarConfig::default(),
             camera: None,
+            egomotion: None,
         }
     }
 }
