@@ -130,7 +130,13 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         let sim = controller.robot().inner();
         let (truth, odometry) = (sim.true_pose(), sim.odometry_pose());
         if let Some((writer, path)) = &mut trajectory {
-            if let Err(e) = writer.write(controller.last_record(), controller.layout(), &truth, &odometry) {
+            if let Err(e) = writer.write(
+                controller.last_record(),
+                controller.layout(),
+                &truth,
+                &odometry,
+                &controller.state().egomotion,
+            ) {
                 failure = Some(output_error(path)(e));
                 break;
             }

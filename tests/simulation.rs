@@ -88,7 +88,10 @@ fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
     let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
-    assert!(header.starts_with("time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta"), "{header}");
+    assert!(
+        header.starts_with("time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta"),
+        "{header}"
+    );
     assert!(header.ends_with("winner,vote:root/Stop,vote:root/AvoidCollision,vote:root/GoTo"), "{header}");
     assert_eq!(lines.count() as u64, report.ticks);
 

@@ -1,5 +1,6 @@
 //! Keep clear of obstacles the range sensors see.
 
+use crate::clearance::{echo_points, free_distance};
 use serde::Deserialize;
 use std::f64::consts::FRAC_PI_2;
 use ubf_core::config::{non_negative, positive, Check};
@@ -150,24 +151,13 @@ impl AvoidCollision {
 
     /// How far the robot's strip along `heading` (robot frame) is free.
     fn free_distance(&self, heading: f64) -> f64 {
-        let (s, c) = heading.sin_cos();
-        self.points
-            .iter()
-            .filter_map(|&(x, y)| {
-                let along = x * c + y * s;
-                let lateral = -x * s + y * c;
-                (along > 0.0 && lateral.abs() <= self.config.path_half_width).then_some(along)
-            })
-            .fold(f64::INFINITY, f64::min)
+        free_distance(&self.points, heading, self.config.path_half_width)
     }
 }
 
 impl Behavior for AvoidCollision {
     fn gen_action(&mut self, state: &State) -> Action {
-        self.points.clear();
-        self.points.extend(
-            state.ranges.iter().filter_map(|r| r.range.map(|range| r.pose_robot_sensor.transform_point(range, 0.0))),
-        );
+        echo_points(state, &mut self.points);
         let c = &self.config;
         // Clearance ahead is measured from the robot's front, where the
         // forward sonars sit: the echo's distance along the heading less the

@@ -5,15 +5,21 @@
 //! | `GoTo` | [`GoTo`]: drive to the state's goal |
 //! | `Stop` | [`Stop`]: stop while a condition holds |
 //! | `AvoidCollision` | [`AvoidCollision`]: keep clear of what the sonar sees |
+//! | `ActionAiding` | [`ActionAiding`]: steer for the least uncertain egomotion (thesis ch. 3) |
 //!
 //! [`register`] adds them all to a [`Registry`].
 
 #![warn(missing_docs)]
 
+mod action_aiding;
 mod avoid;
+pub mod clearance;
+pub mod decision;
 mod go_to;
 mod stop;
+pub mod tracking;
 
+pub use action_aiding::{ActionAiding, ActionAidingConfig, Technique};
 pub use avoid::{AvoidCollision, AvoidCollisionConfig};
 pub use go_to::{GoTo, GoToConfig};
 pub use stop::{Stop, StopConfig};
@@ -27,4 +33,5 @@ pub fn register(registry: &mut Registry) -> &mut Registry {
         .register("GoTo", |c: &GoToConfig, _| GoTo::new(c.clone()))
         .register("Stop", |c: &StopConfig, _| Stop::new(c.clone()))
         .register("AvoidCollision", |c: &Checked<AvoidCollisionConfig>, _| AvoidCollision::new(c.0.clone()))
+        .register("ActionAiding", |c: &ActionAidingConfig, ctx| ActionAiding::new(c.clone(), ctx))
 }

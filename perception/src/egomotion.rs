@@ -17,7 +17,7 @@
 //!   depth noise tilts the solution into metres of false sideways motion.
 //!   It needs three consistent landmarks.
 
-use crate::error_model::{CvTable, ErrorModelKind};
+use crate::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use crate::fusion::{fuse_cv, weighted_mean};
 use crate::stereo::StereoCamera;
 use nalgebra::{Matrix2, Vector2};
@@ -202,6 +202,11 @@ pub struct EgomotionConfig {
     /// Descriptor matching between frames.
     #[serde(default)]
     pub matching: MatchConfig,
+    /// After a failed step the last good frame stays the reference, so the
+    /// next good frame recovers the whole motion since; after this long
+    /// without success the reference is given up and that motion is lost, s.
+    #[serde(default = "EgomotionConfig::default_max_gap", deserialize_with = "positive")]
+    pub max_gap_s: f64,
     /// The robot's top speed: motions faster than this are impossible and
     /// rejected (thesis §4.4.6), m/s.
     #[serde(default = "EgomotionConfig::default_max_speed", deserialize_with = "positive")]
@@ -212,6 +217,9 @@ impl EgomotionConfig {
     fn default_max_speed() -> f64 {
         0.6
     }
+    fn default_max_gap() -> f64 {
+        3.0
+    }
 }
 
 impl Default for EgomotionConfig {
@@ -220,13 +228,11 @@ impl Default for EgomotionConfig {
             estimator: EstimatorKind::default(),
             model: ErrorModelKind::default(),
             matching: MatchConfig::default(),
+            max_gap_s: Self::default_max_gap(),
             max_speed: Self::default_max_speed(),
         }
     }
 }
-
-/// The error model's step: 1 m, as in the thesis.
-pub const MODEL_STEP_M: f64 = 1.0;
 
 /// What the estimators know of one matched landmark.
 #[derive(Clone, Copy, Debug)]
@@ -320,16 +326,23 @@ fn rotation(yaw: f64) -> Matrix2<f64> {
     Matrix2::new(c, -s, s, c)
 }
 
-/// The information matrix (inverse covariance) of a triangulated point's
-/// floor-plane position: stereo measures a point's bearing well and its range
-/// poorly, so the uncertainty is an ellipse stretched along the line of sight.
-fn information(camera: &StereoCamera, pixel_sigma: f64, p: [f64; 3]) -> Matrix2<f64> {
-    let range = p[0].hypot(p[1]).max(0.1);
-    let along = Vector2::new(p[0], p[1]) / range;
+/// The information matrix (inverse covariance) of the residual
+/// `a − (R b + t)` of one landmark seen as `a` before and `b` after a move.
+///
+/// Stereo measures a point's bearing well and its range poorly, so each
+/// observation's uncertainty is an ellipse stretched along its line of sight.
+/// Once the frames are aligned, `R b` lies on `a`'s line of sight, so both
+/// ellipses stretch along it: the variances add along and across that line.
+/// (Adding `b`'s ellipse unrotated would tilt it by the turn between frames,
+/// and a tilted depth error passes for a precise bearing.)
+fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b: [f64; 3]) -> Matrix2<f64> {
+    let range_a = a[0].hypot(a[1]).max(0.1);
+    let range_b = b[0].hypot(b[1]).max(0.1);
+    let along = Vector2::new(a[0], a[1]) / range_a;
     let across = Vector2::new(-along[1], along[0]);
-    let sigma_range = camera.depth_sigma(range, pixel_sigma).max(1e-4);
-    let sigma_across = (range * pixel_sigma / camera.focal_px).max(1e-4);
-    along * along.transpose() / sigma_range.powi(2) + across * across.transpose() / sigma_across.powi(2)
+    let var_along = camera.depth_sigma(range_a, pixel_sigma).powi(2) + camera.depth_sigma(range_b, pixel_sigma).powi(2);
+    let var_across = ((range_a.powi(2) + range_b.powi(2)) * (pixel_sigma / camera.focal_px).powi(2)).max(1e-8);
+    along * along.transpose() / var_along.max(1e-8) + across * across.transpose() / var_across
 }
 
 impl Rigid {
@@ -368,14 +381,8 @@ impl Rigid {
         if pairs.len() < 3 {
             return None;
         }
-        // Each residual combines the uncertainty of both observations.
-        let info: Vec<Matrix2<f64>> = pairs
-            .iter()
-            .map(|p| {
-                let cov = |q| information(camera, config.pixel_sigma, q).try_inverse().unwrap_or_else(Matrix2::zeros);
-                (cov(p.before) + cov(p.after)).try_inverse().unwrap_or_else(Matrix2::zeros)
-            })
-            .collect();
+        let info: Vec<Matrix2<f64>> =
+            pairs.iter().map(|p| residual_information(camera, config.pixel_sigma, p.before, p.after)).collect();
         let mahalanobis = |yaw: f64, t: &Vector2<f64>, i: usize| {
             let p = &pairs[i];
             let e = Vector2::new(p.before[0], p.before[1]) - (rotation(yaw) * Vector2::new(p.after[0], p.after[1]) + t);
@@ -414,8 +421,10 @@ pub struct Tracker {
     table: CvTable,
     rng: ChaCha8Rng,
     previous: Vec<LandmarkObservation>,
-    previous_frame: Option<(u64, f64)>,
-    velocity: Option<(PlanarMotion, f64)>,
+    /// The reference frame's number, time and odometric pose.
+    previous_frame: Option<(u64, f64, Pose2)>,
+    /// The number of the newest frame taken in.
+    newest: u64,
     state: EgomotionState,
     matches: Vec<(usize, usize)>,
     pairs: Vec<Pair>,
@@ -433,7 +442,7 @@ impl Tracker {
             rng: ChaCha8Rng::seed_from_u64(seed),
             previous: Vec::new(),
             previous_frame: None,
-            velocity: None,
+            newest: 0,
             state: EgomotionState { pose: Some(start), ..EgomotionState::default() },
             matches: Vec::new(),
             pairs: Vec::new(),
@@ -450,23 +459,38 @@ impl Tracker {
         &self.table
     }
 
-    /// Takes in `frame` if it is new: matches it to the previous frame,
+    /// Takes in `frame` if it is new: matches it to the reference frame,
     /// estimates the motion and integrates it. A step without a usable
-    /// estimate is a failure; the pose then coasts at the last estimated
-    /// velocity (pure egomotion takes no help from odometry).
-    pub fn update(&mut self, frame: &StereoFrame) {
-        if frame.number == 0 || self.previous_frame.is_some_and(|(n, _)| n == frame.number) {
+    /// estimate is a failure: the pose stays put and the reference frame is
+    /// kept, so the next good frame recovers the motion across the gap; a
+    /// reference older than `max_gap_s` is given up (pure egomotion takes no
+    /// help from odometry, so that motion is lost).
+    ///
+    /// `odometry` is the robot's odometric pose when the frame was taken; it
+    /// only measures how far each step drove, to weigh the step's CV in the
+    /// journey CV (eq. 7 per metre), never the motion itself.
+    pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
+        if frame.number == 0 || frame.number == self.newest {
             return;
         }
-        if let Some((_, before)) = self.previous_frame {
-            let dt = (frame.time - before).max(1e-6);
-            self.step(&frame.landmarks, dt);
+        self.newest = frame.number;
+        let succeeded = match self.previous_frame {
+            Some((_, before, from)) => {
+                let driven = from.distance_to(odometry.x, odometry.y);
+                self.step(&frame.landmarks, (frame.time - before).max(1e-6), driven)
+            }
+            None => true,
+        };
+        let stale = self.previous_frame.is_some_and(|(_, t, _)| frame.time - t > self.config.max_gap_s);
+        if succeeded || stale {
+            self.previous.clone_from(&frame.landmarks);
+            self.previous_frame = Some((frame.number, frame.time, *odometry));
         }
-        self.previous.clone_from(&frame.landmarks);
-        self.previous_frame = Some((frame.number, frame.time));
     }
 
-    fn step(&mut self, current: &[LandmarkObservation], dt: f64) {
+    /// One step from the reference frame to `current`, over which the robot
+    /// drove `driven` metres; whether it succeeded.
+    fn step(&mut self, current: &[LandmarkObservation], dt: f64, driven: f64) -> bool {
         match_frames(&self.previous, current, &self.config.matching, &mut self.matches);
         let mount = self.camera.mount;
         self.pairs.clear();
@@ -487,25 +511,20 @@ impl Tracker {
             EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng),
         };
         self.state.steps += 1;
-        let motion = match estimate {
+        match estimate {
             Some(motion) => {
                 let step_cv = fuse_cv(self.pairs.iter().map(|p| p.cv));
                 self.state.last_step_cv = step_cv;
-                let travelled = motion.forward.hypot(motion.left);
-                self.state.journey_cv += step_cv.unwrap_or(0.0) * travelled / MODEL_STEP_M;
-                self.velocity = Some((motion, dt));
-                motion
+                self.state.journey_cv += step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
+                self.state.pose = self.state.pose.map(|p| p.compose(&motion.as_pose()));
+                true
             }
             None => {
                 self.state.failures += 1;
                 self.state.last_step_cv = None;
-                self.velocity.map_or(PlanarMotion::default(), |(m, was)| {
-                    let k = dt / was;
-                    PlanarMotion { forward: m.forward * k, left: m.left * k, yaw: m.yaw * k }
-                })
+                false
             }
-        };
-        self.state.pose = self.state.pose.map(|p| p.compose(&motion.as_pose()));
+        }
     }
 }
 
@@ -551,8 +570,9 @@ mod tests {
                 number: n as u64 + 1,
                 time: n as f64 * 0.5,
                 landmarks: frame(&landmarks(), *pose, &camera),
+                calibration: None,
             };
-            tracker.update(&f);
+            tracker.update(&f, pose);
         }
         tracker.state()
     }
@@ -582,6 +602,28 @@ mod tests {
     }
 
     #[test]
+    fn turning_on_the_spot_before_a_far_wall() {
+        // The thesis corridor's view: landmarks on an end wall 59 m away,
+        // the robot turning 10° between frames.
+        let camera = StereoCamera::default();
+        let wall: Vec<[f64; 3]> = (0..12).map(|i| [60.0, -2.75 + 0.5 * i as f64, 1.0]).collect();
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::new(1.0, 0.0, 0.0), 1);
+        for k in 0..4 {
+            let pose = Pose2::new(1.0, 0.0, -(k as f64) * 10f64.to_radians());
+            let f = StereoFrame {
+                number: k + 1,
+                time: k as f64 * 0.5,
+                landmarks: frame(&wall, pose, &camera),
+                calibration: None,
+            };
+            tracker.update(&f, &pose);
+        }
+        let s = tracker.state();
+        assert_eq!(s.failures, 0, "{s:?}");
+        assert!((s.pose.unwrap().theta + 30f64.to_radians()).abs() < 1e-6, "{s:?}");
+    }
+
+    #[test]
     fn simple_estimator_follows_rotate_stop_translate_motion() {
         // Translate 0.25 m per frame, then turn 5° per frame, then translate.
         let mut poses = vec![Pose2::default()];
@@ -606,24 +648,34 @@ mod tests {
     }
 
     #[test]
-    fn no_landmarks_is_a_failure_and_the_pose_coasts() {
+    fn a_failed_step_is_recovered_from_the_kept_reference() {
         let camera = StereoCamera::default();
         let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
         let poses = [Pose2::default(), Pose2::new(0.25, 0.0, 0.0)];
         for (n, pose) in poses.iter().enumerate() {
-            tracker.update(&StereoFrame {
-                number: n as u64 + 1,
-                time: n as f64 * 0.5,
-                landmarks: frame(&landmarks(), *pose, &camera),
-            });
+            tracker.update(
+                &StereoFrame {
+                    number: n as u64 + 1,
+                    time: n as f64 * 0.5,
+                    landmarks: frame(&landmarks(), *pose, &camera),
+                    calibration: None,
+                },
+                &Pose2::default(),
+            );
         }
-        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new() });
+        tracker
+            .update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &Pose2::default());
         let s = tracker.state();
         assert_eq!((s.steps, s.failures), (2, 1));
-        assert!((s.pose.unwrap().x - 0.5).abs() < 1e-6, "coasted at the last velocity: {:?}", s.pose);
+        assert!((s.pose.unwrap().x - 0.25).abs() < 1e-6, "a failure moves nothing: {:?}", s.pose);
         // The same frame twice is not a new step.
-        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new() });
+        tracker
+            .update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &Pose2::default());
         assert_eq!(tracker.state().steps, 2);
+        // The next good frame, 0.5 m on from the reference, recovers it all.
+        let seen = frame(&landmarks(), Pose2::new(0.75, 0.0, 0.0), &camera);
+        tracker.update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None }, &Pose2::default());
+        assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
     }
 
     #[test]
@@ -631,12 +683,15 @@ mod tests {
         let camera = StereoCamera::default();
         let poses = [Pose2::default(), Pose2::new(0.25, 0.0, 0.0)];
         let mut tracker = Tracker::new(EgomotionConfig::default(), camera, poses[0], 3);
-        tracker.update(&StereoFrame { number: 1, time: 0.0, landmarks: frame(&landmarks(), poses[0], &camera) });
+        tracker.update(
+            &StereoFrame { number: 1, time: 0.0, landmarks: frame(&landmarks(), poses[0], &camera), calibration: None },
+            &Pose2::default(),
+        );
         let mut second = frame(&landmarks(), poses[1], &camera);
         // One landmark appears 3 m off where it should be (a wrong match).
         second[2].point_cam[1] += 3.0;
         second[2].pixels = StereoPixels::default();
-        tracker.update(&StereoFrame { number: 2, time: 0.5, landmarks: second });
+        tracker.update(&StereoFrame { number: 2, time: 0.5, landmarks: second, calibration: None }, &Pose2::default());
         let end = tracker.state().pose.unwrap();
         assert!((end.x - 0.25).abs() < 1e-6 && end.y.abs() < 1e-6, "{end:?}");
     }

@@ -10,6 +10,9 @@ use crate::stereo::StereoCamera;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// The step the error model assumes: 1 m, as in the thesis (§3.3.3).
+pub const MODEL_STEP_M: f64 = 1.0;
+
 /// The geometric model (thesis eq. 16–23): the CV of a landmark is the
 /// inverse of the image motion a forward step of `step` metres causes in the
 /// two images, `P_s = |δP_L| + |δP_R|`.
@@ -193,6 +196,8 @@ pub struct CvTable {
     nx: usize,
     ny: usize,
     ln_cv: Vec<f64>,
+    /// 1/CV at every node, for [`CvTable::information`].
+    inverse: Vec<f64>,
 }
 
 impl CvTable {
@@ -207,7 +212,8 @@ impl CvTable {
                 ln_cv.push(cv(i as f64 * cell, y_min + j as f64 * cell).ln());
             }
         }
-        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv }
+        let inverse = ln_cv.iter().map(|l| (-l).exp()).collect();
+        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv, inverse }
     }
 
     /// A table of the chosen model for `camera`, steps of `step_m`, out to
@@ -224,6 +230,16 @@ impl CvTable {
                 CvTable::new(|x, y| model.cv(x, y), x_max, y_min, max_depth, cell)
             }
         }
+    }
+
+    /// 1/CV at the node nearest `(x, y)`: the fast read for summing many
+    /// landmarks' information (eq. 6: `1/CV_T = Σ 1/CV_i`), accurate to the
+    /// table's 5 cm cells.
+    #[inline]
+    pub fn information(&self, x: f64, y: f64) -> f64 {
+        let i = ((x.abs().min(self.x_max) / self.cell).round() as usize).min(self.nx - 1);
+        let j = (((y.clamp(self.y_min, self.y_max) - self.y_min) / self.cell).round() as usize).min(self.ny - 1);
+        self.inverse[j * self.nx + i]
     }
 
     /// The CV at `(x, y)`.

@@ -9,7 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 use ubf_core::config::{finite, positive};
-use ubf_core::StereoPixels;
+use ubf_core::{StereoCalibration, StereoPixels};
 
 /// Where the camera pair sits on the robot, looking straight ahead.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,6 +96,28 @@ impl StereoCamera {
     }
     fn default_baseline() -> f64 {
         0.6
+    }
+
+    /// The calibration frames from this camera carry.
+    pub fn calibration(&self) -> StereoCalibration {
+        StereoCalibration {
+            focal_px: self.focal_px,
+            baseline_m: self.baseline_m,
+            width_px: self.width_px,
+            height_px: self.height_px,
+            mount: [self.mount.forward, self.mount.left, self.mount.height],
+        }
+    }
+
+    /// The camera a frame's calibration describes.
+    pub fn from_calibration(c: &StereoCalibration) -> Self {
+        StereoCamera {
+            width_px: c.width_px,
+            height_px: c.height_px,
+            focal_px: c.focal_px,
+            baseline_m: c.baseline_m,
+            mount: CameraMount { forward: c.mount[0], left: c.mount[1], height: c.mount[2] },
+        }
     }
 
     /// Principal point column: the image centre.

@@ -33,7 +33,7 @@ impl<R: Robot> Robot for EgomotionRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some(tracker) = &mut self.tracker {
-            tracker.update(&state.stereo);
+            tracker.update(&state.stereo, &state.pose);
             state.egomotion = tracker.state();
         }
         Ok(())

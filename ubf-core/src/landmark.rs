@@ -56,6 +56,24 @@ pub struct LandmarkObservation {
     pub source_id: Option<u32>,
 }
 
+/// The intrinsics of a rectified stereo pair, carried with its frames so that
+/// whoever reads them (an error model, a behaviour) needs no copy of the
+/// camera's settings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StereoCalibration {
+    /// Focal length, pixels.
+    pub focal_px: f64,
+    /// Distance between the cameras, m.
+    pub baseline_m: f64,
+    /// Image width, pixels.
+    pub width_px: u32,
+    /// Image height, pixels.
+    pub height_px: u32,
+    /// Where the pair's midpoint sits in the robot frame (x forward, y
+    /// left, z up), m.
+    pub mount: [f64; 3],
+}
+
 /// The latest stereo frame's landmarks.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StereoFrame {
@@ -66,6 +84,8 @@ pub struct StereoFrame {
     pub time: f64,
     /// The landmarks matched in both images.
     pub landmarks: Vec<LandmarkObservation>,
+    /// The camera that took the frame.
+    pub calibration: Option<StereoCalibration>,
 }
 
 #[cfg(test)]

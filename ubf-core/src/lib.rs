@@ -68,7 +68,7 @@ pub use controller::{
     Controller, ControllerError, NodeInfo, NodeOutcome, StateSummary, TickRecord, TickSink, TracingSink, TreeLayout,
 };
 pub use geometry::{angle_difference, wrap_angle, Pose2};
-pub use landmark::{Descriptor, LandmarkObservation, StereoFrame, StereoPixels};
+pub use landmark::{Descriptor, LandmarkObservation, StereoCalibration, StereoFrame, StereoPixels};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
 pub use robot::{NullRobot, Robot, RobotError, VelocityLimiter};
 pub use state::{Bumpers, EgomotionState, Goal, RangeReading, State};

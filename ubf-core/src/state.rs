@@ -133,6 +133,7 @@ impl State {
         self.stereo.number = other.stereo.number;
         self.stereo.time = other.stereo.time;
         self.stereo.landmarks.clone_from(&other.stereo.landmarks);
+        self.stereo.calibration = other.stereo.calibration;
         self.egomotion = other.egomotion;
         self.sensor_age = other.sensor_age;
     }

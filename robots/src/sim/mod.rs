@@ -257,6 +257,7 @@ impl Robot for SimRobot {
             if let Some(number) = camera.capture(self.time, &pose, &self.world, &mut self.camera_rng, landmarks) {
                 state.stereo.number = number;
                 state.stereo.time = self.time;
+                state.stereo.calibration = Some(camera.config().stereo.calibration());
             }
         }
         Ok(())

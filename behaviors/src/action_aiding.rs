@@ -1,0 +1,433 @@
+//! Action aiding (thesis chapter 3): steer so that landmarks fall where
+//! stereo egomotion is least uncertain.
+
+use crate::clearance::{echo_points, free_distance};
+use crate::decision::{best_heading, DecisionRules};
+use crate::tracking::{TrackingConfig, TrackingList};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use ubf_core::config::{non_negative, positive};
+use ubf_core::{angle_difference, Action, Behavior, BuildContext, Pose2, State};
+use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
+use ubf_perception::StereoCamera;
+
+/// How the heading of each step is chosen (thesis §3.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Technique {
+    /// No aiding: straight at the goal.
+    None,
+    /// Non-evaluative: ±`zigzag_angle_deg` off the path's centre line,
+    /// alternating at turning points that ignore the landmarks.
+    ZigZag,
+    /// Evaluative with a physical scan: before every step the robot turns
+    /// through the permitted angles, looks, and takes the best heading.
+    Scan,
+    /// Evaluative over the landmark tracking list: the same evaluation in
+    /// software, over the landmarks seen so far and still recognisable.
+    Tracking,
+}
+
+impl Technique {
+    /// The name used in experiment output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::None => "none",
+            Technique::ZigZag => "zigzag",
+            Technique::Scan => "scan",
+            Technique::Tracking => "tracking",
+        }
+    }
+}
+
+/// Settings of [`ActionAiding`], as written in a scenario file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActionAidingConfig {
+    /// The technique.
+    pub technique: Technique,
+    /// Length of each translation step between decisions, m. The default is
+    /// the error model's step.
+    #[serde(default = "ActionAidingConfig::default_step", deserialize_with = "positive")]
+    pub step_m: f64,
+    /// Permitted headings: up to this far either side of the bearing to the
+    /// goal, °.
+    #[serde(default = "ActionAidingConfig::default_max_angle", deserialize_with = "positive")]
+    pub max_angle_deg: f64,
+    /// Spacing of the candidate headings, °.
+    #[serde(default = "ActionAidingConfig::default_angle_step", deserialize_with = "positive")]
+    pub angle_step_deg: f64,
+    /// Zig-zag: angle off the centre line, ° (the thesis: 20°).
+    #[serde(default = "ActionAidingConfig::default_zigzag_angle", deserialize_with = "positive")]
+    pub zigzag_angle_deg: f64,
+    /// Zig-zag: the largest distance from the centre line at which it turns
+    /// back, m; each leg turns at a random share (50–100 %) of it.
+    #[serde(default = "ActionAidingConfig::default_zigzag_offset", deserialize_with = "positive")]
+    pub zigzag_max_offset_m: f64,
+    /// A landmark nearer than this to the projected position rejects the
+    /// heading, m (the thesis: 0.5 m).
+    #[serde(default = "ActionAidingConfig::default_min_slant", deserialize_with = "non_negative")]
+    pub min_slant_m: f64,
+    /// Landmarks farther than this are not counted, m.
+    #[serde(default = "ActionAidingConfig::default_max_range", deserialize_with = "positive")]
+    pub max_range_m: f64,
+    /// Forward speed during a step, m/s.
+    #[serde(default = "ActionAidingConfig::default_speed", deserialize_with = "positive")]
+    pub speed: f64,
+    /// Turn rate while scanning, °/s: slow enough for the camera to look.
+    #[serde(default = "ActionAidingConfig::default_scan_rate", deserialize_with = "positive")]
+    pub scan_rate_deg: f64,
+    /// Heading error under which a turn counts as done, °.
+    #[serde(default = "ActionAidingConfig::default_tolerance", deserialize_with = "positive")]
+    pub heading_tolerance_deg: f64,
+    /// Turn rate per radian of heading error, 1/s.
+    #[serde(default = "ActionAidingConfig::default_turn_gain", deserialize_with = "positive")]
+    pub turn_gain: f64,
+    /// Largest turn rate asked for, °/s.
+    #[serde(default = "ActionAidingConfig::default_max_turn", deserialize_with = "positive")]
+    pub max_turn_deg: f64,
+    /// A heading is permitted only if the range sensors show its swept strip
+    /// clear for this far, m: the robot keeps off walls that carry no
+    /// landmark (thesis §4.4.10.5). 0 turns the check off.
+    #[serde(default = "ActionAidingConfig::default_clearance", deserialize_with = "non_negative")]
+    pub clearance_m: f64,
+    /// Half the width of that strip, m (the Powerbot's 0.34 m and a margin).
+    #[serde(default = "ActionAidingConfig::default_half_width", deserialize_with = "positive")]
+    pub path_half_width: f64,
+    /// The error model used to evaluate headings.
+    #[serde(default)]
+    pub model: ErrorModelKind,
+    /// The landmark tracking list.
+    #[serde(default)]
+    pub tracking: TrackingConfig,
+    /// Vote with egomotion certain (step CV near 0).
+    #[serde(default = "ActionAidingConfig::default_vote_min", deserialize_with = "non_negative")]
+    pub vote_min: f64,
+    /// Vote as the step CV grows without bound.
+    #[serde(default = "ActionAidingConfig::default_vote_max", deserialize_with = "non_negative")]
+    pub vote_max: f64,
+    /// The step CV at which the vote is halfway between the two.
+    #[serde(default = "ActionAidingConfig::default_vote_cv", deserialize_with = "positive")]
+    pub vote_half_cv: f64,
+}
+
+impl ActionAidingConfig {
+    fn default_step() -> f64 {
+        MODEL_STEP_M
+    }
+    fn default_max_angle() -> f64 {
+        45.0
+    }
+    fn default_angle_step() -> f64 {
+        2.5
+    }
+    fn default_zigzag_angle() -> f64 {
+        20.0
+    }
+    fn default_zigzag_offset() -> f64 {
+        2.0
+    }
+    fn default_min_slant() -> f64 {
+        0.5
+    }
+    fn default_max_range() -> f64 {
+        80.0
+    }
+    fn default_clearance() -> f64 {
+        2.0
+    }
+    fn default_half_width() -> f64 {
+        0.5
+    }
+    fn default_speed() -> f64 {
+        0.6
+    }
+    fn default_scan_rate() -> f64 {
+        30.0
+    }
+    fn default_tolerance() -> f64 {
+        2.0
+    }
+    fn default_turn_gain() -> f64 {
+        2.0
+    }
+    fn default_max_turn() -> f64 {
+        // At the thesis's 2 Hz, 10° between frames keeps most of a 60° view
+        // in both.
+        20.0
+    }
+    fn default_vote_min() -> f64 {
+        0.3
+    }
+    fn default_vote_max() -> f64 {
+        1.0
+    }
+    fn default_vote_cv() -> f64 {
+        0.5
+    }
+
+    /// The defaults with this technique.
+    pub fn with_technique(technique: Technique) -> Self {
+        ActionAidingConfig {
+            technique,
+            step_m: Self::default_step(),
+            max_angle_deg: Self::default_max_angle(),
+            angle_step_deg: Self::default_angle_step(),
+            zigzag_angle_deg: Self::default_zigzag_angle(),
+            zigzag_max_offset_m: Self::default_zigzag_offset(),
+            min_slant_m: Self::default_min_slant(),
+            max_range_m: Self::default_max_range(),
+            clearance_m: Self::default_clearance(),
+            path_half_width: Self::default_half_width(),
+            speed: Self::default_speed(),
+            scan_rate_deg: Self::default_scan_rate(),
+            heading_tolerance_deg: Self::default_tolerance(),
+            turn_gain: Self::default_turn_gain(),
+            max_turn_deg: Self::default_max_turn(),
+            model: ErrorModelKind::default(),
+            tracking: TrackingConfig::default(),
+            vote_min: Self::default_vote_min(),
+            vote_max: Self::default_vote_max(),
+            vote_half_cv: Self::default_vote_cv(),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Phase {
+    /// Choose the next heading now.
+    Decide,
+    /// Physical scan: turning to the left edge, then the right edge of the
+    /// permitted headings (world angles), looking on the way.
+    Scan { edges: [f64; 2], leg: usize, centre: f64 },
+    /// Turning on the spot to the chosen heading.
+    Turn { heading: f64 },
+    /// Driving one step along the heading.
+    Step { heading: f64, from: (f64, f64) },
+}
+
+/// The action-aiding behaviour: drives to the goal in steps of `step_m`,
+/// choosing each step's heading by its technique, and votes more when the
+/// egomotion of the step just done was less certain (thesis §3.5.3).
+///
+/// It drives the robot itself (turn, then step), so it is the main driving
+/// behaviour of its tree; a `Stop` and an `AvoidCollision` beside it keep it
+/// safe.
+pub struct ActionAiding {
+    config: ActionAidingConfig,
+    rng: ChaCha8Rng,
+    phase: Phase,
+    camera: Option<(StereoCamera, CvTable)>,
+    list: TrackingList,
+    last_frame: u64,
+    /// The path's start and direction (start to goal), for the zig-zag.
+    path: Option<((f64, f64), f64)>,
+    zig_side: f64,
+    zig_limit: f64,
+    positions: Vec<(f64, f64)>,
+    echoes: Vec<(f64, f64)>,
+    decisions: u64,
+}
+
+impl ActionAiding {
+    /// A behaviour with these settings, drawing the zig-zag's turning points
+    /// from `ctx`'s generator.
+    pub fn new(config: ActionAidingConfig, ctx: &BuildContext) -> Self {
+        let list = TrackingList::new(config.tracking);
+        ActionAiding {
+            config,
+            rng: ctx.rng(),
+            phase: Phase::Decide,
+            camera: None,
+            list,
+            last_frame: 0,
+            path: None,
+            zig_side: 1.0,
+            zig_limit: 0.0,
+            positions: Vec::new(),
+            echoes: Vec::new(),
+            decisions: 0,
+        }
+    }
+
+    /// Decisions made so far.
+    pub fn decisions(&self) -> u64 {
+        self.decisions
+    }
+
+    fn rules(&self, camera: &StereoCamera) -> DecisionRules {
+        DecisionRules {
+            half_fov: camera.horizontal_fov() / 2.0,
+            step_m: self.config.step_m,
+            min_slant_m: self.config.min_slant_m,
+            max_range_m: self.config.max_range_m,
+        }
+    }
+
+    /// Whether the strip along the world `heading` is clear far enough.
+    fn clear(&self, pose: &Pose2, heading: f64) -> bool {
+        self.config.clearance_m <= 0.0
+            || free_distance(&self.echoes, angle_difference(heading, pose.theta), self.config.path_half_width)
+                >= self.config.clearance_m
+    }
+
+    /// The permitted headings around `centre`, centre first so that ties
+    /// keep to the path: within the angle limits and clear of walls.
+    fn candidates(&self, pose: &Pose2, centre: f64) -> Vec<f64> {
+        let n = (self.config.max_angle_deg / self.config.angle_step_deg).floor() as i32;
+        let step = self.config.angle_step_deg.to_radians();
+        let mut out = vec![centre];
+        for k in 1..=n {
+            out.push(centre + f64::from(k) * step);
+            out.push(centre - f64::from(k) * step);
+        }
+        out.retain(|&h| self.clear(pose, h));
+        out
+    }
+
+    /// Chooses the heading from `landmarks`; without a usable heading, the
+    /// goal's bearing.
+    fn evaluate(&mut self, pose: &Pose2, centre: f64) -> f64 {
+        let Some((camera, table)) = &self.camera else { return centre };
+        self.positions.clear();
+        self.positions.extend(self.list.landmarks().iter().map(|l| l.position));
+        let rules = self.rules(camera);
+        best_heading(table, &rules, &self.positions, (pose.x, pose.y), self.candidates(pose, centre))
+            .map_or(centre, |(h, _)| h)
+    }
+
+    fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {
+        let (start, direction) = *self.path.get_or_insert(((pose.x, pose.y), (goal.1 - pose.y).atan2(goal.0 - pose.x)));
+        if self.zig_limit == 0.0 {
+            self.zig_limit = self.config.zigzag_max_offset_m * self.rng.random_range(0.5..=1.0);
+        }
+        let (s, c) = direction.sin_cos();
+        let offset = -(pose.x - start.0) * s + (pose.y - start.1) * c;
+        let leg = direction + self.zig_side * self.config.zigzag_angle_deg.to_radians();
+        if offset * self.zig_side >= self.zig_limit || !self.clear(pose, leg) {
+            self.zig_side = -self.zig_side;
+            self.zig_limit = self.config.zigzag_max_offset_m * self.rng.random_range(0.5..=1.0);
+        }
+        direction + self.zig_side * self.config.zigzag_angle_deg.to_radians()
+    }
+
+    fn turn_towards(&self, pose: &Pose2, heading: f64) -> f64 {
+        let max = self.config.max_turn_deg.to_radians();
+        (self.config.turn_gain * angle_difference(heading, pose.theta)).clamp(-max, max)
+    }
+
+    fn vote(&self, state: &State) -> f64 {
+        let c = &self.config;
+        match state.egomotion.last_step_cv {
+            Some(cv) => c.vote_min + (c.vote_max - c.vote_min) * cv / (cv + c.vote_half_cv),
+            None => c.vote_max,
+        }
+    }
+}
+
+impl Behavior for ActionAiding {
+    fn gen_action(&mut self, state: &State) -> Action {
+        let Some(goal) = state.goal else { return Action::none() };
+        if state.goal_reached() {
+            return Action::none();
+        }
+        let pose = state.pose;
+        let frame = &state.stereo;
+        if frame.number != self.last_frame {
+            self.last_frame = frame.number;
+            if let Some(calibration) = &frame.calibration {
+                if self.camera.is_none() {
+                    let camera = StereoCamera::from_calibration(calibration);
+                    let table = CvTable::for_camera(self.config.model, &camera, MODEL_STEP_M, self.config.max_range_m);
+                    self.camera = Some((camera, table));
+                }
+                let scanning = matches!(self.phase, Phase::Scan { .. });
+                if self.config.technique == Technique::Tracking || scanning {
+                    self.list.observe(&frame.landmarks, calibration, &pose);
+                }
+            }
+        }
+        echo_points(state, &mut self.echoes);
+        let to_goal = (goal.y - pose.y).atan2(goal.x - pose.x);
+        let distance = pose.distance_to(goal.x, goal.y);
+        let vote = self.vote(state);
+        // Two passes at most: a finished phase hands over within the tick.
+        for _ in 0..3 {
+            match self.phase {
+                Phase::Decide => {
+                    self.decisions += 1;
+                    if self.config.technique == Technique::Tracking {
+                        self.list.prune(&pose);
+                    }
+                    // The last stretch is straight at the goal: a zig-zag leg
+                    // would pass it by a lateral offset.
+                    let final_approach = match self.config.technique {
+                        Technique::ZigZag => 2.0 * self.config.zigzag_max_offset_m,
+                        _ => self.config.step_m,
+                    };
+                    let heading = if distance <= final_approach {
+                        to_goal
+                    } else {
+                        match self.config.technique {
+                            Technique::None => to_goal,
+                            Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
+                            Technique::Tracking => self.evaluate(&pose, to_goal),
+                            Technique::Scan => {
+                                // Sweep the allowable headings: within the
+                                // angle limits and clear of walls.
+                                let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
+                                let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
+                                self.list.clear();
+                                self.phase =
+                                    Phase::Scan { edges: [to_goal + high, to_goal + low], leg: 0, centre: to_goal };
+                                continue;
+                            }
+                        }
+                    };
+                    self.phase = Phase::Turn { heading };
+                }
+                Phase::Scan { edges, leg, centre } => {
+                    if angle_difference(edges[leg], pose.theta).abs() > self.config.heading_tolerance_deg.to_radians() {
+                        let rate = self.config.scan_rate_deg.to_radians();
+                        let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
+                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
+                    }
+                    if leg == 0 {
+                        self.phase = Phase::Scan { edges, leg: 1, centre };
+                    } else {
+                        let heading = self.evaluate(&pose, centre);
+                        self.phase = Phase::Turn { heading };
+                    }
+                }
+                Phase::Turn { heading } => {
+                    if angle_difference(heading, pose.theta).abs() > self.config.heading_tolerance_deg.to_radians() {
+                        return Action::with_vote(vote).velocity(0.0).rot_velocity(self.turn_towards(&pose, heading));
+                    }
+                    self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
+                }
+                Phase::Step { heading, from } => {
+                    if pose.distance_to(from.0, from.1) >= self.config.step_m {
+                        self.phase = Phase::Decide;
+                        continue;
+                    }
+                    return Action::with_vote(vote)
+                        .velocity(self.config.speed)
+                        .rot_velocity(self.turn_towards(&pose, heading));
+                }
+            }
+        }
+        Action::with_vote(vote).velocity(0.0).rot_velocity(0.0)
+    }
+
+    fn name(&self) -> &str {
+        "ActionAiding"
+    }
+
+    fn reset(&mut self) {
+        self.phase = Phase::Decide;
+        self.list.clear();
+        self.path = None;
+        self.last_frame = 0;
+        self.decisions = 0;
+    }
+}

@@ -1,0 +1,229 @@
+//! The landmark tracking list (thesis §3.5.2.1): where usable landmarks are,
+//! remembered after they leave the field of view, so that headings can be
+//! evaluated in software instead of by turning to look.
+
+use serde::Deserialize;
+use ubf_core::config::{non_negative, positive, unit_interval};
+use ubf_core::{angle_difference, Descriptor, LandmarkObservation, Pose2, StereoCalibration};
+
+/// Settings of the tracking list.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackingConfig {
+    /// Largest descriptor distance of a match, bits of 256 (eq. 30–34).
+    #[serde(default = "TrackingConfig::default_max_distance")]
+    pub max_distance: u32,
+    /// The best match must be nearer than this share of the second best.
+    #[serde(default = "TrackingConfig::default_ratio", deserialize_with = "unit_interval")]
+    pub ratio: f64,
+    /// Position gate (eq. 35) at zero range, m…
+    #[serde(default = "TrackingConfig::default_gate", deserialize_with = "non_negative")]
+    pub gate_m: f64,
+    /// …growing by this much per metre of range, as stereo depth error does.
+    #[serde(default = "TrackingConfig::default_gate_per_m", deserialize_with = "non_negative")]
+    pub gate_per_m: f64,
+    /// Drop a landmark once the robot sees it from this much further round
+    /// than when it last saw it (the thesis: 20°, as descriptor matching falls
+    /// below 80 % past about 30°).
+    #[serde(default = "TrackingConfig::default_drop_deg", deserialize_with = "positive")]
+    pub drop_viewpoint_deg: f64,
+}
+
+impl TrackingConfig {
+    fn default_max_distance() -> u32 {
+        64
+    }
+    fn default_ratio() -> f64 {
+        0.8
+    }
+    fn default_gate() -> f64 {
+        0.5
+    }
+    fn default_gate_per_m() -> f64 {
+        0.05
+    }
+    fn default_drop_deg() -> f64 {
+        20.0
+    }
+}
+
+impl Default for TrackingConfig {
+    fn default() -> Self {
+        TrackingConfig {
+            max_distance: Self::default_max_distance(),
+            ratio: Self::default_ratio(),
+            gate_m: Self::default_gate(),
+            gate_per_m: Self::default_gate_per_m(),
+            drop_viewpoint_deg: Self::default_drop_deg(),
+        }
+    }
+}
+
+/// One remembered landmark.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackedLandmark {
+    /// World position on the floor plane, m (eq. 28–29).
+    pub position: (f64, f64),
+    /// Its descriptor when last seen.
+    pub descriptor: Descriptor,
+    /// The world direction from the robot to it when last seen (eq. 37).
+    pub viewpoint: f64,
+}
+
+/// What one update did, for tests and logs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TrackingUpdate {
+    /// Observations matched to a remembered landmark.
+    pub matched: usize,
+    /// Observations registered as new landmarks.
+    pub registered: usize,
+    /// Observations ignored because two remembered landmarks looked alike.
+    pub ambiguous: usize,
+    /// Landmarks dropped for a changed viewpoint.
+    pub dropped: usize,
+}
+
+/// The tracking list.
+#[derive(Clone, Debug, Default)]
+pub struct TrackingList {
+    config: TrackingConfig,
+    entries: Vec<TrackedLandmark>,
+}
+
+/// Where an observation is in the world, from the robot's pose (eq. 25–29).
+pub fn world_position(observation: &LandmarkObservation, calibration: &StereoCalibration, pose: &Pose2) -> (f64, f64) {
+    let [x_cam, y_cam, _] = observation.point_cam;
+    // Camera frame (x right, y ahead) to robot frame (x forward, y left).
+    let (forward, left) = (y_cam + calibration.mount[0], -x_cam + calibration.mount[1]);
+    pose.transform_point(forward, left)
+}
+
+impl TrackingList {
+    /// An empty list.
+    pub fn new(config: TrackingConfig) -> Self {
+        TrackingList { config, entries: Vec::new() }
+    }
+
+    /// The remembered landmarks.
+    pub fn landmarks(&self) -> &[TrackedLandmark] {
+        &self.entries
+    }
+
+    /// Forgets everything.
+    pub fn clear(&mut self) {
+        self.entries.clear();
+    }
+
+    /// Takes in one frame's observations seen from `pose`: each is matched
+    /// by descriptor (nearest, within the threshold, clearly nearer than the
+    /// second) and position (within the gate) and updated, or registered as
+    /// new; an observation that two entries resemble equally is ignored.
+    pub fn observe(
+        &mut self,
+        observations: &[LandmarkObservation],
+        calibration: &StereoCalibration,
+        pose: &Pose2,
+    ) -> TrackingUpdate {
+        let mut update = TrackingUpdate::default();
+        for obs in observations {
+            let position = world_position(obs, calibration, pose);
+            let range = pose.distance_to(position.0, position.1);
+            let viewpoint = (position.1 - pose.y).atan2(position.0 - pose.x);
+            let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
+            for (i, entry) in self.entries.iter().enumerate() {
+                let d = obs.descriptor.hamming(&entry.descriptor);
+                if d < best.0 {
+                    second = best.0;
+                    best = (d, i);
+                } else if d < second {
+                    second = d;
+                }
+            }
+            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, viewpoint };
+            if best.0 > self.config.max_distance {
+                self.entries.push(fresh);
+                update.registered += 1;
+                continue;
+            }
+            if second != u32::MAX && f64::from(best.0) >= self.config.ratio * f64::from(second) {
+                update.ambiguous += 1;
+                continue;
+            }
+            let entry = &mut self.entries[best.1];
+            let gate = self.config.gate_m + self.config.gate_per_m * range;
+            let moved = (entry.position.0 - position.0).hypot(entry.position.1 - position.1);
+            if moved <= gate {
+                // The thesis keeps only the latest position (§3.5.2.1).
+                *entry = fresh;
+                update.matched += 1;
+            } else {
+                self.entries.push(fresh);
+                update.registered += 1;
+            }
+        }
+        update
+    }
+
+    /// After a step: drops every landmark the robot now sees from more than
+    /// the drop angle away from where it last saw it (eq. 37).
+    pub fn prune(&mut self, pose: &Pose2) -> usize {
+        let limit = self.config.drop_viewpoint_deg.to_radians();
+        let before = self.entries.len();
+        self.entries.retain(|e| {
+            let now = (e.position.1 - pose.y).atan2(e.position.0 - pose.x);
+            angle_difference(now, e.viewpoint).abs() <= limit
+        });
+        before - self.entries.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn calibration() -> StereoCalibration {
+        StereoCalibration { focal_px: 554.0, baseline_m: 0.6, width_px: 640, height_px: 480, mount: [0.0, 0.0, 1.0] }
+    }
+
+    fn obs(point_cam: [f64; 3], seed: u64) -> LandmarkObservation {
+        let d = Descriptor([seed.wrapping_mul(0x9e37_79b9_7f4a_7c15), seed.rotate_left(17), !seed, seed << 3]);
+        LandmarkObservation { point_cam, descriptor: d, ..LandmarkObservation::default() }
+    }
+
+    #[test]
+    fn converts_camera_to_world() {
+        // 10 m ahead and 2 m right of a robot at (1, 1) facing +y.
+        let p = world_position(
+            &obs([2.0, 10.0, 0.0], 1),
+            &calibration(),
+            &Pose2::new(1.0, 1.0, std::f64::consts::FRAC_PI_2),
+        );
+        assert!((p.0 - 3.0).abs() < 1e-12 && (p.1 - 11.0).abs() < 1e-12, "{p:?}");
+    }
+
+    #[test]
+    fn registers_then_matches_then_drops() {
+        let mut list = TrackingList::new(TrackingConfig::default());
+        let pose = Pose2::default();
+        let seen = [obs([-1.0, 5.0, 0.0], 1), obs([2.0, 8.0, 0.0], 2)];
+        assert_eq!(list.observe(&seen, &calibration(), &pose).registered, 2);
+        // The same landmarks a step later: matched, not registered again.
+        let later = Pose2::new(0.5, 0.0, 0.0);
+        let again = [obs([-1.0, 4.5, 0.0], 1), obs([2.0, 7.5, 0.0], 2)];
+        let u = list.observe(&again, &calibration(), &later);
+        assert_eq!((u.matched, u.registered), (2, 0));
+        assert_eq!(list.landmarks().len(), 2);
+        // Driving past the first landmark turns the view of it by far more
+        // than 20°; the far one stays.
+        assert_eq!(list.prune(&Pose2::new(4.0, 0.0, 0.0)), 1);
+        assert_eq!(list.landmarks().len(), 1);
+    }
+
+    #[test]
+    fn a_lookalike_in_the_wrong_place_is_a_new_landmark() {
+        let mut list = TrackingList::new(TrackingConfig::default());
+        list.observe(&[obs([0.0, 5.0, 0.0], 1)], &calibration(), &Pose2::default());
+        let u = list.observe(&[obs([0.0, 15.0, 0.0], 1)], &calibration(), &Pose2::default());
+        assert_eq!(u.registered, 1);
+    }
+}
