@@ -77,10 +77,44 @@ enum Command {
     },
     /// List the behaviours this build can read from scenario files.
     Behaviors,
+    /// Reproduce one of the thesis's experiments.
+    Experiment {
+        #[command(subcommand)]
+        which: ExperimentCommand,
+    },
     /// The landmark egomotion error model of a camera (thesis §3.3.3).
     Model {
         #[command(subcommand)]
         action: ModelCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum ExperimentCommand {
+    /// Table 4: journey CV of every technique in 10 random 6 m × 60 m corridors.
+    ThesisTable4 {
+        /// Corridors (seeds of their layouts).
+        #[arg(long, default_value = "0..10", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Runs at once; by default one per core.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Tables 5–7 and 10: end-point egomotion error on the two 40.7 m routes
+    /// and the feature-poor section, both estimators.
+    ThesisEndpoint {
+        /// Seeds per route, technique and estimator.
+        #[arg(long, default_value = "0..30", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Runs at once; by default one per core.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -140,6 +174,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             sweep_command(&registry, &files, seeds, jobs, &out, trajectories)
         }
         Command::Model { action } => model_command(&registry, action),
+        Command::Experiment { which } => experiment_command(&registry, which),
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -184,6 +219,85 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
         }
         Err(e) => {
             eprintln!("error: {}: {e}", file.display());
+            ExitCode::from(EXIT_FAILURE)
+        }
+    }
+}
+
+fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode {
+    use crate::experiment::{thesis_endpoint, thesis_table4, TECHNIQUES};
+    let cores = || std::thread::available_parallelism().map_or(1, |n| n.get());
+    let result = match which {
+        ExperimentCommand::ThesisTable4 { seeds, jobs, json } => {
+            thesis_table4(registry, seeds, jobs.unwrap_or_else(cores)).map(|table| {
+                if json {
+                    println!("{}", serde_json::to_string_pretty(&table).expect("results serialise"));
+                    return;
+                }
+                println!("Journey CV (lower is better); egomotion failures in brackets");
+                println!("{:>8} {:>14} {:>14} {:>14} {:>14}", "corridor", "none", "zigzag", "scan", "tracking");
+                for chunk in table.runs.chunks(TECHNIQUES.len()) {
+                    print!("{:>8}", chunk[0].corridor);
+                    for r in chunk {
+                        let unfinished = if r.reached_goal { "" } else { "*" };
+                        print!(" {:>8.3} ({:>3}){unfinished}", r.journey_cv, r.egomotion_failures);
+                    }
+                    println!();
+                }
+                print!("{:>8}", "mean");
+                for t in TECHNIQUES {
+                    print!(" {:>8.3} ({:>3.0})", table.mean[t.name()], table.mean_failures[t.name()]);
+                }
+                println!();
+                print!("{:>8}", "vs none");
+                for t in TECHNIQUES {
+                    print!(" {:>13.0}%", -table.improvement_pct[t.name()]);
+                }
+                println!("\n(* did not reach the goal in time)");
+            })
+        }
+        ExperimentCommand::ThesisEndpoint { seeds, jobs, json } => {
+            thesis_endpoint(registry, seeds, jobs.unwrap_or_else(cores)).map(|result| {
+                if json {
+                    println!("{}", serde_json::to_string_pretty(&result).expect("results serialise"));
+                    return;
+                }
+                println!(
+                    "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}",
+                    result.seeds[0], result.seeds[1]
+                );
+                for (route, estimators) in &result.routes {
+                    for (estimator, techniques) in estimators {
+                        println!("\n{route}, {estimator} estimator");
+                        println!(
+                            "{:>9} {:>24} {:>9} {:>10} {:>10} {:>9} {:>9}",
+                            "technique", "end-point error m", "% dist", "failures", "runs w/ f", "path +%", "time +%"
+                        );
+                        for t in TECHNIQUES {
+                            let Some(c) = techniques.get(t.name()) else { continue };
+                            let e = &c.endpoint_error_m;
+                            println!(
+                                "{:>9} {:>7.2} [{:>6.2}, {:>6.2}] {:>9.2} {:>10.1} {:>10} {:>9.1} {:>9.1}",
+                                t.name(),
+                                e.mean,
+                                e.ci95[0],
+                                e.ci95[1],
+                                c.endpoint_error_pct.mean,
+                                c.egomotion_failures.mean,
+                                c.runs_with_failures,
+                                c.path_overhead_pct.mean,
+                                c.time_overhead_pct.mean
+                            );
+                        }
+                    }
+                }
+            })
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
             ExitCode::from(EXIT_FAILURE)
         }
     }

@@ -6,12 +6,15 @@
 //! - [`scenario`]: the scenario file format and its loader, whose errors
 //!   name the file, line and column;
 //! - [`run`]: a scenario run headless on the simulator;
+//! - [`sweep`]: many runs in parallel, summarised;
+//! - [`experiment`]: the thesis's experiments;
 //! - [`cli`]: the `ubf` command line, which a user's crate can reuse with its
 //!   own registry so that its behaviours work from scenario files by name.
 
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod experiment;
 pub mod plot;
 pub mod run;
 pub mod scenario;

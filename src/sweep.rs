@@ -123,6 +123,38 @@ pub fn sweep(
     full_outputs: bool,
 ) -> Result<SweepSummary, SweepError> {
     let tasks: Vec<(usize, u64)> = (0..items.len()).flat_map(|i| seeds.clone().map(move |s| (i, s))).collect();
+    let results = run_parallel(&tasks, jobs, |&(item, seed)| {
+        let dir = out.join(&items[item].label).join(format!("seed-{seed}"));
+        run_one(&items[item].scenario, seed, &dir, full_outputs).map_err(|e| e.to_string())
+    });
+    let mut scenarios = BTreeMap::new();
+    for (i, item) in items.iter().enumerate() {
+        let mut values: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+        let mut failed = Vec::new();
+        let mut runs = 0;
+        for (task, result) in tasks.iter().zip(&results).filter(|(t, _)| t.0 == i) {
+            match result {
+                Ok(report) => {
+                    runs += 1;
+                    for (name, v) in numeric_fields(report) {
+                        values.entry(name).or_default().push(v);
+                    }
+                }
+                Err(e) => failed.push((task.1, e.clone())),
+            }
+        }
+        let fields = values.into_iter().map(|(k, v)| (k, stats(&v))).collect();
+        scenarios.insert(item.label.clone(), ScenarioSummary { runs, failed, fields });
+    }
+    let summary = SweepSummary { seeds: [seeds.start, seeds.end], scenarios };
+    write_summary(&summary, out)?;
+    Ok(summary)
+}
+
+/// Runs `work` on every task on `jobs` threads, with a progress bar on
+/// stderr (hidden when stderr is not a terminal), and returns the results in
+/// the tasks' order whatever order they finished in.
+pub fn run_parallel<T: Sync, R: Send>(tasks: &[T], jobs: usize, work: impl Fn(&T) -> R + Sync) -> Vec<R> {
     let progress = ProgressBar::new(tasks.len() as u64);
     progress.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} runs  {elapsed_precise} elapsed, {eta} to go")
@@ -133,12 +165,11 @@ pub fn sweep(
     std::thread::scope(|scope| {
         for _ in 0..jobs.max(1) {
             let sender = sender.clone();
-            let (next, tasks, progress) = (&next, &tasks, &progress);
+            let (next, progress, work) = (&next, &progress, &work);
             scope.spawn(move || loop {
                 let index = next.fetch_add(1, Ordering::Relaxed);
-                let Some(&(item, seed)) = tasks.get(index) else { break };
-                let dir = out.join(&items[item].label).join(format!("seed-{seed}"));
-                let result = run_one(&items[item].scenario, seed, &dir, full_outputs);
+                let Some(task) = tasks.get(index) else { break };
+                let result = work(task);
                 progress.inc(1);
                 if sender.send((index, result)).is_err() {
                     break;
@@ -148,34 +179,9 @@ pub fn sweep(
     });
     drop(sender);
     progress.finish_and_clear();
-
-    let mut results: Vec<Option<Result<RunReport, String>>> = vec![None; tasks.len()];
-    for (index, result) in receiver {
-        results[index] = Some(result.map_err(|e| e.to_string()));
-    }
-    let mut scenarios = BTreeMap::new();
-    for (i, item) in items.iter().enumerate() {
-        let mut values: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-        let mut failed = Vec::new();
-        let mut runs = 0;
-        for (task, result) in tasks.iter().zip(&results).filter(|(t, _)| t.0 == i) {
-            match result {
-                Some(Ok(report)) => {
-                    runs += 1;
-                    for (name, v) in numeric_fields(report) {
-                        values.entry(name).or_default().push(v);
-                    }
-                }
-                Some(Err(e)) => failed.push((task.1, e.clone())),
-                None => failed.push((task.1, "the run did not report".to_owned())),
-            }
-        }
-        let fields = values.into_iter().map(|(k, v)| (k, stats(&v))).collect();
-        scenarios.insert(item.label.clone(), ScenarioSummary { runs, failed, fields });
-    }
-    let summary = SweepSummary { seeds: [seeds.start, seeds.end], scenarios };
-    write_summary(&summary, out)?;
-    Ok(summary)
+    let mut results: Vec<(usize, R)> = receiver.into_iter().collect();
+    results.sort_by_key(|(index, _)| *index);
+    results.into_iter().map(|(_, r)| r).collect()
 }
 
 fn run_one(scenario: &Scenario, seed: u64, dir: &Path, full_outputs: bool) -> Result<RunReport, RunError> {

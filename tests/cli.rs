@@ -41,12 +41,18 @@ fn check(body: &str) -> (i32, String) {
 
 #[test]
 fn every_shipped_scenario_checks() {
-    let files: Vec<String> = std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
-        .map(|p| p.to_string_lossy().into_owned())
-        .collect();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut files: Vec<String> = Vec::new();
+    for dir in [root.clone(), root.join("thesis")] {
+        files.extend(
+            std::fs::read_dir(dir)
+                .unwrap()
+                .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+                .map(|p| p.to_string_lossy().into_owned()),
+        );
+    }
+    assert!(files.iter().any(|f| f.contains("thesis/table4.ron")));
     assert!(!files.is_empty());
     let args: Vec<&str> = std::iter::once("check").chain(files.iter().map(String::as_str)).collect();
     let out = ubf(&args);
@@ -144,4 +150,20 @@ fn the_stock_binary_does_not_know_a_users_behaviour() {
     let out = ubf(&["check", "examples/wander/wander.ron"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("unknown behaviour `Wander`"));
+}
+
+#[test]
+fn thesis_table4_prints_the_promised_json() {
+    let out = ubf(&["experiment", "thesis-table4", "--seeds", "0..2", "--json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 8);
+    for technique in ["none", "zigzag", "scan", "tracking"] {
+        assert!(v["mean"][technique].as_f64().unwrap() > 0.0, "{technique}");
+        assert!(v["improvement_pct"][technique].is_number(), "{technique}");
+        assert_eq!(runs.iter().filter(|r| r["technique"] == technique).count(), 2);
+    }
+    assert_eq!(v["improvement_pct"]["none"], 0.0);
+    assert!(runs.iter().all(|r| r["corridor"].is_u64() && r["journey_cv"].is_f64()));
 }

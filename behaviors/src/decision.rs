@@ -17,6 +17,9 @@ pub struct DecisionRules {
     pub max_range_m: f64,
 }
 
+/// Bearing buckets over the full circle.
+const BUCKETS: usize = 72;
+
 /// The best heading among `candidates` (world angles) for a robot at
 /// `position` among `landmarks` (world floor positions): the one whose fused
 /// CV (eq. 6) over the landmarks in view after one projected step is least.
@@ -24,6 +27,11 @@ pub struct DecisionRules {
 /// than the slant limit is rejected. Ties go to the candidate listed first.
 /// Returns the heading and its fused CV, or `None` if every heading is
 /// rejected.
+///
+/// For speed, landmarks are bucketed by bearing once, and each candidate
+/// looks only at the buckets its field of view can reach from the projected
+/// position; landmarks within four steps, whose bearing the step can swing
+/// far, are looked at by every candidate.
 pub fn best_heading(
     table: &CvTable,
     rules: &DecisionRules,
@@ -31,35 +39,143 @@ pub fn best_heading(
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
 ) -> Option<(f64, f64)> {
+    use std::f64::consts::TAU;
     let tan_half = rules.half_fov.tan();
     let (min_slant2, max_range2) = (rules.min_slant_m.powi(2), rules.max_range_m.powi(2));
+    let near = 4.0 * rules.step_m;
+    let bucket_of = |bearing: f64| ((bearing.rem_euclid(TAU) / TAU * BUCKETS as f64) as usize).min(BUCKETS - 1);
+    // Counting sort of the far landmarks into bearing buckets.
+    let mut counts = [0usize; BUCKETS + 1];
+    let mut nearby: Vec<(f64, f64)> = Vec::new();
+    let mut bearing_bucket = Vec::with_capacity(landmarks.len());
+    for &(lx, ly) in landmarks {
+        let (dx, dy) = (lx - position.0, ly - position.1);
+        if dx.hypot(dy) < near {
+            nearby.push((lx, ly));
+            bearing_bucket.push(usize::MAX);
+        } else {
+            let b = bucket_of(dy.atan2(dx));
+            counts[b + 1] += 1;
+            bearing_bucket.push(b);
+        }
+    }
+    for b in 0..BUCKETS {
+        counts[b + 1] += counts[b];
+    }
+    let starts = counts;
+    let mut fill = counts;
+    let mut sorted = vec![(0.0, 0.0); landmarks.len() - nearby.len()];
+    for (&landmark, &b) in landmarks.iter().zip(&bearing_bucket) {
+        if b != usize::MAX {
+            sorted[fill[b]] = landmark;
+            fill[b] += 1;
+        }
+    }
+    // From four steps out, one step moves a bearing by at most asin(1/4).
+    let reach = rules.half_fov + (0.25f64).asin() + TAU / BUCKETS as f64;
+    let span = (reach / TAU * BUCKETS as f64).ceil() as isize;
+
     let mut best: Option<(f64, f64)> = None;
-    'candidates: for heading in candidates {
+    for heading in candidates {
         let (s, c) = heading.sin_cos();
         // Eq. 40–43: the robot projected one step ahead.
-        let (px, py) = (position.0 + rules.step_m * c, position.1 + rules.step_m * s);
+        let projected = (position.0 + rules.step_m * c, position.1 + rules.step_m * s);
+        let view = View { sin: s, cos: c, tan_half, min_slant2, max_range2 };
+        // The window of buckets is one run of `sorted`, or two where it
+        // wraps round.
+        let first = bucket_of(heading) as isize - span;
+        let last = bucket_of(heading) as isize + span;
+        let slices: [&[(f64, f64)]; 2] = if last - first + 1 >= BUCKETS as isize {
+            [&sorted[..], &[]]
+        } else {
+            let lo = first.rem_euclid(BUCKETS as isize) as usize;
+            let hi = last.rem_euclid(BUCKETS as isize) as usize;
+            if lo <= hi {
+                [&sorted[starts[lo]..starts[hi + 1]], &[]]
+            } else {
+                [&sorted[starts[lo]..], &sorted[..starts[hi + 1]]]
+            }
+        };
         let mut information = 0.0;
-        for &(lx, ly) in landmarks {
-            let (dx, dy) = (lx - px, ly - py);
-            // Eq. 44–48 without trigonometry: depth along the heading,
-            // lateral offset to the right.
-            let depth = dx * c + dy * s;
-            let lateral = dx * s - dy * c;
-            if depth <= 0.0 || lateral.abs() > depth * tan_half {
-                continue;
-            }
-            let range2 = depth * depth + lateral * lateral;
-            if range2 < min_slant2 {
-                continue 'candidates;
-            }
-            if range2 <= max_range2 {
-                information += table.information(lateral, depth);
+        let mut rejected = false;
+        for slice in [&nearby[..], slices[0], slices[1]] {
+            match view.information(table, slice, projected) {
+                Some(i) => information += i,
+                None => {
+                    rejected = true;
+                    break;
+                }
             }
         }
-        if information > 0.0 {
+        if !rejected && information > 0.0 {
             let cv = 1.0 / information;
             if best.is_none_or(|(_, b)| cv < b) {
                 best = Some((heading, cv));
+            }
+        }
+    }
+    best
+}
+
+/// One candidate heading's view from the projected position.
+struct View {
+    sin: f64,
+    cos: f64,
+    tan_half: f64,
+    min_slant2: f64,
+    max_range2: f64,
+}
+
+impl View {
+    /// The summed information (Σ 1/CV) of the landmarks in view, or `None`
+    /// if one is nearer than the slant limit (an obstacle).
+    #[inline]
+    fn information(&self, table: &CvTable, landmarks: &[(f64, f64)], from: (f64, f64)) -> Option<f64> {
+        let mut sum = 0.0;
+        for &(lx, ly) in landmarks {
+            let (dx, dy) = (lx - from.0, ly - from.1);
+            // Eq. 44–48 without trigonometry: depth along the heading,
+            // lateral offset to the right.
+            let depth = dx * self.cos + dy * self.sin;
+            let lateral = dx * self.sin - dy * self.cos;
+            if depth <= 0.0 || lateral.abs() > depth * self.tan_half {
+                continue;
+            }
+            let range2 = depth * depth + lateral * lateral;
+            if range2 < self.min_slant2 {
+                return None;
+            }
+            if range2 <= self.max_range2 {
+                sum += table.information(lateral, depth);
+            }
+        }
+        Some(sum)
+    }
+}
+
+/// The same evaluation without bucketing, every landmark for every heading:
+/// the reference the fast version is tested against.
+pub fn best_heading_exhaustive(
+    table: &CvTable,
+    rules: &DecisionRules,
+    landmarks: &[(f64, f64)],
+    position: (f64, f64),
+    candidates: impl IntoIterator<Item = f64>,
+) -> Option<(f64, f64)> {
+    let mut best: Option<(f64, f64)> = None;
+    for heading in candidates {
+        let (s, c) = heading.sin_cos();
+        let projected = (position.0 + rules.step_m * c, position.1 + rules.step_m * s);
+        let view = View {
+            sin: s,
+            cos: c,
+            tan_half: rules.half_fov.tan(),
+            min_slant2: rules.min_slant_m.powi(2),
+            max_range2: rules.max_range_m.powi(2),
+        };
+        if let Some(information) = view.information(table, landmarks, projected).filter(|i| *i > 0.0) {
+            if best.is_none_or(|(_, b)| 1.0 / information < b) {
+                best = Some((heading, 1.0 / information));
             }
         }
     }
@@ -93,6 +209,28 @@ mod tests {
         let straight_at = 2f64.atan2(10.0);
         assert!((heading - straight_at).abs() > 15f64.to_radians(), "{}", heading.to_degrees());
         assert!(cv < 1.0 / t.information(0.0, 10.0));
+    }
+
+    #[test]
+    fn bucketing_changes_nothing() {
+        use rand::{Rng, SeedableRng};
+        let t = table();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for _ in 0..50 {
+            let landmarks: Vec<(f64, f64)> =
+                (0..300).map(|_| (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0))).collect();
+            let at = (rng.random_range(0.0..40.0), rng.random_range(-2.0..2.0));
+            let heads: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians() + 0.3).collect();
+            let fast = best_heading(&t, &rules(), &landmarks, at, heads.iter().copied());
+            let slow = best_heading_exhaustive(&t, &rules(), &landmarks, at, heads.iter().copied());
+            match (fast, slow) {
+                (Some(a), Some(b)) => {
+                    assert_eq!(a.0, b.0);
+                    assert!((a.1 / b.1 - 1.0).abs() < 1e-9);
+                }
+                (a, b) => assert_eq!(a, b),
+            }
+        }
     }
 
     #[test]

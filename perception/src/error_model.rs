@@ -198,6 +198,8 @@ pub struct CvTable {
     ln_cv: Vec<f64>,
     /// 1/CV at every node, for [`CvTable::information`].
     inverse: Vec<f64>,
+    /// 1/cell, so the hot lookup multiplies instead of dividing.
+    per_cell: f64,
 }
 
 impl CvTable {
@@ -213,7 +215,7 @@ impl CvTable {
             }
         }
         let inverse = ln_cv.iter().map(|l| (-l).exp()).collect();
-        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv, inverse }
+        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv, inverse, per_cell: 1.0 / cell }
     }
 
     /// A table of the chosen model for `camera`, steps of `step_m`, out to
@@ -237,8 +239,9 @@ impl CvTable {
     /// table's 5 cm cells.
     #[inline]
     pub fn information(&self, x: f64, y: f64) -> f64 {
-        let i = ((x.abs().min(self.x_max) / self.cell).round() as usize).min(self.nx - 1);
-        let j = (((y.clamp(self.y_min, self.y_max) - self.y_min) / self.cell).round() as usize).min(self.ny - 1);
+        // Non-negative after the clamps, so truncating x + 0.5 rounds.
+        let i = ((x.abs().min(self.x_max) * self.per_cell + 0.5) as usize).min(self.nx - 1);
+        let j = (((y.clamp(self.y_min, self.y_max) - self.y_min) * self.per_cell + 0.5) as usize).min(self.ny - 1);
         self.inverse[j * self.nx + i]
     }
 

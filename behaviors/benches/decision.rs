@@ -1,0 +1,34 @@
+//! One evaluative decision: 73 candidate headings over 1 000 tracked
+//! landmarks. Run with `cargo bench -p ubf-behaviors --bench decision`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+use ubf_behaviors::decision::{best_heading, DecisionRules};
+use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
+use ubf_perception::StereoCamera;
+
+fn decision(c: &mut Criterion) {
+    let camera = StereoCamera::default();
+    let table = CvTable::for_camera(ErrorModelKind::Geometric, &camera, MODEL_STEP_M, 80.0);
+    let rules =
+        DecisionRules { half_fov: camera.horizontal_fov() / 2.0, step_m: 1.0, min_slant_m: 0.5, max_range_m: 80.0 };
+    // 1 000 landmarks on the walls and far end of a 6 m × 60 m corridor.
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let landmarks: Vec<(f64, f64)> = (0..1000)
+        .map(|_| match rng.random_range(0..3) {
+            0 => (rng.random_range(0.0..60.0), 3.0),
+            1 => (rng.random_range(0.0..60.0), -3.0),
+            _ => (60.0, rng.random_range(-3.0..3.0)),
+        })
+        .collect();
+    // 73 headings: ±90° every 2.5°.
+    let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
+    c.bench_function("decision/73_headings_1000_landmarks", |b| {
+        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, (10.0, 0.0), candidates.iter().copied())))
+    });
+}
+
+criterion_group!(benches, decision);
+criterion_main!(benches);

@@ -1,0 +1,237 @@
+//! The thesis's experiments, reproduced on the simulator:
+//! `ubf experiment thesis-table4` and `ubf experiment thesis-endpoint`.
+//!
+//! Each experiment starts from a scenario file in `scenarios/thesis/`
+//! (compiled in, so the command works from any directory) and swaps in the
+//! technique and the estimator under test; nothing else changes between the
+//! runs being compared.
+
+use crate::run::{run, RunReport};
+use crate::scenario::Scenario;
+use crate::sweep::{run_parallel, stats, FieldStats};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use ubf_behaviors::Technique;
+use ubf_core::{BehaviorSpec, Registry};
+use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
+
+/// The techniques, in the thesis's order.
+pub const TECHNIQUES: [Technique; 4] = [Technique::None, Technique::ZigZag, Technique::Scan, Technique::Tracking];
+
+/// Why an experiment could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    /// A compiled-in scenario did not load (a bug, caught by the tests).
+    #[error("experiment scenario {name}: {message}")]
+    Scenario {
+        /// Which.
+        name: &'static str,
+        /// Why.
+        message: String,
+    },
+}
+
+fn load(registry: &Registry, name: &'static str, text: &str) -> Result<Scenario, ExperimentError> {
+    Scenario::from_ron(registry, text).map_err(|e| ExperimentError::Scenario { name, message: e.to_string() })
+}
+
+/// `base` with its tree driven by `technique` (with the zig-zag's largest
+/// offset `zigzag_offset`, which depends on the corridor's width) and
+/// egomotion by `estimator`.
+fn variant(
+    registry: &Registry,
+    base: &Scenario,
+    technique: Technique,
+    zigzag_offset: f64,
+    estimator: EstimatorKind,
+) -> Result<Scenario, ExperimentError> {
+    let technique_name = format!("{technique:?}");
+    let offset = format!(", zigzag_max_offset_m: {zigzag_offset:.1}");
+    let tree = format!(
+        "Composite(arbiter: CommandFusion, children: [(behavior: Stop(), weight: 1.0), \
+         (behavior: AvoidCollision(), weight: 2.0), (behavior: ActionAiding(technique: {technique_name}{offset}))])"
+    );
+    let root: BehaviorSpec =
+        registry.from_ron(&tree).map_err(|e| ExperimentError::Scenario { name: "tree", message: e.to_string() })?;
+    let mut scenario = base.clone();
+    scenario.root = root;
+    if let Some(egomotion) = &mut scenario.robot.egomotion {
+        egomotion.estimator = estimator;
+    }
+    scenario.name = format!("{}-{}", base.name, technique.name());
+    Ok(scenario)
+}
+
+const TABLE4: &str = include_str!("../scenarios/thesis/table4.ron");
+/// Zig-zag offset in the 6 m corridor of Table 4.
+const TABLE4_ZIGZAG_M: f64 = 2.0;
+/// Route label, base file name, text, and zig-zag offset in its 4 m corridor
+/// (as the file's own tree has it; a test keeps them in step).
+const ROUTES: [(&str, &str, &str, f64); 3] = [
+    ("1->2 (far landmarks ahead)", "route-1-2", include_str!("../scenarios/thesis/route-1-2.ron"), 1.0),
+    ("2->1 (near landmarks ahead)", "route-2-1", include_str!("../scenarios/thesis/route-2-1.ron"), 1.0),
+    ("feature-poor", "feature-poor", include_str!("../scenarios/thesis/feature-poor.ron"), 1.0),
+];
+
+/// One run of Table 4.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Table4Run {
+    /// The corridor (its layout's seed).
+    pub corridor: u64,
+    /// `none`, `zigzag`, `scan` or `tracking`.
+    pub technique: &'static str,
+    /// Journey CV: the sum of step CVs, each per metre driven (eq. 7).
+    pub journey_cv: f64,
+    /// Egomotion steps that failed (they add nothing to the journey CV).
+    pub egomotion_failures: u32,
+    /// Whether the robot got to the goal before the time limit.
+    pub reached_goal: bool,
+    /// Simulated seconds.
+    pub sim_time_s: f64,
+    /// Path length over the straight line, %.
+    pub path_overhead_pct: f64,
+}
+
+/// Table 4 reproduced.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Table4 {
+    /// Every run.
+    pub runs: Vec<Table4Run>,
+    /// Mean journey CV per technique.
+    pub mean: BTreeMap<&'static str, f64>,
+    /// Reduction of the mean journey CV against no aiding, %.
+    pub improvement_pct: BTreeMap<&'static str, f64>,
+    /// Mean egomotion failures per run, per technique.
+    pub mean_failures: BTreeMap<&'static str, f64>,
+}
+
+/// Table 4: one run per technique per corridor, the corridors drawn by
+/// `seeds`.
+pub fn thesis_table4(registry: &Registry, seeds: Range<u64>, jobs: usize) -> Result<Table4, ExperimentError> {
+    let base = load(registry, "table4", TABLE4)?;
+    let rigid = EstimatorKind::Rigid(RigidConfig::default());
+    let scenarios: Vec<Scenario> =
+        TECHNIQUES.iter().map(|&t| variant(registry, &base, t, TABLE4_ZIGZAG_M, rigid)).collect::<Result<_, _>>()?;
+    let tasks: Vec<(u64, usize)> = seeds.flat_map(|c| (0..TECHNIQUES.len()).map(move |t| (c, t))).collect();
+    let reports = run_parallel(&tasks, jobs, |&(corridor, t)| run(&scenarios[t], corridor, None));
+    let mut runs = Vec::new();
+    for (&(corridor, t), report) in tasks.iter().zip(reports) {
+        let report = report.map_err(|e| ExperimentError::Scenario { name: "table4", message: e.to_string() })?;
+        runs.push(Table4Run {
+            corridor,
+            technique: TECHNIQUES[t].name(),
+            journey_cv: report.journey_cv.unwrap_or(f64::NAN),
+            egomotion_failures: report.egomotion_failures.unwrap_or(0),
+            reached_goal: report.reached_goal,
+            sim_time_s: report.sim_time_s,
+            path_overhead_pct: report.path_overhead_pct.unwrap_or(f64::NAN),
+        });
+    }
+    let mean_of = |name: &str, f: &dyn Fn(&Table4Run) -> f64| {
+        let values: Vec<f64> = runs.iter().filter(|r| r.technique == name).map(f).collect();
+        values.iter().sum::<f64>() / values.len().max(1) as f64
+    };
+    let mean: BTreeMap<&'static str, f64> =
+        TECHNIQUES.iter().map(|t| (t.name(), mean_of(t.name(), &|r| r.journey_cv))).collect();
+    let mean_failures =
+        TECHNIQUES.iter().map(|t| (t.name(), mean_of(t.name(), &|r| f64::from(r.egomotion_failures)))).collect();
+    let baseline = mean["none"];
+    let improvement_pct = mean.iter().map(|(k, v)| (*k, 100.0 * (1.0 - v / baseline))).collect();
+    Ok(Table4 { runs, mean, improvement_pct, mean_failures })
+}
+
+/// End-point results of one technique on one route with one estimator.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EndpointCell {
+    /// |true stop − egomotion stop|, m.
+    pub endpoint_error_m: FieldStats,
+    /// The same as a share of the distance driven, %.
+    pub endpoint_error_pct: FieldStats,
+    /// Egomotion failures per run.
+    pub egomotion_failures: FieldStats,
+    /// Runs with at least one egomotion failure.
+    pub runs_with_failures: usize,
+    /// Runs that did not reach the goal in time.
+    pub runs_not_finished: usize,
+    /// Journey CV.
+    pub journey_cv: FieldStats,
+    /// Path length over the straight line, %.
+    pub path_overhead_pct: FieldStats,
+    /// Time over the straight line at top speed, %.
+    pub time_overhead_pct: FieldStats,
+}
+
+/// Tables 5–7 and 10 reproduced in spirit: route → estimator → technique.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Endpoint {
+    /// The seeds run.
+    pub seeds: [u64; 2],
+    /// The results.
+    pub routes: BTreeMap<&'static str, BTreeMap<&'static str, BTreeMap<&'static str, EndpointCell>>>,
+}
+
+fn cell(reports: &[RunReport]) -> EndpointCell {
+    let field = |f: &dyn Fn(&RunReport) -> Option<f64>| stats(&reports.iter().filter_map(f).collect::<Vec<_>>());
+    EndpointCell {
+        endpoint_error_m: field(&|r| r.endpoint_error_m),
+        endpoint_error_pct: field(&|r| r.endpoint_error_pct),
+        egomotion_failures: field(&|r| r.egomotion_failures.map(f64::from)),
+        runs_with_failures: reports.iter().filter(|r| r.egomotion_failures.unwrap_or(0) > 0).count(),
+        runs_not_finished: reports.iter().filter(|r| !r.reached_goal).count(),
+        journey_cv: field(&|r| r.journey_cv),
+        path_overhead_pct: field(&|r| r.path_overhead_pct),
+        time_overhead_pct: field(&|r| r.time_overhead_pct),
+    }
+}
+
+/// End-point egomotion error of every technique on every route with both
+/// estimators, over `seeds`.
+pub fn thesis_endpoint(registry: &Registry, seeds: Range<u64>, jobs: usize) -> Result<Endpoint, ExperimentError> {
+    let estimators = [
+        ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
+        ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
+    ];
+    let mut scenarios = Vec::new();
+    for (label, name, text, zigzag) in ROUTES {
+        let base = load(registry, name, text)?;
+        for (estimator, kind) in estimators {
+            for technique in TECHNIQUES {
+                scenarios.push((
+                    label,
+                    estimator,
+                    technique.name(),
+                    variant(registry, &base, technique, zigzag, kind)?,
+                ));
+            }
+        }
+    }
+    let tasks: Vec<(usize, u64)> = (0..scenarios.len()).flat_map(|i| seeds.clone().map(move |s| (i, s))).collect();
+    let reports = run_parallel(&tasks, jobs, |&(i, seed)| run(&scenarios[i].3, seed, None));
+    let mut by_case: BTreeMap<usize, Vec<RunReport>> = BTreeMap::new();
+    for (&(i, _), report) in tasks.iter().zip(reports) {
+        let report = report.map_err(|e| ExperimentError::Scenario { name: "endpoint", message: e.to_string() })?;
+        by_case.entry(i).or_default().push(report);
+    }
+    let mut routes: Endpoint = Endpoint { seeds: [seeds.start, seeds.end], routes: BTreeMap::new() };
+    for (i, reports) in by_case {
+        let (route, estimator, technique, _) = &scenarios[i];
+        routes.routes.entry(route).or_default().entry(estimator).or_default().insert(technique, cell(&reports));
+    }
+    Ok(routes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_experiment_scenarios_load_and_keep_their_offsets() {
+        let registry = crate::registry();
+        load(&registry, "table4", TABLE4).unwrap();
+        for (_, name, text, offset) in ROUTES {
+            assert_eq!(load(&registry, name, text).unwrap().name, name);
+            assert!(text.contains(&format!("zigzag_max_offset_m: {offset:.1}")), "{name}");
+        }
+    }
+}
