@@ -98,3 +98,20 @@ fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
     let png = std::fs::read(dir.path().join("plot.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
 }
+
+#[test]
+fn camera_egomotion_and_action_aiding_runs_repeat_exactly() {
+    // The thesis's corridor with every random source on: the layout, pixel
+    // noise, RANSAC and the zig-zag's turning points.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/table4.ron");
+    let text = std::fs::read_to_string(path).unwrap().replace("technique: None", "technique: ZigZag");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let a = outputs(&scenario, 3, &dir.path().join("a"));
+    let b = outputs(&scenario, 3, &dir.path().join("b"));
+    assert_eq!(a.0, b.0, "report.json");
+    assert!(a.1 == b.1, "trajectory.csv differs");
+    let report: serde_json::Value = serde_json::from_str(&a.0).unwrap();
+    assert!(report["journey_cv"].as_f64().unwrap() > 0.0);
+    assert!(report["endpoint_error_m"].is_number());
+}
