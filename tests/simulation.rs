@@ -115,3 +115,28 @@ fn camera_egomotion_and_action_aiding_runs_repeat_exactly() {
     assert!(report["journey_cv"].as_f64().unwrap() > 0.0);
     assert!(report["endpoint_error_m"].is_number());
 }
+
+#[test]
+fn every_aiding_technique_reaches_the_goal_and_does_what_it_says() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/table4.ron");
+    let base = std::fs::read_to_string(path).unwrap();
+    let mut reports = std::collections::BTreeMap::new();
+    for technique in ["None", "ZigZag", "Scan", "Tracking"] {
+        let text = base.replace("technique: None", &format!("technique: {technique}"));
+        let report = run(&Scenario::from_ron(&ubf::registry(), &text).unwrap(), 1, None).unwrap();
+        assert_eq!(report.end, EndReason::GoalReached, "{technique}: {report:?}");
+        assert_eq!(report.collisions, 0, "{technique}");
+        reports.insert(technique, report);
+    }
+    let (none, zigzag, scan, tracking) = (&reports["None"], &reports["ZigZag"], &reports["Scan"], &reports["Tracking"]);
+    // Straight at the goal: no detour. The zig-zag drives further; the
+    // physical scan takes far longer than anything else.
+    assert!(none.path_overhead_pct.unwrap().abs() < 1.0, "{none:?}");
+    assert!(zigzag.path_overhead_pct.unwrap() > 3.0, "{zigzag:?}");
+    assert!(scan.sim_time_s > 3.0 * none.sim_time_s, "{} vs {}", scan.sim_time_s, none.sim_time_s);
+    assert!(scan.sim_time_s > tracking.sim_time_s, "{} vs {}", scan.sim_time_s, tracking.sim_time_s);
+    // Aiding brings side-wall landmarks into view: lower journey CV.
+    for aided in [zigzag, scan, tracking] {
+        assert!(aided.journey_cv.unwrap() < 0.5 * none.journey_cv.unwrap(), "{aided:?}");
+    }
+}

@@ -431,3 +431,50 @@ impl Behavior for ActionAiding {
         self.decisions = 0;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ubf_core::Goal;
+
+    fn state(step_cv: Option<f64>) -> State {
+        let mut s = State { goal: Some(Goal { x: 10.0, y: 0.0, tolerance: 0.2 }), ..State::default() };
+        s.egomotion.last_step_cv = step_cv;
+        s
+    }
+
+    #[test]
+    fn the_vote_rises_with_the_last_step_cv() {
+        let mut aa = ActionAiding::new(ActionAidingConfig::with_technique(Technique::None), &BuildContext::new(0));
+        let low = aa.gen_action(&state(Some(0.05))).vote;
+        let mid = aa.gen_action(&state(Some(0.5))).vote;
+        let high = aa.gen_action(&state(Some(5.0))).vote;
+        assert!(0.3 < low && low < mid && mid < high && high < 1.0, "{low} {mid} {high}");
+        assert!((mid - 0.65).abs() < 1e-12, "halfway at vote_half_cv");
+        // Without egomotion it bids its most.
+        assert_eq!(aa.gen_action(&state(None)).vote, 1.0);
+    }
+
+    #[test]
+    fn silent_without_a_goal_or_at_it() {
+        let mut aa = ActionAiding::new(ActionAidingConfig::with_technique(Technique::Tracking), &BuildContext::new(0));
+        assert!(!aa.gen_action(&State::default()).is_voting());
+        let mut at_goal = state(None);
+        at_goal.pose = Pose2::new(10.0, 0.1, 0.0);
+        assert!(!aa.gen_action(&at_goal).is_voting());
+    }
+
+    #[test]
+    fn no_aiding_turns_towards_the_goal_then_steps() {
+        let mut aa = ActionAiding::new(ActionAidingConfig::with_technique(Technique::None), &BuildContext::new(0));
+        let mut s = state(None);
+        s.goal = Some(Goal { x: 0.0, y: 10.0, tolerance: 0.2 });
+        let turning = aa.gen_action(&s);
+        assert_eq!(turning.motion.velocity, Some(0.0));
+        assert!(turning.motion.rot_velocity.unwrap() > 0.0);
+        s.pose = Pose2::new(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let stepping = aa.gen_action(&s);
+        assert_eq!(stepping.motion.velocity, Some(0.6));
+        assert_eq!(aa.decisions(), 1);
+    }
+}
