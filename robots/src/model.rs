@@ -58,6 +58,34 @@ impl SonarUnit {
     }
 }
 
+/// The controller's unit conversions (ARCOS), from the model's parameter
+/// file.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArcosParams {
+    /// Millimetres per position unit.
+    #[serde(deserialize_with = "positive")]
+    pub dist_conv_factor: f64,
+    /// Radians per heading unit (2π/4096 on most models).
+    #[serde(deserialize_with = "positive")]
+    pub angle_conv_factor: f64,
+    /// mm/s per wheel velocity unit.
+    #[serde(deserialize_with = "positive")]
+    pub vel_conv_factor: f64,
+    /// Millimetres per sonar range unit.
+    #[serde(deserialize_with = "positive")]
+    pub range_conv_factor: f64,
+    /// Ratio of angular velocity to wheel velocity difference.
+    #[serde(deserialize_with = "positive")]
+    pub diff_conv_factor: f64,
+    /// Divisor of VEL2 wheel speeds.
+    #[serde(deserialize_with = "positive")]
+    pub vel2_divisor: f64,
+    /// Baud rate to switch to after connecting at 9600, if any (0: stay).
+    #[serde(default)]
+    pub switch_to_baud: u32,
+}
+
 /// A robot type: what a robot model file holds.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -79,6 +107,8 @@ pub struct RobotModel {
     /// Largest turn rate the robot can do, °/s.
     #[serde(deserialize_with = "positive")]
     pub max_rot_velocity_deg: f64,
+    /// The controller's unit conversions.
+    pub arcos: ArcosParams,
     /// The sonar ring.
     pub sonar: Vec<SonarUnit>,
 }
@@ -87,6 +117,11 @@ impl RobotModel {
     /// The MobileRobots Powerbot (`robots/models/powerbot.ron`).
     pub fn powerbot() -> RobotModel {
         RobotModel::from_ron(include_str!("../models/powerbot.ron")).expect("the shipped Powerbot model is valid")
+    }
+
+    /// The MobileRobots Pioneer 3-DX (`robots/models/p3dx.ron`).
+    pub fn p3dx() -> RobotModel {
+        RobotModel::from_ron(include_str!("../models/p3dx.ron")).expect("the shipped P3-DX model is valid")
     }
 
     /// Reads a model from RON text.
@@ -105,5 +140,9 @@ mod tests {
         assert_eq!((m.class.as_str(), m.subclass.as_str()), ("Pioneer", "powerbot"));
         assert_eq!(m.sonar.len(), 28);
         assert!((m.footprint.front + m.footprint.rear - 0.911).abs() < 1e-9);
+        assert_eq!(m.arcos.dist_conv_factor, 0.5813);
+        let p = RobotModel::p3dx();
+        assert_eq!((p.subclass.as_str(), p.sonar.len()), ("p3dx", 16));
+        assert_eq!(p.arcos.angle_conv_factor, 0.0018);
     }
 }
