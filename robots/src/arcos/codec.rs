@@ -550,7 +550,7 @@ impl StreamDecoder {
                 self.stats.skipped_bytes += start as u64;
                 self.buffer.drain(..start);
             }
-            let Some(&count) = self.buffer.get(2) else { return None };
+            let &count = self.buffer.get(2)?;
             let count = usize::from(count);
             if count < 2 {
                 // No room for a checksum: not a packet header after all.
