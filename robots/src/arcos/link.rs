@@ -1,0 +1,59 @@
+//! The byte link to a controller: a serial port or a TCP socket (a robot
+//! simulator at `host:8101`), behind one trait.
+
+use std::io::{self, Read, Write};
+use std::net::TcpStream;
+use std::time::Duration;
+
+/// How long a read waits before giving the caller a chance to do other
+/// work (a watchdog, a stop flag).
+pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
+
+/// A two-way byte link. Reads time out after [`READ_TIMEOUT`] with
+/// `TimedOut` or `WouldBlock`, which callers treat as "nothing yet".
+pub trait Link: Read + Write + Send {
+    /// A second handle on the same link, so one thread can read while
+    /// another writes.
+    fn try_clone_link(&self) -> io::Result<Box<dyn Link>>;
+}
+
+impl Link for TcpStream {
+    fn try_clone_link(&self) -> io::Result<Box<dyn Link>> {
+        Ok(Box::new(self.try_clone()?))
+    }
+}
+
+#[cfg(unix)]
+impl Link for serialport::TTYPort {
+    fn try_clone_link(&self) -> io::Result<Box<dyn Link>> {
+        Ok(Box::new(self.try_clone_native().map_err(io::Error::other)?))
+    }
+}
+
+/// Whether an I/O error only means "no bytes yet".
+pub fn is_timeout(e: &io::Error) -> bool {
+    matches!(e.kind(), io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted)
+}
+
+/// Opens `address`: `tcp://host:port`, or a serial device path opened at
+/// `baud`.
+pub fn open(address: &str, baud: u32) -> io::Result<Box<dyn Link>> {
+    if let Some(host) = address.strip_prefix("tcp://") {
+        let stream = TcpStream::connect(host)?;
+        stream.set_nodelay(true)?;
+        stream.set_read_timeout(Some(READ_TIMEOUT))?;
+        return Ok(Box::new(stream));
+    }
+    open_serial(address, baud)
+}
+
+#[cfg(unix)]
+fn open_serial(path: &str, baud: u32) -> io::Result<Box<dyn Link>> {
+    let port = serialport::new(path, baud).timeout(READ_TIMEOUT).open_native().map_err(io::Error::other)?;
+    Ok(Box::new(port))
+}
+
+#[cfg(not(unix))]
+fn open_serial(path: &str, _baud: u32) -> io::Result<Box<dyn Link>> {
+    Err(io::Error::other(format!("{path}: serial ports are supported on Unix only")))
+}
