@@ -77,6 +77,23 @@ enum Command {
     },
     /// List the behaviours this build can read from scenario files.
     Behaviors,
+    /// Drive a real robot (or an emulator) with a behaviour tree; Ctrl-C or
+    /// SIGTERM stops it safely.
+    Drive {
+        /// The robot configuration file (RON).
+        file: PathBuf,
+        /// Connect and show the robot's identity, odometry and sonar without
+        /// enabling the motors.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Emulate a Powerbot's controller on a TCP port, for trying things out
+    /// without a robot.
+    EmulatePowerbot {
+        /// Address to listen on.
+        #[arg(long, default_value = "127.0.0.1:8101")]
+        listen: String,
+    },
     /// Reproduce one of the thesis's experiments.
     Experiment {
         #[command(subcommand)]
@@ -175,6 +192,8 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
+        Command::Drive { file, dry_run } => drive_command(&registry, &file, dry_run),
+        Command::EmulatePowerbot { listen } => emulate_command(&listen),
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -187,7 +206,12 @@ pub fn main_with(registry: Registry) -> ExitCode {
 fn init_tracing() {
     use tracing_subscriber::EnvFilter;
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"));
-    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+    use std::io::IsTerminal;
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .try_init();
 }
 
 fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Option<PathBuf>, json: bool) -> ExitCode {
@@ -222,6 +246,82 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
             ExitCode::from(EXIT_FAILURE)
         }
     }
+}
+
+fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> ExitCode {
+    use crate::drive::{drive, DriveConfig, DriveEnd};
+    let (config, model) = match DriveConfig::load(registry, file) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let stop = crate::drive::install_stop_flag();
+    let result = if dry_run {
+        crate::drive::dry_run(&config, &model, &stop).map(|_| DriveEnd::Stopped)
+    } else {
+        drive(&config, &model, &stop)
+    };
+    match result {
+        Ok(DriveEnd::Stopped) => {
+            eprintln!("stopped; log in {}", config.log.display());
+            ExitCode::SUCCESS
+        }
+        Ok(DriveEnd::LinkLost) => ExitCode::from(EXIT_FAILURE),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_FAILURE)
+        }
+    }
+}
+
+fn emulate_command(listen: &str) -> ExitCode {
+    use ubf_robots::arcos::emulator::{serve, EmulatorConfig};
+    let listener = match std::net::TcpListener::bind(listen) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("error: listening on {listen}: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    match listener.local_addr() {
+        Ok(address) => println!("emulating a Powerbot on tcp://{address}"),
+        Err(e) => eprintln!("warning: {e}"),
+    }
+    let stop = crate::drive::install_stop_flag();
+    let config = EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
+    // Poll for clients so that Ctrl-C or SIGTERM ends a waiting emulator.
+    if let Err(e) = listener.set_nonblocking(true) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_FAILURE);
+    }
+    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+        let stream = match listener.accept() {
+            Ok((stream, _)) => stream,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                continue;
+            }
+            Err(e) => {
+                eprintln!("error: accepting a client: {e}");
+                continue;
+            }
+        };
+        let _ = stream.set_nonblocking(false);
+        let _ = stream.set_read_timeout(Some(ubf_robots::arcos::link::READ_TIMEOUT));
+        match serve(Box::new(stream), &config, &stop) {
+            Ok(report) => println!(
+                "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m",
+                report.commands,
+                report.closed,
+                report.pose.0 / 1000.0,
+                report.pose.1 / 1000.0
+            ),
+            Err(e) => eprintln!("client error: {e}"),
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode {

@@ -14,6 +14,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod drive;
 pub mod experiment;
 pub mod plot;
 pub mod run;

@@ -1,0 +1,239 @@
+//! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
+//! speaking its protocol), stopped safely.
+
+use crate::trajectory::TrajectoryWriter;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use ubf_core::config::{positive, RonError};
+use ubf_core::{BehaviorSpec, BuildContext, Controller, EgomotionState, Goal, Registry, Robot, State, WallClock};
+use ubf_robots::arcos::client::ArcosRobot;
+use ubf_robots::arcos::link;
+use ubf_robots::model::RobotModel;
+
+/// Which robot model a configuration names.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub enum ModelChoice {
+    /// The MobileRobots Powerbot.
+    Powerbot,
+    /// The Pioneer 3-DX.
+    P3dx,
+    /// A model file (`robots/models/*.ron` shows the format), relative to the
+    /// configuration file.
+    File(String),
+}
+
+/// What to do when the robot stops answering.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum OnLinkLoss {
+    /// Stop commanding and try to connect again, until stopped.
+    #[default]
+    Reconnect,
+    /// Stop and exit with an error.
+    Exit,
+}
+
+/// A robot configuration file: `RobotConfig(...)`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "RobotConfig")]
+pub struct DriveConfig {
+    /// A name for logs.
+    pub name: String,
+    /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port`.
+    pub connection: String,
+    /// Serial baud rate (ARCOS starts at 9600).
+    #[serde(default = "DriveConfig::default_baud")]
+    pub baud: u32,
+    /// The robot model.
+    pub model: ModelChoice,
+    /// Seconds between control ticks (ARCOS sends a SIP every 0.1 s).
+    #[serde(default = "DriveConfig::default_period", deserialize_with = "positive")]
+    pub period_s: f64,
+    /// Where the tick log goes, relative to the working directory.
+    #[serde(default = "DriveConfig::default_log")]
+    pub log: PathBuf,
+    /// What to do when the robot stops answering.
+    #[serde(default)]
+    pub on_link_loss: OnLinkLoss,
+    /// A goal in odometry coordinates, for trees that use one.
+    #[serde(default)]
+    pub goal: Option<Goal>,
+    /// Stop by itself after this long, s (unset: run until stopped).
+    #[serde(default)]
+    pub max_time_s: Option<f64>,
+    /// The behaviour tree.
+    pub root: BehaviorSpec,
+}
+
+impl DriveConfig {
+    fn default_baud() -> u32 {
+        9600
+    }
+    fn default_period() -> f64 {
+        0.1
+    }
+    fn default_log() -> PathBuf {
+        PathBuf::from("drive-log.csv")
+    }
+
+    /// Reads a configuration file.
+    pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let config: DriveConfig = registry.from_ron(&text).map_err(|e: RonError| format!("{}:{e}", path.display()))?;
+        let model = match &config.model {
+            ModelChoice::Powerbot => RobotModel::powerbot(),
+            ModelChoice::P3dx => RobotModel::p3dx(),
+            ModelChoice::File(file) => {
+                let model_path = path.parent().unwrap_or(Path::new(".")).join(file);
+                let text =
+                    std::fs::read_to_string(&model_path).map_err(|e| format!("{}: {e}", model_path.display()))?;
+                RobotModel::from_ron(&text).map_err(|e| format!("{}:{e}", model_path.display()))?
+            }
+        };
+        Ok((config, model))
+    }
+}
+
+/// Set by Ctrl-C or SIGTERM.
+pub fn install_stop_flag() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    // A second handler cannot be installed; then only the time limit stops.
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    stop
+}
+
+/// How a drive ended.
+#[derive(Debug, PartialEq, Eq)]
+pub enum DriveEnd {
+    /// Ctrl-C, SIGTERM or the time limit.
+    Stopped,
+    /// The link was lost and the configuration says exit.
+    LinkLost,
+}
+
+/// Runs the tree against the robot until `stop` is set (or the time limit),
+/// reconnecting after a lost link if configured. Every tick goes to the log;
+/// on the way out the robot gets STOP, ENABLE 0 and CLOSE and the log is
+/// flushed.
+pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<DriveEnd, String> {
+    let started = Instant::now();
+    let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
+    let mut log_path = config.log.clone();
+    let mut session = 0;
+    loop {
+        if stop.load(Ordering::SeqCst) || out_of_time() {
+            return Ok(DriveEnd::Stopped);
+        }
+        let robot = match link::open(&config.connection, config.baud)
+            .map_err(|e| e.to_string())
+            .and_then(|l| ArcosRobot::connect(l, model.clone(), true).map_err(|e| e.to_string()))
+        {
+            Ok(robot) => robot,
+            Err(e) => {
+                tracing::warn!("connecting to {}: {e}", config.connection);
+                if config.on_link_loss == OnLinkLoss::Exit {
+                    return Err(format!("{}: {e}", config.connection));
+                }
+                std::thread::sleep(Duration::from_secs(1));
+                continue;
+            }
+        };
+        eprintln!("connected to {} ({} {})", robot.identity().name, robot.identity().class, robot.identity().subclass);
+        session += 1;
+        if session > 1 {
+            log_path = config.log.with_extension(format!("{session}.csv"));
+        }
+        let root = config.root.build(&BuildContext::new(0));
+        let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
+        controller.set_goal(config.goal);
+        let mut log = TrajectoryWriter::create(&log_path, controller.layout())
+            .map_err(|e| format!("{}: {e}", log_path.display()))?;
+        let lost = run_session(&mut controller, &mut log, config, stop, &out_of_time);
+        // Whatever happened: stop the robot, close the session, keep the log.
+        if let Err(e) = controller.shutdown() {
+            tracing::warn!("shutting down: {e}");
+        }
+        log.finish().map_err(|e| format!("{}: {e}", log_path.display()))?;
+        match lost {
+            None => return Ok(DriveEnd::Stopped),
+            Some(why) => {
+                eprintln!("link lost: {why}");
+                if config.on_link_loss == OnLinkLoss::Exit {
+                    return Ok(DriveEnd::LinkLost);
+                }
+                std::thread::sleep(Duration::from_secs(1));
+            }
+        }
+    }
+}
+
+/// Ticks until stopped (returns `None`) or the link is lost (returns why).
+fn run_session(
+    controller: &mut Controller<ArcosRobot>,
+    log: &mut TrajectoryWriter,
+    config: &DriveConfig,
+    stop: &AtomicBool,
+    out_of_time: &dyn Fn() -> bool,
+) -> Option<String> {
+    let stale_after = 3.0 * config.period_s;
+    // The first SIP follows OPEN within a cycle or two; meanwhile the state
+    // is stale and a Stop behaviour holds the robot.
+    let grace = Instant::now() + Duration::from_secs(2);
+    while !stop.load(Ordering::SeqCst) && !out_of_time() {
+        if let Err(e) = controller.tick() {
+            return Some(e.to_string());
+        }
+        let state: &State = controller.state();
+        let (pose, age) = (state.pose, state.sensor_age);
+        if let Err(e) =
+            log.write(controller.last_record(), controller.layout(), &pose, &pose, &EgomotionState::default())
+        {
+            tracing::warn!("writing the log: {e}");
+        }
+        if age > stale_after {
+            // No SIP for three cycles: never keep commanding motion blind.
+            let _ = controller.robot_mut().act(&ubf_core::Command::Stop);
+            if age > 10.0 * stale_after && Instant::now() > grace {
+                return Some(if age.is_finite() { format!("no SIP for {age:.1} s") } else { "no SIP arrived".into() });
+            }
+        }
+    }
+    None
+}
+
+/// `--dry-run`: connect without enabling the motors, print who the robot is
+/// and its configuration, then its odometry and nearest sonar echo once a
+/// second until stopped.
+pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), String> {
+    let link = link::open(&config.connection, config.baud).map_err(|e| format!("{}: {e}", config.connection))?;
+    let mut robot = ArcosRobot::connect(link, model.clone(), false).map_err(|e| e.to_string())?;
+    let id = robot.identity().clone();
+    println!("robot           {} ({} {})", id.name, id.class, id.subclass);
+    println!(
+        "model           {}: max {:.2} m/s, {:.0}°/s, {} sonars",
+        model.name,
+        model.max_velocity,
+        model.max_rot_velocity_deg,
+        model.sonar.len()
+    );
+    println!("motors          left disabled (dry run)");
+    let mut state = State::default();
+    let started = Instant::now();
+    while !stop.load(Ordering::SeqCst) && config.max_time_s.is_none_or(|t| started.elapsed().as_secs_f64() < t) {
+        std::thread::sleep(Duration::from_secs(1));
+        robot.keep_alive().map_err(|e| e.to_string())?;
+        robot.sense(&mut state).map_err(|e| e.to_string())?;
+        let nearest = state.nearest_range().map_or("none".into(), |r| format!("{r:.2} m"));
+        println!(
+            "odometry        ({:.3}, {:.3}) m, {:.1}°; nearest sonar echo {nearest}; battery {:.1} V",
+            state.pose.x,
+            state.pose.y,
+            state.pose.theta.to_degrees(),
+            state.battery_volts.unwrap_or(f64::NAN)
+        );
+    }
+    robot.shutdown().map_err(|e| e.to_string())
+}
