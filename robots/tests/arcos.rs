@@ -21,6 +21,10 @@ struct Emulator {
 
 impl Emulator {
     fn tcp(model: RobotModel) -> Emulator {
+        Self::tcp_with(EmulatorConfig::new(model))
+    }
+
+    fn tcp_with(config: EmulatorConfig) -> Emulator {
         let listener = TcpListener::bind("127.0.0.1:0").unwrap();
         let address = format!("tcp://{}", listener.local_addr().unwrap());
         let stop = Arc::new(AtomicBool::new(false));
@@ -28,7 +32,7 @@ impl Emulator {
         let thread = std::thread::spawn(move || {
             let (stream, _) = listener.accept().unwrap();
             stream.set_read_timeout(Some(link::READ_TIMEOUT)).unwrap();
-            serve(Box::new(stream), &EmulatorConfig::new(model), &flag).unwrap()
+            serve(Box::new(stream), &config, &flag).unwrap()
         });
         Emulator { address, stop, thread: Some(thread) }
     }
@@ -138,4 +142,46 @@ fn handshake_and_drive_over_a_pseudo_terminal() {
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     assert!(emulator.join().unwrap().closed);
+}
+
+#[test]
+fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
+    // The Powerbot's 15-bit accumulators wrap every 32768 × 0.5813 mm ≈ 19 m.
+    // Start the emulated robot 0.2 m short of the wrap and drive across it at
+    // 1 m/s, then back past the start into negative coordinates.
+    let mut config = EmulatorConfig::new(RobotModel::powerbot());
+    config.start_mm = (32768.0 * 0.5813 - 200.0, 0.0);
+    let emulator = Emulator::tcp_with(config);
+    let mut robot =
+        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), RobotModel::powerbot(), true).unwrap();
+    let mut state = State::default();
+    drive(&mut robot, Command::Drive { velocity: 1.0, turn: Turn::Rate(0.0) }, 1.0, &mut state);
+    // Relative to the first SIP: about +1 m, not −18 m.
+    assert!(state.pose.x > 0.6 && state.pose.x < 1.4, "{:?}", state.pose);
+    drive(&mut robot, Command::Drive { velocity: -1.0, turn: Turn::Rate(0.0) }, 2.0, &mut state);
+    assert!(state.pose.x < -0.4 && state.pose.x > -1.4, "{:?}", state.pose);
+    robot.shutdown().unwrap();
+    emulator.finish();
+}
+
+#[test]
+fn a_dead_robot_is_reported_not_waited_for() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let mut robot =
+        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), RobotModel::powerbot(), true).unwrap();
+    let mut state = State::default();
+    drive(&mut robot, Command::Drive { velocity: 0.2, turn: Turn::Rate(0.0) }, 0.3, &mut state);
+    // The robot side goes away mid-run.
+    emulator.finish();
+    std::thread::sleep(Duration::from_millis(300));
+    let mut failed = false;
+    for _ in 0..20 {
+        if robot.sense(&mut state).is_err() || robot.act(&Command::Stop).is_err() {
+            failed = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert!(failed, "a vanished robot must surface as an error");
+    assert!(state.sensor_age > 0.3, "and the state says its data is old: {}", state.sensor_age);
 }

@@ -25,7 +25,8 @@ pub struct ArcosRobot {
     link: Box<dyn Link>,
     model: RobotModel,
     identity: Identity,
-    sips: Receiver<Sip>,
+    /// SIPs with the moment they arrived.
+    sips: Receiver<(Instant, Sip)>,
     stop_reader: Arc<AtomicBool>,
     reader: Option<JoinHandle<()>>,
     unwrapper: Unwrapper,
@@ -166,7 +167,7 @@ impl ArcosRobot {
 /// The reader thread: packets into SIPs on a channel, until told to stop or
 /// the link fails (then the channel closes and the robot sees a
 /// disconnection).
-fn read_sips(mut link: Box<dyn Link>, sender: Sender<Sip>, stop: Arc<AtomicBool>) {
+fn read_sips(mut link: Box<dyn Link>, sender: Sender<(Instant, Sip)>, stop: Arc<AtomicBool>) {
     let mut decoder = StreamDecoder::new();
     let mut buffer = [0u8; 512];
     while !stop.load(Ordering::Relaxed) {
@@ -178,7 +179,7 @@ fn read_sips(mut link: Box<dyn Link>, sender: Sender<Sip>, stop: Arc<AtomicBool>
         }
         while let Some(body) = decoder.next_body() {
             if let Ok(sip) = Sip::parse(&body) {
-                if sender.send(sip).is_err() {
+                if sender.send((Instant::now(), sip)).is_err() {
                     return;
                 }
             }
@@ -192,7 +193,7 @@ impl Robot for ArcosRobot {
         let mut disconnected = false;
         loop {
             match self.sips.try_recv() {
-                Ok(sip) => {
+                Ok((arrived, sip)) => {
                     // Every SIP goes through the unwrapper, or a wrap between
                     // two ticks would be missed.
                     let (x, y) = self.unwrapper.update(sip.xpos, sip.ypos);
@@ -208,7 +209,7 @@ impl Robot for ArcosRobot {
                         }
                     }
                     self.latest = Some(sip);
-                    self.last_sip_at = Some(Instant::now());
+                    self.last_sip_at = Some(arrived);
                 }
                 Err(crossbeam_channel::TryRecvError::Empty) => break,
                 Err(crossbeam_channel::TryRecvError::Disconnected) => {

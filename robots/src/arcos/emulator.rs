@@ -23,6 +23,9 @@ pub struct EmulatorConfig {
     pub watchdog: Duration,
     /// Range every sonar reports, mm (the emulator has no world).
     pub sonar_range_mm: u16,
+    /// Where the robot's internal position starts, mm: set it near the
+    /// position accumulators' wrap to exercise a client's unwrapping.
+    pub start_mm: (f64, f64),
 }
 
 impl EmulatorConfig {
@@ -35,6 +38,7 @@ impl EmulatorConfig {
             sip_period: Duration::from_millis(100),
             watchdog: Duration::from_secs(2),
             sonar_range_mm: 5000,
+            start_mm: (0.0, 0.0),
         }
     }
 }
@@ -74,7 +78,7 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
     let mut decoder = StreamDecoder::new();
     let mut report = EmulatorReport::default();
     let mut phase = Phase::Sync0;
-    let (mut x, mut y, mut th) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut x, mut y, mut th) = (config.start_mm.0, config.start_mm.1, 0.0f64);
     let (mut v, mut w) = (0.0f64, 0.0f64);
     let mut enabled = false;
     let mut last_packet = Instant::now();
