@@ -706,6 +706,21 @@ mod tests {
         assert!(d.stats().skipped_bytes >= 3);
     }
 
+    /// Feeds `chunks` to a decoder and every parser: no panic, bounded memory.
+    fn feed(chunks: &[Vec<u8>]) -> Result<(), proptest::test_runner::TestCaseError> {
+        let mut d = StreamDecoder::new();
+        for chunk in chunks {
+            d.push(chunk);
+            while let Some(body) = d.next_body() {
+                let _ = Sip::parse(&body);
+                let _ = ClientCommand::parse(&body);
+                let _ = Identity::parse(&body);
+            }
+            prop_assert!(d.buffer.len() <= 3 + 255 + chunk.len());
+        }
+        Ok(())
+    }
+
     /// The fuzz run: a million random streams through the decoder and every
     /// parser. `cargo test --release -p ubf-robots -- --ignored million`.
     #[test]
@@ -715,17 +730,7 @@ mod tests {
         let mut runner = TestRunner::new(Config { cases: 1_000_000, failure_persistence: None, ..Config::default() });
         runner
             .run(&proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..64), 0..16), |chunks| {
-                let mut d = StreamDecoder::new();
-                for chunk in &chunks {
-                    d.push(chunk);
-                    while let Some(body) = d.next_body() {
-                        let _ = Sip::parse(&body);
-                        let _ = ClientCommand::parse(&body);
-                        let _ = Identity::parse(&body);
-                    }
-                    prop_assert!(d.buffer.len() <= 3 + 255 + chunk.len());
-                }
-                Ok(())
+                feed(&chunks)
             })
             .unwrap();
     }
@@ -733,16 +738,7 @@ mod tests {
     proptest! {
         #[test]
         fn arbitrary_bytes_never_panic_and_memory_stays_bounded(chunks in proptest::collection::vec(proptest::collection::vec(any::<u8>(), 0..64), 0..64)) {
-            let mut d = StreamDecoder::new();
-            for chunk in &chunks {
-                d.push(chunk);
-                while let Some(body) = d.next_body() {
-                    let _ = Sip::parse(&body);
-                    let _ = ClientCommand::parse(&body);
-                    let _ = Identity::parse(&body);
-                }
-                prop_assert!(d.buffer.len() <= 3 + 255 + chunk.len());
-            }
+            feed(&chunks)?;
         }
 
         #[test]
