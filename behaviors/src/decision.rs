@@ -45,13 +45,15 @@ pub fn best_heading(
     let near = 4.0 * rules.step_m;
     let bucket_of = |bearing: f64| ((bearing.rem_euclid(TAU) / TAU * BUCKETS as f64) as usize).min(BUCKETS - 1);
     // Counting sort of the far landmarks into bearing buckets.
+    // Offsets from the robot, computed once: from the projected position a
+    // landmark's depth is `d·u − step` and its lateral offset `d·n`.
     let mut counts = [0usize; BUCKETS + 1];
     let mut nearby: Vec<(f64, f64)> = Vec::new();
     let mut bearing_bucket = Vec::with_capacity(landmarks.len());
     for &(lx, ly) in landmarks {
         let (dx, dy) = (lx - position.0, ly - position.1);
         if dx.hypot(dy) < near {
-            nearby.push((lx, ly));
+            nearby.push((dx, dy));
             bearing_bucket.push(usize::MAX);
         } else {
             let b = bucket_of(dy.atan2(dx));
@@ -65,9 +67,9 @@ pub fn best_heading(
     let starts = counts;
     let mut fill = counts;
     let mut sorted = vec![(0.0, 0.0); landmarks.len() - nearby.len()];
-    for (&landmark, &b) in landmarks.iter().zip(&bearing_bucket) {
+    for (&(lx, ly), &b) in landmarks.iter().zip(&bearing_bucket) {
         if b != usize::MAX {
-            sorted[fill[b]] = landmark;
+            sorted[fill[b]] = (lx - position.0, ly - position.1);
             fill[b] += 1;
         }
     }
@@ -78,9 +80,8 @@ pub fn best_heading(
     let mut best: Option<(f64, f64)> = None;
     for heading in candidates {
         let (s, c) = heading.sin_cos();
-        // Eq. 40–43: the robot projected one step ahead.
-        let projected = (position.0 + rules.step_m * c, position.1 + rules.step_m * s);
-        let view = View { sin: s, cos: c, tan_half, min_slant2, max_range2 };
+        // Eq. 40–43: the robot projected one step ahead along the heading.
+        let view = View { sin: s, cos: c, step: rules.step_m, tan_half, min_slant2, max_range2 };
         // The window of buckets is one run of `sorted`, or two where it
         // wraps round.
         let first = bucket_of(heading) as isize - span;
@@ -99,7 +100,7 @@ pub fn best_heading(
         let mut information = 0.0;
         let mut rejected = false;
         for slice in [&nearby[..], slices[0], slices[1]] {
-            match view.information(table, slice, projected) {
+            match view.information(table, slice) {
                 Some(i) => information += i,
                 None => {
                     rejected = true;
@@ -121,22 +122,23 @@ pub fn best_heading(
 struct View {
     sin: f64,
     cos: f64,
+    step: f64,
     tan_half: f64,
     min_slant2: f64,
     max_range2: f64,
 }
 
 impl View {
-    /// The summed information (Σ 1/CV) of the landmarks in view, or `None`
-    /// if one is nearer than the slant limit (an obstacle).
+    /// The summed information (Σ 1/CV) of the landmarks in view, given as
+    /// offsets from the robot's current position, or `None` if one is nearer
+    /// than the slant limit (an obstacle).
     #[inline]
-    fn information(&self, table: &CvTable, landmarks: &[(f64, f64)], from: (f64, f64)) -> Option<f64> {
+    fn information(&self, table: &CvTable, offsets: &[(f64, f64)]) -> Option<f64> {
         let mut sum = 0.0;
-        for &(lx, ly) in landmarks {
-            let (dx, dy) = (lx - from.0, ly - from.1);
-            // Eq. 44–48 without trigonometry: depth along the heading,
-            // lateral offset to the right.
-            let depth = dx * self.cos + dy * self.sin;
+        for &(dx, dy) in offsets {
+            // Eq. 44–48 without trigonometry: depth along the heading from
+            // the projected position, lateral offset to the right.
+            let depth = dx * self.cos + dy * self.sin - self.step;
             let lateral = dx * self.sin - dy * self.cos;
             if depth <= 0.0 || lateral.abs() > depth * self.tan_half {
                 continue;
@@ -162,18 +164,19 @@ pub fn best_heading_exhaustive(
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
 ) -> Option<(f64, f64)> {
+    let offsets: Vec<(f64, f64)> = landmarks.iter().map(|&(x, y)| (x - position.0, y - position.1)).collect();
     let mut best: Option<(f64, f64)> = None;
     for heading in candidates {
         let (s, c) = heading.sin_cos();
-        let projected = (position.0 + rules.step_m * c, position.1 + rules.step_m * s);
         let view = View {
             sin: s,
             cos: c,
+            step: rules.step_m,
             tan_half: rules.half_fov.tan(),
             min_slant2: rules.min_slant_m.powi(2),
             max_range2: rules.max_range_m.powi(2),
         };
-        if let Some(information) = view.information(table, landmarks, projected).filter(|i| *i > 0.0) {
+        if let Some(information) = view.information(table, &offsets).filter(|i| *i > 0.0) {
             if best.is_none_or(|(_, b)| 1.0 / information < b) {
                 best = Some((heading, 1.0 / information));
             }

@@ -200,6 +200,8 @@ pub struct CvTable {
     inverse: Vec<f64>,
     /// 1/cell, so the hot lookup multiplies instead of dividing.
     per_cell: f64,
+    /// `y_min/cell − 0.5`: the row offset with rounding folded in.
+    y_min_cells: f64,
 }
 
 impl CvTable {
@@ -215,7 +217,18 @@ impl CvTable {
             }
         }
         let inverse = ln_cv.iter().map(|l| (-l).exp()).collect();
-        CvTable { x_max, y_min, y_max, cell, nx, ny, ln_cv, inverse, per_cell: 1.0 / cell }
+        CvTable {
+            x_max,
+            y_min,
+            y_max,
+            cell,
+            nx,
+            ny,
+            ln_cv,
+            inverse,
+            per_cell: 1.0 / cell,
+            y_min_cells: y_min / cell - 0.5,
+        }
     }
 
     /// A table of the chosen model for `camera`, steps of `step_m`, out to
@@ -241,7 +254,7 @@ impl CvTable {
     pub fn information(&self, x: f64, y: f64) -> f64 {
         // Non-negative after the clamps, so truncating x + 0.5 rounds.
         let i = ((x.abs().min(self.x_max) * self.per_cell + 0.5) as usize).min(self.nx - 1);
-        let j = (((y.clamp(self.y_min, self.y_max) - self.y_min) * self.per_cell + 0.5) as usize).min(self.ny - 1);
+        let j = ((y.clamp(self.y_min, self.y_max) * self.per_cell - self.y_min_cells) as usize).min(self.ny - 1);
         self.inverse[j * self.nx + i]
     }
 
