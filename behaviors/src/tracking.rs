@@ -3,19 +3,17 @@
 //! evaluated in software instead of by turning to look.
 
 use serde::Deserialize;
-use ubf_core::config::{non_negative, positive, unit_interval};
+use ubf_core::config::{non_negative, positive};
 use ubf_core::{angle_difference, Descriptor, LandmarkObservation, Pose2, StereoCalibration};
+use ubf_perception::egomotion::MatchConfig;
 
 /// Settings of the tracking list.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrackingConfig {
-    /// Largest descriptor distance of a match, bits of 256 (eq. 30–34).
-    #[serde(default = "TrackingConfig::default_max_distance")]
-    pub max_distance: u32,
-    /// The best match must be nearer than this share of the second best.
-    #[serde(default = "TrackingConfig::default_ratio", deserialize_with = "unit_interval")]
-    pub ratio: f64,
+    /// Descriptor matching against the list (eq. 30–34).
+    #[serde(default)]
+    pub matching: MatchConfig,
     /// Position gate (eq. 35) at zero range, m…
     #[serde(default = "TrackingConfig::default_gate", deserialize_with = "non_negative")]
     pub gate_m: f64,
@@ -30,12 +28,6 @@ pub struct TrackingConfig {
 }
 
 impl TrackingConfig {
-    fn default_max_distance() -> u32 {
-        64
-    }
-    fn default_ratio() -> f64 {
-        0.8
-    }
     fn default_gate() -> f64 {
         0.5
     }
@@ -50,8 +42,7 @@ impl TrackingConfig {
 impl Default for TrackingConfig {
     fn default() -> Self {
         TrackingConfig {
-            max_distance: Self::default_max_distance(),
-            ratio: Self::default_ratio(),
+            matching: MatchConfig::default(),
             gate_m: Self::default_gate(),
             gate_per_m: Self::default_gate_per_m(),
             drop_viewpoint_deg: Self::default_drop_deg(),
@@ -129,27 +120,21 @@ impl TrackingList {
             let position = world_position(obs, calibration, pose);
             let range = pose.distance_to(position.0, position.1);
             let viewpoint = (position.1 - pose.y).atan2(position.0 - pose.x);
-            let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
-            for (i, entry) in self.entries.iter().enumerate() {
-                let d = obs.descriptor.hamming(&entry.descriptor);
-                if d < best.0 {
-                    second = best.0;
-                    best = (d, i);
-                } else if d < second {
-                    second = d;
-                }
-            }
             let fresh = TrackedLandmark { position, descriptor: obs.descriptor, viewpoint };
-            if best.0 > self.config.max_distance {
-                self.entries.push(fresh);
-                update.registered += 1;
-                continue;
-            }
-            if second != u32::MAX && f64::from(best.0) >= self.config.ratio * f64::from(second) {
-                update.ambiguous += 1;
-                continue;
-            }
-            let entry = &mut self.entries[best.1];
+            let best =
+                match self.config.matching.best_match(&obs.descriptor, self.entries.iter().map(|e| &e.descriptor)) {
+                    Ok(i) => i,
+                    Err(false) => {
+                        self.entries.push(fresh);
+                        update.registered += 1;
+                        continue;
+                    }
+                    Err(true) => {
+                        update.ambiguous += 1;
+                        continue;
+                    }
+                };
+            let entry = &mut self.entries[best];
             let gate = self.config.gate_m + self.config.gate_per_m * range;
             let moved = (entry.position.0 - position.0).hypot(entry.position.1 - position.1);
             if moved <= gate {

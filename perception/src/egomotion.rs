@@ -26,7 +26,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{EgomotionState, LandmarkObservation, Pose2, StereoFrame};
+use ubf_core::{Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
 
 /// A planar motion of the robot between two frames, in the earlier frame's
 /// robot frame.
@@ -73,6 +73,36 @@ impl Default for MatchConfig {
     }
 }
 
+impl MatchConfig {
+    /// The index of the descriptor in `candidates` nearest `query`, if it is
+    /// within `max_distance` and clearly nearer than the second nearest
+    /// (thesis eq. 11). `Err(true)` when two candidates are too alike to
+    /// tell apart, `Err(false)` when none is near enough.
+    pub fn best_match<'a>(
+        &self,
+        query: &Descriptor,
+        candidates: impl IntoIterator<Item = &'a Descriptor>,
+    ) -> Result<usize, bool> {
+        let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
+        for (i, candidate) in candidates.into_iter().enumerate() {
+            let d = query.hamming(candidate);
+            if d < best.0 {
+                second = best.0;
+                best = (d, i);
+            } else if d < second {
+                second = d;
+            }
+        }
+        if best.0 > self.max_distance {
+            return Err(false);
+        }
+        if second != u32::MAX && f64::from(best.0) >= self.ratio * f64::from(second) {
+            return Err(true);
+        }
+        Ok(best.1)
+    }
+}
+
 /// Pairs `(previous, current)` of observations of the same landmark, by
 /// descriptor: nearest within `max_distance`, clearly nearer than the second
 /// nearest, and each previous observation used once (the nearer pair wins).
@@ -84,19 +114,8 @@ pub fn match_frames(
 ) {
     out.clear();
     for (j, cur) in current.iter().enumerate() {
-        let (mut best, mut second) = ((u32::MAX, usize::MAX), u32::MAX);
-        for (i, prev) in previous.iter().enumerate() {
-            let d = cur.descriptor.hamming(&prev.descriptor);
-            if d < best.0 {
-                second = best.0;
-                best = (d, i);
-            } else if d < second {
-                second = d;
-            }
-        }
-        let distinct = second == u32::MAX || f64::from(best.0) < config.ratio * f64::from(second);
-        if best.0 <= config.max_distance && distinct {
-            out.push((best.1, j));
+        if let Ok(i) = config.best_match(&cur.descriptor, previous.iter().map(|p| &p.descriptor)) {
+            out.push((i, j));
         }
     }
     // One current observation per previous one: keep the closest.
