@@ -464,24 +464,13 @@ fn model_command(registry: &Registry, action: ModelCommand) -> ExitCode {
             );
         }
         ModelCommand::Heatmap { exponential, out, .. } => {
-            let result = if exponential {
-                let m = fit.model;
-                crate::plot::draw_error_model(
-                    "Fitted exponential model (eq. 24)",
-                    |x, y| m.cv(x, y),
-                    &camera,
-                    depths[1],
-                    &out,
-                )
+            let m = fit.model;
+            let (title, cv): (&str, &dyn Fn(f64, f64) -> f64) = if exponential {
+                ("Fitted exponential model (eq. 24)", &|x, y| m.cv(x, y))
             } else {
-                crate::plot::draw_error_model(
-                    "Geometric error model (eq. 16-23)",
-                    |x, y| geometric.cv(x, y),
-                    &camera,
-                    depths[1],
-                    &out,
-                )
+                ("Geometric error model (eq. 16-23)", &|x, y| geometric.cv(x, y))
             };
+            let result = crate::plot::draw_error_model(title, cv, &camera, depths[1], &out);
             if let Err(e) = result {
                 eprintln!("error: {e}");
                 return ExitCode::from(EXIT_FAILURE);

@@ -34,6 +34,8 @@ pub struct ArcosRobot {
     last_sip_at: Option<Instant>,
     last_sent: Instant,
     ranges: Vec<RangeReading>,
+    /// Sonar channel number → position in `ranges`, built once.
+    sonar_slot: [Option<usize>; 256],
     closed: bool,
 }
 
@@ -124,7 +126,12 @@ impl ArcosRobot {
             .iter()
             .map(|s| RangeReading { pose_robot_sensor: s.pose(), range: None, max_range: 5.0 })
             .collect();
+        let mut sonar_slot = [None; 256];
+        for (slot, unit) in model.sonar.iter().enumerate() {
+            sonar_slot[usize::from(unit.index)] = Some(slot);
+        }
         Ok(ArcosRobot {
+            sonar_slot,
             link,
             model,
             identity,
@@ -203,7 +210,7 @@ impl Robot for ArcosRobot {
                         f64::from(sip.thpos) * a.angle_conv_factor,
                     );
                     for &(channel, range) in &sip.sonar {
-                        if let Some(i) = self.model.sonar.iter().position(|s| s.index == channel) {
+                        if let Some(i) = self.sonar_slot[usize::from(channel)] {
                             let metres = f64::from(range) * a.range_conv_factor / 1000.0;
                             self.ranges[i].range = (metres < self.ranges[i].max_range).then_some(metres);
                         }
