@@ -1,5 +1,6 @@
 //! One evaluative decision: 73 candidate headings over 1 000 tracked
-//! landmarks. Run with `cargo bench -p ubf-behaviors --bench decision`.
+//! landmarks, and the share of it spent indexing the landmarks (no
+//! candidates). Run with `cargo bench -p ubf-behaviors --bench decision`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rand::{Rng, SeedableRng};
@@ -27,6 +28,9 @@ fn decision(c: &mut Criterion) {
     let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
     c.bench_function("decision/73_headings_1000_landmarks", |b| {
         b.iter(|| black_box(best_heading(&table, &rules, &landmarks, (10.0, 0.0), candidates.iter().copied())))
+    });
+    c.bench_function("decision/indexing_only", |b| {
+        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, (10.0, 0.0), std::iter::empty())))
     });
 }
 
