@@ -87,12 +87,20 @@ enum Command {
         #[arg(long)]
         dry_run: bool,
     },
-    /// Emulate a Powerbot's controller on a TCP port, for trying things out
-    /// without a robot.
+    /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
+    /// for trying things out without a robot.
     EmulatePowerbot {
         /// Address to listen on.
-        #[arg(long, default_value = "127.0.0.1:8101")]
+        #[arg(long, default_value = "127.0.0.1:8101", conflicts_with = "pty")]
         listen: String,
+        /// Serve on a new pseudo-terminal instead, as the robot's serial port
+        /// would be; prints its device path for `connection`.
+        #[arg(long)]
+        pty: bool,
+        /// Put the robot in the middle of a LENGTHxWIDTH metre room, facing
+        /// along it, for the sonar to see (default: open space, no echoes).
+        #[arg(long, value_name = "LENGTHxWIDTH", value_parser = parse_room)]
+        room: Option<(f64, f64)>,
     },
     /// Reproduce one of the thesis's experiments.
     Experiment {
@@ -193,7 +201,18 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
         Command::Drive { file, dry_run } => drive_command(&registry, &file, dry_run),
-        Command::EmulatePowerbot { listen } => emulate_command(&listen),
+        Command::EmulatePowerbot { listen, pty, room } => {
+            let mut config =
+                ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
+            if let Some((length, width)) = room {
+                config = config.in_room(length, width);
+            }
+            if pty {
+                emulate_on_pty(&config)
+            } else {
+                emulate_command(&listen, &config)
+            }
+        }
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -264,6 +283,7 @@ fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> 
         drive(&config, &model, &stop)
     };
     match result {
+        Ok(DriveEnd::Stopped) if dry_run => ExitCode::SUCCESS,
         Ok(DriveEnd::Stopped) => {
             eprintln!("stopped; log in {}", config.log.display());
             ExitCode::SUCCESS
@@ -276,8 +296,69 @@ fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> 
     }
 }
 
-fn emulate_command(listen: &str) -> ExitCode {
-    use ubf_robots::arcos::emulator::{serve, EmulatorConfig};
+/// `LENGTHxWIDTH` in metres, both positive.
+fn parse_room(text: &str) -> Result<(f64, f64), String> {
+    let parse = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0);
+    match text.split_once(['x', 'X']).map(|(l, w)| (parse(l), parse(w))) {
+        Some((Some(length), Some(width))) => Ok((length, width)),
+        _ => Err(format!("expected LENGTHxWIDTH in metres, both positive, e.g. 8x4; got {text:?}")),
+    }
+}
+
+/// Prints what the emulator saw of a client.
+fn print_emulator_report(report: &ubf_robots::arcos::emulator::EmulatorReport) {
+    println!(
+        "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m",
+        report.commands,
+        report.closed,
+        report.pose.0 / 1000.0,
+        report.pose.1 / 1000.0
+    );
+}
+
+/// Serves clients one after another on a new pseudo-terminal until Ctrl-C
+/// or SIGTERM.
+#[cfg(unix)]
+fn emulate_on_pty(config: &ubf_robots::arcos::emulator::EmulatorConfig) -> ExitCode {
+    use ubf_robots::arcos::emulator::serve;
+    let (master, path) = match ubf_robots::arcos::link::pseudo_terminal() {
+        Ok(pair) => pair,
+        Err(e) => {
+            eprintln!("error: opening a pseudo-terminal: {e}");
+            return ExitCode::from(EXIT_FAILURE);
+        }
+    };
+    println!("emulating a Powerbot on {path}");
+    let stop = crate::drive::install_stop_flag();
+    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+        let link = match master.try_clone_native() {
+            Ok(link) => link,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_FAILURE);
+            }
+        };
+        match serve(Box::new(link), config, &stop) {
+            // Nobody on the other end yet.
+            Ok(report) if report.commands == 0 => std::thread::sleep(std::time::Duration::from_millis(100)),
+            Ok(report) => print_emulator_report(&report),
+            Err(e) => {
+                eprintln!("client error: {e}");
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+#[cfg(not(unix))]
+fn emulate_on_pty(_config: &ubf_robots::arcos::emulator::EmulatorConfig) -> ExitCode {
+    eprintln!("error: pseudo-terminals are supported on Unix only");
+    ExitCode::from(EXIT_FAILURE)
+}
+
+fn emulate_command(listen: &str, config: &ubf_robots::arcos::emulator::EmulatorConfig) -> ExitCode {
+    use ubf_robots::arcos::emulator::serve;
     let listener = match std::net::TcpListener::bind(listen) {
         Ok(l) => l,
         Err(e) => {
@@ -290,7 +371,6 @@ fn emulate_command(listen: &str) -> ExitCode {
         Err(e) => eprintln!("warning: {e}"),
     }
     let stop = crate::drive::install_stop_flag();
-    let config = EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
     // Poll for clients so that Ctrl-C or SIGTERM ends a waiting emulator.
     if let Err(e) = listener.set_nonblocking(true) {
         eprintln!("error: {e}");
@@ -310,14 +390,8 @@ fn emulate_command(listen: &str) -> ExitCode {
         };
         let _ = stream.set_nonblocking(false);
         let _ = stream.set_read_timeout(Some(ubf_robots::arcos::link::READ_TIMEOUT));
-        match serve(Box::new(stream), &config, &stop) {
-            Ok(report) => println!(
-                "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m",
-                report.commands,
-                report.closed,
-                report.pose.0 / 1000.0,
-                report.pose.1 / 1000.0
-            ),
+        match serve(Box::new(stream), config, &stop) {
+            Ok(report) => print_emulator_report(&report),
             Err(e) => eprintln!("client error: {e}"),
         }
     }

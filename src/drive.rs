@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{BehaviorSpec, BuildContext, Controller, EgomotionState, Goal, Registry, Robot, State, WallClock};
-use ubf_robots::arcos::client::ArcosRobot;
+use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::link;
 use ubf_robots::model::RobotModel;
 
@@ -60,6 +60,9 @@ pub struct DriveConfig {
     /// A goal in odometry coordinates, for trees that use one.
     #[serde(default)]
     pub goal: Option<Goal>,
+    /// Accelerations to set on the controller (unset: its own).
+    #[serde(default)]
+    pub accelerations: Option<Accelerations>,
     /// Stop by itself after this long, s (unset: run until stopped).
     #[serde(default)]
     pub max_time_s: Option<f64>,
@@ -76,6 +79,11 @@ impl DriveConfig {
     }
     fn default_log() -> PathBuf {
         PathBuf::from("drive-log.csv")
+    }
+
+    /// How to open a session, motors on or not.
+    fn connect_options(&self, enable_motors: bool) -> ConnectOptions {
+        ConnectOptions { enable_motors, accelerations: self.accelerations }
     }
 
     /// Reads a configuration file.
@@ -127,10 +135,9 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Res
         if stop.load(Ordering::SeqCst) || out_of_time() {
             return Ok(DriveEnd::Stopped);
         }
-        let robot = match link::open(&config.connection, config.baud)
-            .map_err(|e| e.to_string())
-            .and_then(|l| ArcosRobot::connect(l, model.clone(), true).map_err(|e| e.to_string()))
-        {
+        let robot = match link::open(&config.connection, config.baud).map_err(|e| e.to_string()).and_then(|l| {
+            ArcosRobot::connect(l, model.clone(), &config.connect_options(true)).map_err(|e| e.to_string())
+        }) {
             Ok(robot) => robot,
             Err(e) => {
                 tracing::warn!("connecting to {}: {e}", config.connection);
@@ -206,34 +213,82 @@ fn run_session(
 
 /// `--dry-run`: connect without enabling the motors, print who the robot is
 /// and its configuration, then its odometry and nearest sonar echo once a
-/// second until stopped.
+/// second until stopped. Output that cannot be written (a closed pipe) ends
+/// the run like Ctrl-C: the session is closed either way.
 pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), String> {
     let link = link::open(&config.connection, config.baud).map_err(|e| format!("{}: {e}", config.connection))?;
-    let mut robot = ArcosRobot::connect(link, model.clone(), false).map_err(|e| e.to_string())?;
+    let mut robot =
+        ArcosRobot::connect(link, model.clone(), &config.connect_options(false)).map_err(|e| e.to_string())?;
+    let result = show_robot(&mut robot, config, model, stop, &mut std::io::stdout().lock());
+    let closed = robot.shutdown().map_err(|e| e.to_string());
+    match result {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => closed,
+        Err(e) => Err(format!("writing: {e}")),
+        Ok(Err(e)) => Err(e),
+        Ok(Ok(())) => closed,
+    }
+}
+
+/// The dry run's report: I/O errors are the output's, the inner ones the
+/// robot's.
+fn show_robot(
+    robot: &mut ArcosRobot,
+    config: &DriveConfig,
+    model: &RobotModel,
+    stop: &AtomicBool,
+    out: &mut impl std::io::Write,
+) -> std::io::Result<Result<(), String>> {
     let id = robot.identity().clone();
-    println!("robot           {} ({} {})", id.name, id.class, id.subclass);
-    println!(
+    writeln!(out, "robot           {} ({} {})", id.name, id.class, id.subclass)?;
+    writeln!(
+        out,
         "model           {}: max {:.2} m/s, {:.0}°/s, {} sonars",
         model.name,
         model.max_velocity,
         model.max_rot_velocity_deg,
         model.sonar.len()
-    );
-    println!("motors          left disabled (dry run)");
+    )?;
+    match robot.config() {
+        Some(c) => {
+            writeln!(
+                out,
+                "controller      {} {}, serial {}, name {}",
+                c.robot_type, c.subtype, c.serial_number, c.name
+            )?;
+            writeln!(
+                out,
+                "tops            {} mm/s, {}°/s, {} mm/s², {}°/s²; SIP every {} ms; host baud code {}",
+                c.trans_vel_top, c.rot_vel_top, c.trans_acc_top, c.rot_acc_top, c.sip_cycle_ms, c.host_baud
+            )?;
+        }
+        None => writeln!(out, "controller      sent no CONFIG reply")?,
+    }
+    let limits = robot.limits();
+    writeln!(out, "limits in use   {:.2} m/s, {:.0}°/s", limits.max_velocity, limits.max_rot_velocity.to_degrees())?;
+    writeln!(out, "motors          left disabled (dry run)")?;
     let mut state = State::default();
     let started = Instant::now();
+    let mut last_shown = Instant::now();
     while !stop.load(Ordering::SeqCst) && config.max_time_s.is_none_or(|t| started.elapsed().as_secs_f64() < t) {
-        std::thread::sleep(Duration::from_secs(1));
-        robot.keep_alive().map_err(|e| e.to_string())?;
-        robot.sense(&mut state).map_err(|e| e.to_string())?;
+        // Wake often enough to PULSE within the 500 ms; show once a second.
+        std::thread::sleep(Duration::from_millis(250));
+        if let Err(e) = robot.keep_alive().and_then(|_| robot.sense(&mut state)) {
+            return Ok(Err(e.to_string()));
+        }
+        if last_shown.elapsed() < Duration::from_secs(1) {
+            continue;
+        }
+        last_shown = Instant::now();
         let nearest = state.nearest_range().map_or("none".into(), |r| format!("{r:.2} m"));
-        println!(
+        writeln!(
+            out,
             "odometry        ({:.3}, {:.3}) m, {:.1}°; nearest sonar echo {nearest}; battery {:.1} V",
             state.pose.x,
             state.pose.y,
             state.pose.theta.to_degrees(),
             state.battery_volts.unwrap_or(f64::NAN)
-        );
+        )?;
+        out.flush()?;
     }
-    robot.shutdown().map_err(|e| e.to_string())
+    Ok(Ok(()))
 }

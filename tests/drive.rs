@@ -7,17 +7,35 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 fn emulator() -> (Child, String, BufReader<std::process::ChildStdout>) {
+    emulator_with(&["--listen", "127.0.0.1:0"])
+}
+
+/// `ubf emulate-powerbot ARGS`, with the address it serves on.
+fn emulator_with(args: &[&str]) -> (Child, String, BufReader<std::process::ChildStdout>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["emulate-powerbot", "--listen", "127.0.0.1:0"])
+        .arg("emulate-powerbot")
+        .args(args)
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut line = String::new();
     out.read_line(&mut line).unwrap();
+    assert!(line.starts_with("emulating a Powerbot on "), "{line}");
     let address = line.trim().rsplit(' ').next().unwrap().to_owned();
-    assert!(address.starts_with("tcp://127.0.0.1:"), "{line}");
     (child, address, out)
+}
+
+/// Waits up to `seconds` for `child` to exit.
+fn wait_for(child: &mut Child, seconds: f64) -> Option<std::process::ExitStatus> {
+    let deadline = std::time::Instant::now() + Duration::from_secs_f64(seconds);
+    while std::time::Instant::now() < deadline {
+        if let Some(status) = child.try_wait().unwrap() {
+            return Some(status);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
 }
 
 fn config(address: &str, log: &std::path::Path, extra: &str) -> String {
@@ -77,4 +95,84 @@ fn bad_configurations_and_unreachable_robots_are_reported() {
     let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("127.0.0.1:9"));
+}
+
+#[cfg(unix)]
+#[test]
+fn the_emulator_on_a_pseudo_terminal_serves_one_client_after_another() {
+    let (mut emulator, path, mut emulator_out) = emulator_with(&["--pty", "--room", "8x4"]);
+    assert!(path.starts_with("/dev/"), "{path}");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&path, &dir.path().join("l.csv"), "max_time_s: 1.5,")).unwrap();
+    for _ in 0..2 {
+        let out = Command::new(env!("CARGO_BIN_EXE_ubf"))
+            .args(["drive", "--dry-run", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+        assert!(text.contains("controller      Pioneer powerbot, serial EMU-0001"), "{text}");
+        assert!(text.contains("motors          left disabled"), "{text}");
+        // The room's side wall is 2 m from the centre; the nearest echo is
+        // the side transducers', 2 − 0.278 m.
+        assert!(text.contains("nearest sonar echo 1.72 m"), "{text}");
+        let mut line = String::new();
+        emulator_out.read_line(&mut line).unwrap();
+        assert!(line.contains("closed true"), "{line}");
+    }
+    emulator.kill().unwrap();
+}
+
+#[test]
+fn reconnects_after_the_robot_vanishes_and_stops_cleanly() {
+    let (mut first, address, _) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&address, &log, "on_link_loss: Reconnect,")).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    // The robot side dies without a word, then comes back on the same port.
+    first.kill().unwrap();
+    first.wait().unwrap();
+    assert!(wait_for(&mut drive, 2.0).is_none(), "ubf drive keeps trying");
+    let listen = address.trim_start_matches("tcp://");
+    let (mut second, _, mut second_out) = emulator_with(&["--listen", listen]);
+    std::thread::sleep(Duration::from_secs(4));
+    Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap();
+    let status = wait_for(&mut drive, 10.0).expect("ubf drive exits on SIGTERM");
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut drive.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert!(status.success(), "{stderr}");
+    assert!(stderr.contains("link lost"), "{stderr}");
+    assert_eq!(stderr.matches("connected to").count(), 2, "{stderr}");
+    let mut line = String::new();
+    second_out.read_line(&mut line).unwrap();
+    assert!(line.contains("closed true"), "the new session was closed: {line}");
+    second.kill().unwrap();
+    // One log per session, each flushed.
+    for path in [log.clone(), log.with_extension("2.csv")] {
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.lines().count() > 5, "{}", path.display());
+    }
+}
+
+#[test]
+fn exits_when_the_robot_vanishes_if_so_configured() {
+    let (mut emulator, address, _) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&address, &log, "on_link_loss: Exit,")).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    emulator.kill().unwrap();
+    let status = wait_for(&mut drive, 10.0).expect("ubf drive gives up");
+    assert_eq!(status.code(), Some(1));
+    assert!(std::fs::read_to_string(&log).unwrap().lines().count() > 5, "the log was flushed");
 }

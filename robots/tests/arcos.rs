@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 use ubf_core::{Command, Robot, State, Turn};
-use ubf_robots::arcos::client::ArcosRobot;
+use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::emulator::{serve, EmulatorConfig, EmulatorReport};
 use ubf_robots::arcos::link::{self, Link};
 use ubf_robots::model::RobotModel;
@@ -59,7 +59,7 @@ fn drive(robot: &mut ArcosRobot, command: Command, seconds: f64, state: &mut Sta
 fn handshake_drive_and_close_over_tcp() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let link = link::open(&emulator.address, 9600).unwrap();
-    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
     assert_eq!(robot.identity().subclass, "powerbot");
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.4, turn: Turn::Rate(0.0) }, 1.5, &mut state);
@@ -82,7 +82,7 @@ fn handshake_drive_and_close_over_tcp() {
 fn the_wrong_robot_is_refused() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let link = link::open(&emulator.address, 9600).unwrap();
-    let err = ArcosRobot::connect(link, RobotModel::p3dx(), true).err().unwrap();
+    let err = ArcosRobot::connect(link, RobotModel::p3dx(), &ConnectOptions::default()).err().unwrap();
     assert!(err.to_string().contains("expects a Pioneer p3dx"), "{err}");
     emulator.finish();
 }
@@ -91,7 +91,7 @@ fn the_wrong_robot_is_refused() {
 fn the_watchdog_stops_a_silent_client() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let link = link::open(&emulator.address, 9600).unwrap();
-    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.5, &mut state);
     assert!(state.velocity > 0.25);
@@ -108,7 +108,7 @@ fn garbage_and_bad_checksums_mid_stream_are_survived() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let link = link::open(&emulator.address, 9600).unwrap();
     let mut side = link.try_clone_link().unwrap();
-    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.2, turn: Turn::Rate(0.0) }, 0.3, &mut state);
     let mut corrupt = ubf_robots::arcos::codec::ClientCommand::Vel(900).packet();
@@ -134,7 +134,7 @@ fn handshake_and_drive_over_a_pseudo_terminal() {
     let emulator = std::thread::spawn(move || {
         serve(Box::new(master) as Box<dyn Link>, &EmulatorConfig::new(RobotModel::powerbot()), &flag).unwrap()
     });
-    let mut robot = ArcosRobot::connect(Box::new(slave), RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(Box::new(slave), RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 1.0, &mut state);
     assert!(state.pose.x > 0.15, "{:?}", state.pose);
@@ -152,8 +152,12 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
     let mut config = EmulatorConfig::new(RobotModel::powerbot());
     config.start_mm = (32768.0 * 0.5813 - 200.0, 0.0);
     let emulator = Emulator::tcp_with(config);
-    let mut robot =
-        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(
+        link::open(&emulator.address, 9600).unwrap(),
+        RobotModel::powerbot(),
+        &ConnectOptions::default(),
+    )
+    .unwrap();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 1.0, turn: Turn::Rate(0.0) }, 1.0, &mut state);
     // Relative to the first SIP: about +1 m, not −18 m.
@@ -167,8 +171,12 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
 #[test]
 fn a_dead_robot_is_reported_not_waited_for() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
-    let mut robot =
-        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), RobotModel::powerbot(), true).unwrap();
+    let mut robot = ArcosRobot::connect(
+        link::open(&emulator.address, 9600).unwrap(),
+        RobotModel::powerbot(),
+        &ConnectOptions::default(),
+    )
+    .unwrap();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.2, turn: Turn::Rate(0.0) }, 0.3, &mut state);
     // The robot side goes away mid-run.
@@ -184,4 +192,139 @@ fn a_dead_robot_is_reported_not_waited_for() {
     }
     assert!(failed, "a vanished robot must surface as an error");
     assert!(state.sensor_age > 0.3, "and the state says its data is old: {}", state.sensor_age);
+}
+
+#[test]
+fn config_is_read_and_the_controllers_tops_bound_the_model() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    // A model file claiming more than the controller's 2 m/s and 360°/s.
+    let mut optimistic = RobotModel::powerbot();
+    optimistic.max_velocity = 3.0;
+    optimistic.max_rot_velocity_deg = 500.0;
+    let robot =
+        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), optimistic, &ConnectOptions::default())
+            .unwrap();
+    let config = robot.config().expect("the emulator answers CONFIG");
+    assert_eq!((config.subtype.as_str(), config.trans_vel_top, config.sip_cycle_ms), ("powerbot", 2000, 100));
+    assert_eq!(robot.limits().max_velocity, 2.0);
+    assert!((robot.limits().max_rot_velocity - 360f64.to_radians()).abs() < 1e-12);
+    drop(robot);
+    assert!(emulator.finish().closed, "dropping the robot closes the session");
+}
+
+#[test]
+fn accelerations_are_set_and_obeyed() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let options = ConnectOptions {
+        accelerations: Some(Accelerations { translation: 0.5, rotation_deg: 90.0 }),
+        ..ConnectOptions::default()
+    };
+    let mut robot =
+        ArcosRobot::connect(link::open(&emulator.address, 9600).unwrap(), RobotModel::powerbot(), &options).unwrap();
+    let mut state = State::default();
+    // 1 m/s asked for; at 0.5 m/s² the robot is near half that after 1 s.
+    drive(&mut robot, Command::Drive { velocity: 1.0, turn: Turn::Rate(0.0) }, 1.0, &mut state);
+    assert!(state.velocity > 0.3 && state.velocity < 0.7, "{}", state.velocity);
+    robot.shutdown().unwrap();
+    assert_eq!(emulator.finish().accelerations, Some((500, 90)));
+}
+
+#[test]
+fn sonar_echoes_off_the_walls_of_the_room() {
+    // The robot in the middle of an 6 m × 4 m room, facing along it.
+    let emulator = Emulator::tcp_with(EmulatorConfig::new(RobotModel::powerbot()).in_room(6.0, 4.0));
+    let mut robot = ArcosRobot::connect(
+        link::open(&emulator.address, 9600).unwrap(),
+        RobotModel::powerbot(),
+        &ConnectOptions::default(),
+    )
+    .unwrap();
+    let mut state = State::default();
+    drive(&mut robot, Command::Stop, 0.3, &mut state);
+    let range_of = |state: &State, heading_deg: f64| {
+        let model = RobotModel::powerbot();
+        let slot = model.sonar.iter().position(|s| s.heading_deg == heading_deg).unwrap();
+        state.ranges[slot].range
+    };
+    // The 5° transducer sits 0.332 m ahead of the centre: the wall 3 m ahead
+    // is (3 − 0.332)/cos 5° away along its axis; the left one (90°, 0.278 m
+    // out) 2 − 0.278.
+    let ahead = range_of(&state, 5.0).unwrap();
+    assert!((ahead - (3.0 - 0.332) / 5f64.to_radians().cos()).abs() < 0.01, "{ahead}");
+    let left = range_of(&state, 90.0).unwrap();
+    assert!((left - (2.0 - 0.278)).abs() < 0.01, "{left}");
+    drive(&mut robot, Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) }, 1.0, &mut state);
+    let closer = range_of(&state, 5.0).unwrap();
+    assert!(
+        (ahead - closer - state.pose.x / 5f64.to_radians().cos()).abs() < 0.02,
+        "{ahead} {closer} {:?}",
+        state.pose
+    );
+    robot.shutdown().unwrap();
+    emulator.finish();
+}
+
+#[test]
+fn drives_a_square_on_its_own_odometry() {
+    // Closed loop on the odometry the client decodes: four 1 m legs with
+    // 90° turns. The client's pose must agree with the emulator's truth, and
+    // the square must close.
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let mut robot = ArcosRobot::connect(
+        link::open(&emulator.address, 9600).unwrap(),
+        RobotModel::powerbot(),
+        &ConnectOptions::default(),
+    )
+    .unwrap();
+    let mut state = State::default();
+    drive(&mut robot, Command::Stop, 0.3, &mut state);
+    let wrap = |a: f64| a.sin().atan2(a.cos());
+    for leg in 0..4 {
+        let (start, heading) = (state.pose, f64::from(leg) * std::f64::consts::FRAC_PI_2);
+        while (state.pose.x - start.x).hypot(state.pose.y - start.y) < 0.97 {
+            // Hold the leg's heading while driving.
+            let correction = (2.0 * wrap(heading - state.pose.theta)).clamp(-0.3, 0.3);
+            drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(correction) }, 0.1, &mut state);
+        }
+        let next = heading + std::f64::consts::FRAC_PI_2;
+        while wrap(next - state.pose.theta).abs() > 0.02 {
+            let rate = (2.0 * wrap(next - state.pose.theta)).clamp(-0.6, 0.6);
+            drive(&mut robot, Command::Drive { velocity: 0.0, turn: Turn::Rate(rate) }, 0.1, &mut state);
+        }
+    }
+    drive(&mut robot, Command::Stop, 0.3, &mut state);
+    robot.shutdown().unwrap();
+    let truth = emulator.finish().pose;
+    assert!(state.pose.x.hypot(state.pose.y) < 0.15, "the square closes: {:?}", state.pose);
+    assert!(wrap(state.pose.theta).abs() < 0.05, "{:?}", state.pose);
+    let (tx, ty) = (truth.0 / 1000.0, truth.1 / 1000.0);
+    assert!((tx - state.pose.x).hypot(ty - state.pose.y) < 0.01, "odometry {:?} vs truth ({tx}, {ty})", state.pose);
+}
+
+#[cfg(unix)]
+#[test]
+fn the_baud_switch_over_a_pseudo_terminal() {
+    // The model asks for 115200: HOSTBAUD goes out, both ends follow, and the
+    // session carries on at the new rate.
+    use serialport::SerialPort;
+    let (mut master, mut slave) = serialport::TTYPort::pair().unwrap();
+    master.set_timeout(link::READ_TIMEOUT).unwrap();
+    slave.set_timeout(link::READ_TIMEOUT).unwrap();
+    slave.set_baud_rate(9600).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let emulator = std::thread::spawn(move || {
+        serve(Box::new(master) as Box<dyn Link>, &EmulatorConfig::new(RobotModel::powerbot()), &flag).unwrap()
+    });
+    let mut model = RobotModel::powerbot();
+    model.arcos.switch_to_baud = 115200;
+    let mut robot = ArcosRobot::connect(Box::new(slave), model, &ConnectOptions::default()).unwrap();
+    assert_eq!(robot.config().unwrap().host_baud, 4, "the controller reports the new rate");
+    let mut state = State::default();
+    drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.6, &mut state);
+    assert!(state.pose.x > 0.05, "{:?}", state.pose);
+    robot.shutdown().unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    stop.store(true, Ordering::Relaxed);
+    assert_eq!(emulator.join().unwrap().host_baud, Some(115200));
 }

@@ -1,7 +1,7 @@
 //! The client's side: connect to a Pioneer-family controller and drive it as
 //! a [`Robot`].
 
-use super::codec::{ClientCommand, Identity, Sip, StreamDecoder, Unwrapper};
+use super::codec::{baud_code, ClientCommand, ConfigPacket, Identity, Sip, StreamDecoder, Unwrapper, CONFIG_TYPE};
 use super::link::{is_timeout, Link};
 use crate::model::RobotModel;
 use crossbeam_channel::{Receiver, Sender};
@@ -20,11 +20,47 @@ const ATTEMPTS: usize = 5;
 /// after about 2 s).
 const PULSE_AFTER: Duration = Duration::from_millis(500);
 
+/// How long to wait for the CONFIG reply.
+const CONFIG_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Accelerations to set on the controller (SETA, SETRA), the same for
+/// speeding up and slowing down.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Accelerations {
+    /// Translational, m/s².
+    #[serde(deserialize_with = "ubf_core::config::positive")]
+    pub translation: f64,
+    /// Rotational, °/s².
+    #[serde(deserialize_with = "ubf_core::config::positive")]
+    pub rotation_deg: f64,
+}
+
+/// How to open a session.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConnectOptions {
+    /// Whether to switch the motors on (off for a dry run).
+    pub enable_motors: bool,
+    /// Accelerations to set; the controller's own otherwise.
+    pub accelerations: Option<Accelerations>,
+}
+
+impl Default for ConnectOptions {
+    /// Motors on, the controller's accelerations.
+    fn default() -> Self {
+        ConnectOptions { enable_motors: true, accelerations: None }
+    }
+}
+
 /// An open session with a controller.
 pub struct ArcosRobot {
     link: Box<dyn Link>,
     model: RobotModel,
     identity: Identity,
+    /// The controller's CONFIG reply, if it sent one.
+    config: Option<ConfigPacket>,
+    /// The model's limits, lowered to the controller's top speeds.
+    limits: Limits,
     /// SIPs with the moment they arrived.
     sips: Receiver<(Instant, Sip)>,
     stop_reader: Arc<AtomicBool>,
@@ -95,11 +131,49 @@ fn handshake(link: &mut dyn Link) -> Result<Identity, RobotError> {
     Err(RobotError::Disconnected(format!("no handshake after {ATTEMPTS} attempts")))
 }
 
+/// HOSTBAUD: tells the controller to switch to `baud`, lets the packet
+/// drain at the old rate, then follows on this side. Only on a serial line.
+fn switch_baud(link: &mut dyn Link, baud: u32) -> Result<(), RobotError> {
+    let code = baud_code(baud).ok_or_else(|| {
+        RobotError::Protocol(format!("switch_to_baud {baud}: the controller offers 9600, 19200, 38400, 57600, 115200"))
+    })?;
+    send(link, ClientCommand::HostBaud(code))?;
+    std::thread::sleep(Duration::from_millis(50));
+    link.set_baud(baud).map_err(RobotError::from)
+}
+
+/// Asks for CONFIG and waits for it, passing over the SIPs that OPEN
+/// started. `Ok(None)` if SIPs come but no CONFIG (not every simulator
+/// answers it); an error if nothing comes at all.
+fn request_config(link: &mut dyn Link) -> Result<Option<ConfigPacket>, RobotError> {
+    send(link, ClientCommand::Config)?;
+    let mut decoder = StreamDecoder::new();
+    let deadline = Instant::now() + CONFIG_TIMEOUT;
+    let mut heard = false;
+    while let Some(body) = next_body(link, &mut decoder, deadline.saturating_duration_since(Instant::now()))? {
+        heard = true;
+        if body.first() == Some(&CONFIG_TYPE) {
+            return ConfigPacket::parse(&body).map(Some).map_err(|e| RobotError::Protocol(format!("CONFIG: {e}")));
+        }
+    }
+    if heard {
+        Ok(None)
+    } else {
+        Err(RobotError::Disconnected("no packet after OPEN".into()))
+    }
+}
+
 impl ArcosRobot {
-    /// Connects over `link` to a robot of `model`: handshake, checks the
-    /// robot's class and subclass against the model, OPEN, speed limits,
-    /// then motors on unless `enable` is false (a dry run).
-    pub fn connect(mut link: Box<dyn Link>, model: RobotModel, enable: bool) -> Result<ArcosRobot, RobotError> {
+    /// Connects over `link` to a robot of `model`: handshake; the robot's
+    /// class and subclass checked against the model; the baud switch the
+    /// model asks for (serial lines only); OPEN; CONFIG, whose top speeds
+    /// lower the model's limits; SETV, SETRV and any accelerations; then
+    /// motors on unless the options say otherwise (a dry run).
+    pub fn connect(
+        mut link: Box<dyn Link>,
+        model: RobotModel,
+        options: &ConnectOptions,
+    ) -> Result<ArcosRobot, RobotError> {
         let identity = handshake(link.as_mut())?;
         if !identity.class.eq_ignore_ascii_case(&model.class)
             || !identity.subclass.eq_ignore_ascii_case(&model.subclass)
@@ -109,10 +183,49 @@ impl ArcosRobot {
                 identity.class, identity.subclass, identity.name, model.class, model.subclass
             )));
         }
+        let target = model.arcos.switch_to_baud;
+        let switched = match link.baud() {
+            Some(current) if target != 0 && target != current => {
+                switch_baud(link.as_mut(), target)?;
+                true
+            }
+            _ => false,
+        };
         send(link.as_mut(), ClientCommand::Open)?;
-        send(link.as_mut(), ClientCommand::SetV((model.max_velocity * 1000.0).round() as u16))?;
-        send(link.as_mut(), ClientCommand::SetRv(model.max_rot_velocity_deg.round() as u16))?;
-        send(link.as_mut(), ClientCommand::Enable(enable))?;
+        let config = request_config(link.as_mut()).map_err(|e| match e {
+            RobotError::Disconnected(why) if switched => RobotError::Disconnected(format!(
+                "{why} after switching to {target} baud; if the robot cannot, set switch_to_baud: 0 in its model"
+            )),
+            e => e,
+        })?;
+        let mut limits = Limits::new(model.max_velocity, model.max_rot_velocity_deg.to_radians());
+        if let Some(c) = &config {
+            // The controller's tops bound whatever the model file says.
+            if c.trans_vel_top > 0 {
+                limits.max_velocity = limits.max_velocity.min(f64::from(c.trans_vel_top) / 1000.0);
+            }
+            if c.rot_vel_top > 0 {
+                limits.max_rot_velocity = limits.max_rot_velocity.min(f64::from(c.rot_vel_top).to_radians());
+            }
+        } else {
+            tracing::warn!("{}: no CONFIG reply; using the model's limits", identity.name);
+        }
+        send(link.as_mut(), ClientCommand::SetV((limits.max_velocity * 1000.0).round() as u16))?;
+        send(link.as_mut(), ClientCommand::SetRv(limits.max_rot_velocity.to_degrees().round() as u16))?;
+        if let Some(a) = options.accelerations {
+            let top = |top: Option<i16>| top.filter(|&t| t > 0).map_or(f64::from(i16::MAX), f64::from);
+            let mm_s2 = (a.translation * 1000.0).min(top(config.as_ref().map(|c| c.trans_acc_top))).round() as i16;
+            let deg_s2 = a.rotation_deg.min(top(config.as_ref().map(|c| c.rot_acc_top))).round() as i16;
+            for command in [
+                ClientCommand::SetA(mm_s2),
+                ClientCommand::SetA(-mm_s2),
+                ClientCommand::SetRa(deg_s2),
+                ClientCommand::SetRa(-deg_s2),
+            ] {
+                send(link.as_mut(), command)?;
+            }
+        }
+        send(link.as_mut(), ClientCommand::Enable(options.enable_motors))?;
         let (sender, sips) = crossbeam_channel::bounded(256);
         let stop_reader = Arc::new(AtomicBool::new(false));
         let reader_link = link.try_clone_link()?;
@@ -135,6 +248,8 @@ impl ArcosRobot {
             link,
             model,
             identity,
+            config,
+            limits,
             sips,
             stop_reader,
             reader: Some(reader),
@@ -150,6 +265,11 @@ impl ArcosRobot {
     /// Who the robot said it is.
     pub fn identity(&self) -> &Identity {
         &self.identity
+    }
+
+    /// The controller's CONFIG reply, if it sent one.
+    pub fn config(&self) -> Option<&ConfigPacket> {
+        self.config.as_ref()
     }
 
     /// The latest SIP, in robot units.
@@ -285,7 +405,7 @@ impl Robot for ArcosRobot {
     }
 
     fn limits(&self) -> Limits {
-        Limits::new(self.model.max_velocity, self.model.max_rot_velocity_deg.to_radians())
+        self.limits
     }
 }
 

@@ -203,6 +203,14 @@ pub enum DecodeError {
     /// Not a packet type this codec reads.
     #[error("packet type {0:#04x} is not a SIP")]
     NotASip(u8),
+    /// A packet of another type than the one asked for.
+    #[error("expected packet type {expected:#04x}, got {got:#04x}")]
+    UnexpectedPacket {
+        /// The type asked for.
+        expected: u8,
+        /// The type there.
+        got: u8,
+    },
     /// An unknown command number.
     #[error("unknown command {0}")]
     UnknownCommand(u8),
@@ -240,6 +248,13 @@ impl<'a> Reader<'a> {
     }
     fn i16(&mut self, what: &'static str) -> Result<i16, DecodeError> {
         Ok(self.u16(what)? as i16)
+    }
+    /// A NUL-terminated string (lossy UTF-8).
+    fn string(&mut self, what: &'static str) -> Result<String, DecodeError> {
+        let rest = &self.bytes[self.at.min(self.bytes.len())..];
+        let end = rest.iter().position(|&b| b == 0).ok_or(DecodeError::Truncated { what, needed: 1, got: 0 })?;
+        self.at += end + 1;
+        Ok(String::from_utf8_lossy(&rest[..end]).into_owned())
     }
     fn remaining(&self) -> usize {
         self.bytes.len().saturating_sub(self.at)
@@ -463,6 +478,109 @@ impl Identity {
     }
 }
 
+/// Packet type of a CONFIG reply.
+pub const CONFIG_TYPE: u8 = 0x20;
+
+/// The reply to CONFIG (packet type 0x20): the controller's identity, its
+/// top speeds and accelerations, its SIP cycle and its serial settings.
+///
+/// The fields here are the ones every controller generation sends, in the
+/// order of the operations manuals' CONFIGpac tables (AROS, ARCOS and the
+/// Pioneer LX list the same head). What follows them (gripper, sonar
+/// arrays, PID gains, working limits, …) grew field by field across
+/// firmware versions; it is kept as raw bytes rather than guessed at.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ConfigPacket {
+    /// The robot type, e.g. `Pioneer`.
+    pub robot_type: String,
+    /// The model, e.g. `powerbot`.
+    pub subtype: String,
+    /// The robot's serial number.
+    pub serial_number: String,
+    /// Obsolete four-motor flag.
+    pub four_motors: u8,
+    /// Top rotational speed, °/s.
+    pub rot_vel_top: i16,
+    /// Top translational speed, mm/s.
+    pub trans_vel_top: i16,
+    /// Top rotational (de)acceleration, °/s².
+    pub rot_acc_top: i16,
+    /// Top translational (de)acceleration, mm/s².
+    pub trans_acc_top: i16,
+    /// Maximum motor PWM.
+    pub pwm_max: i16,
+    /// The name given to the robot.
+    pub name: String,
+    /// Time between SIPs, ms.
+    pub sip_cycle_ms: u8,
+    /// The host serial port's baud code (0 = 9600 … 4 = 115200).
+    pub host_baud: u8,
+    /// The first auxiliary serial port's baud code.
+    pub aux_baud: u8,
+    /// The firmware-specific fields that follow, unparsed.
+    pub rest: Vec<u8>,
+}
+
+impl ConfigPacket {
+    /// Reads a CONFIG body (starting with its type byte).
+    pub fn parse(body: &[u8]) -> Result<ConfigPacket, DecodeError> {
+        let mut r = Reader { bytes: body, at: 0 };
+        match r.u8("packet type")? {
+            CONFIG_TYPE => {}
+            other => return Err(DecodeError::UnexpectedPacket { expected: CONFIG_TYPE, got: other }),
+        }
+        Ok(ConfigPacket {
+            robot_type: r.string("robot type")?,
+            subtype: r.string("subtype")?,
+            serial_number: r.string("serial number")?,
+            four_motors: r.u8("four-motor flag")?,
+            rot_vel_top: r.i16("top rotational speed")?,
+            trans_vel_top: r.i16("top translational speed")?,
+            rot_acc_top: r.i16("top rotational acceleration")?,
+            trans_acc_top: r.i16("top translational acceleration")?,
+            pwm_max: r.i16("PWM maximum")?,
+            name: r.string("name")?,
+            sip_cycle_ms: r.u8("SIP cycle")?,
+            host_baud: r.u8("host baud")?,
+            aux_baud: r.u8("aux baud")?,
+            rest: r.take(r.remaining(), "rest")?.to_vec(),
+        })
+    }
+
+    /// Writes a CONFIG body.
+    pub fn body(&self) -> Vec<u8> {
+        let mut b = vec![CONFIG_TYPE];
+        let string = |b: &mut Vec<u8>, s: &str| {
+            b.extend(s.bytes().filter(|&c| c != 0));
+            b.push(0);
+        };
+        string(&mut b, &self.robot_type);
+        string(&mut b, &self.subtype);
+        string(&mut b, &self.serial_number);
+        b.push(self.four_motors);
+        for v in [self.rot_vel_top, self.trans_vel_top, self.rot_acc_top, self.trans_acc_top, self.pwm_max] {
+            b.extend(v.to_le_bytes());
+        }
+        string(&mut b, &self.name);
+        b.extend([self.sip_cycle_ms, self.host_baud, self.aux_baud]);
+        b.extend(&self.rest);
+        b
+    }
+}
+
+/// The baud rates HOSTBAUD can select, by code.
+const BAUD_RATES: [u32; 5] = [9600, 19200, 38400, 57600, 115200];
+
+/// HOSTBAUD's code for `baud`, if the controller offers it.
+pub fn baud_code(baud: u32) -> Option<u8> {
+    BAUD_RATES.iter().position(|&b| b == baud).map(|i| i as u8)
+}
+
+/// The baud rate HOSTBAUD's `code` selects.
+pub fn baud_of_code(code: u8) -> Option<u32> {
+    BAUD_RATES.get(usize::from(code)).copied()
+}
+
 /// Keeps odometry continuous across the 15-bit wrap of the position
 /// accumulators, over any distance and into negative coordinates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -664,6 +782,39 @@ mod tests {
     }
 
     #[test]
+    fn config_packets_round_trip_and_fail_cleanly_when_cut() {
+        let config = ConfigPacket {
+            robot_type: "Pioneer".into(),
+            subtype: "powerbot".into(),
+            serial_number: "PB-0042".into(),
+            four_motors: 0,
+            rot_vel_top: 360,
+            trans_vel_top: 2000,
+            rot_acc_top: 300,
+            trans_acc_top: 1000,
+            pwm_max: 1000,
+            name: "bertha".into(),
+            sip_cycle_ms: 100,
+            host_baud: 2,
+            aux_baud: 0,
+            rest: vec![1, 2, 3],
+        };
+        let body = config.body();
+        assert_eq!(ConfigPacket::parse(&body), Ok(config));
+        // Every cut short of the fixed fields is a clean error naming the
+        // field it ran out in.
+        for end in 0..body.len() - 3 {
+            assert!(ConfigPacket::parse(&body[..end]).is_err(), "{end}");
+        }
+        let err = ConfigPacket::parse(&body[..30]).unwrap_err();
+        assert!(err.to_string().contains("top"), "{err}");
+        assert!(matches!(ConfigPacket::parse(&[0x32]), Err(DecodeError::UnexpectedPacket { .. })));
+        assert_eq!(baud_code(38400), Some(2));
+        assert_eq!(baud_of_code(4), Some(115200));
+        assert_eq!(baud_code(14400), None);
+    }
+
+    #[test]
     fn identity_round_trips() {
         let id = Identity { name: "AMRISim".into(), class: "Pioneer".into(), subclass: "powerbot".into() };
         assert_eq!(Identity::parse(&id.body()).unwrap(), id);
@@ -715,6 +866,7 @@ mod tests {
                 let _ = Sip::parse(&body);
                 let _ = ClientCommand::parse(&body);
                 let _ = Identity::parse(&body);
+                let _ = ConfigPacket::parse(&body);
             }
             prop_assert!(d.buffer.len() <= 3 + 255 + chunk.len());
         }

@@ -15,11 +15,25 @@ pub trait Link: Read + Write + Send {
     /// A second handle on the same link, so one thread can read while
     /// another writes.
     fn try_clone_link(&self) -> io::Result<Box<dyn Link>>;
+
+    /// The line's baud rate, or `None` for a link without one (TCP).
+    fn baud(&self) -> Option<u32>;
+
+    /// Changes the line's baud rate (nothing to do on a link without one).
+    fn set_baud(&mut self, baud: u32) -> io::Result<()>;
 }
 
 impl Link for TcpStream {
     fn try_clone_link(&self) -> io::Result<Box<dyn Link>> {
         Ok(Box::new(self.try_clone()?))
+    }
+
+    fn baud(&self) -> Option<u32> {
+        None
+    }
+
+    fn set_baud(&mut self, _baud: u32) -> io::Result<()> {
+        Ok(())
     }
 }
 
@@ -28,6 +42,27 @@ impl Link for serialport::TTYPort {
     fn try_clone_link(&self) -> io::Result<Box<dyn Link>> {
         Ok(Box::new(self.try_clone_native().map_err(io::Error::other)?))
     }
+
+    fn baud(&self) -> Option<u32> {
+        serialport::SerialPort::baud_rate(self).ok()
+    }
+
+    fn set_baud(&mut self, baud: u32) -> io::Result<()> {
+        serialport::SerialPort::set_baud_rate(self, baud).map_err(io::Error::other)
+    }
+}
+
+/// A new pseudo-terminal for an emulated robot: its master end (raw, with
+/// the read timeout) and the path a client opens as the robot's serial
+/// port. The slave end is left closed, so the master reads EIO until a
+/// client opens it.
+#[cfg(unix)]
+pub fn pseudo_terminal() -> io::Result<(serialport::TTYPort, String)> {
+    let (mut master, slave) = serialport::TTYPort::pair().map_err(io::Error::other)?;
+    serialport::SerialPort::set_timeout(&mut master, READ_TIMEOUT).map_err(io::Error::other)?;
+    let path =
+        serialport::SerialPort::name(&slave).ok_or_else(|| io::Error::other("the pseudo-terminal has no name"))?;
+    Ok((master, path))
 }
 
 /// Whether an I/O error only means "no bytes yet".

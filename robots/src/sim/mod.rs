@@ -16,7 +16,7 @@ mod world;
 
 pub use body::{integrate, MotionProfile, OdometryErrors, StartPose};
 pub use camera::{descriptor_from, SimCameraConfig};
-pub use sonar::SonarConfig;
+pub use sonar::{Sonar, SonarConfig};
 pub use world::{
     Anchor, BoxConfig, CorridorConfig, FeaturelessConfig, LandmarkConfig, PersonConfig, RandomLandmarks, Side,
     WallConfig, World, WorldConfig, WorldLandmark, Xy,
@@ -29,7 +29,6 @@ use geometry::Circle;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
-use sonar::Sonar;
 use ubf_core::config::{positive, Check};
 use ubf_core::{Bumpers, Command, Limits, Pose2, Robot, RobotError, State};
 use ubf_perception::egomotion::EgomotionConfig;
