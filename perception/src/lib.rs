@@ -6,6 +6,8 @@
 //!   fit and its look-up table.
 //! - [`fusion`]: combining CVs (eq. 5–7).
 //! - [`egomotion`]: frame matching and the two egomotion estimators.
+//! - [`features`]: landmarks from a pair of real images: corners,
+//!   descriptors, stereo matching, triangulation.
 //!
 //! Shared by the simulated and the real robot, so that both feed the same
 //! landmark observations to the behaviours.
@@ -14,6 +16,7 @@
 
 pub mod egomotion;
 pub mod error_model;
+pub mod features;
 pub mod fusion;
 pub mod stereo;
 

@@ -43,6 +43,13 @@ impl Segment {
     /// Distance along the ray from `origin` in unit direction `dir` to this
     /// segment, if the ray hits it.
     pub fn ray_hit(&self, origin: Point, dir: Point) -> Option<f64> {
+        self.ray_hit_at(origin, dir).map(|(t, _)| t)
+    }
+
+    /// Where the ray from `origin` along `dir` hits this segment: the ray's
+    /// parameter (in lengths of `dir`) and the share of the way from `a` to
+    /// `b`.
+    pub fn ray_hit_at(&self, origin: Point, dir: Point) -> Option<(f64, f64)> {
         let e = sub(self.b, self.a);
         let denom = cross(dir, e);
         if denom.abs() < 1e-12 {
@@ -51,7 +58,7 @@ impl Segment {
         let w = sub(self.a, origin);
         let t = cross(w, e) / denom;
         let s = cross(w, dir) / denom;
-        (t >= 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
+        (t >= 0.0 && (0.0..=1.0).contains(&s)).then_some((t, s))
     }
 
     /// Whether this segment crosses the segment `p`–`q` (touching counts).

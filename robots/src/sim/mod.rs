@@ -11,6 +11,7 @@
 mod body;
 mod camera;
 pub mod geometry;
+pub mod render;
 mod sonar;
 mod world;
 

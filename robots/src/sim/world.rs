@@ -282,6 +282,8 @@ pub struct World {
     pub people: Vec<Person>,
     /// The corridor, if there is one.
     pub corridor: Option<CorridorConfig>,
+    /// Stretches of the corridor's side walls with nothing on them.
+    pub featureless: Vec<FeaturelessConfig>,
 }
 
 fn random_descriptor(rng: &mut ChaCha8Rng) -> Descriptor {
@@ -358,6 +360,7 @@ impl World {
             landmarks,
             people: config.people.iter().map(|&config| Person { config }).collect(),
             corridor: config.corridor,
+            featureless: config.featureless.clone(),
         }
     }
 
