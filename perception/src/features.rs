@@ -440,7 +440,7 @@ mod tests {
         let camera = StereoCamera { width_px: 320, height_px: 240, ..StereoCamera::default() };
         let left = squares(320, 240, &squares_at, 0);
         let right = squares(320, 240, &squares_at, 12);
-        let pipeline = StereoPipeline::new(camera.clone(), FeatureConfig::default());
+        let pipeline = StereoPipeline::new(camera, FeatureConfig::default());
         let landmarks = pipeline.process(&left, &right).unwrap();
         assert!(landmarks.len() >= 12, "{}", landmarks.len());
         for l in &landmarks {
