@@ -272,8 +272,8 @@ mod tests {
     use ubf_perception::features::StereoPipeline;
 
     fn corridor_world() -> World {
-        let mut config = WorldConfig::default();
-        config.corridor = Some(CorridorConfig { length: 30.0, width: 4.0 });
+        let config =
+            WorldConfig { corridor: Some(CorridorConfig { length: 30.0, width: 4.0 }), ..WorldConfig::default() };
         let mut world = World::build(&config, &mut rand_chacha::ChaCha8Rng::seed_from_u64(1));
         // Posters at 1.2 m on both walls, every 3 m from 4 m on.
         for k in 0..8 {
