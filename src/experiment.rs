@@ -167,6 +167,10 @@ pub struct EndpointCell {
 pub struct Endpoint {
     /// The seeds run.
     pub seeds: [u64; 2],
+    /// Where the landmarks came from: `geometric` (the camera model
+    /// projects them) or `rendered` (the feature pipeline finds them in
+    /// rendered images).
+    pub camera: &'static str,
     /// The results.
     pub routes: BTreeMap<&'static str, BTreeMap<&'static str, BTreeMap<&'static str, EndpointCell>>>,
 }
@@ -187,14 +191,25 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
 
 /// End-point egomotion error of every technique on every route with both
 /// estimators, over `seeds`.
-pub fn thesis_endpoint(registry: &Registry, seeds: Range<u64>, jobs: usize) -> Result<Endpoint, ExperimentError> {
+///
+/// With `rendered`, the cameras render images and the feature pipeline
+/// finds the landmarks in them, instead of the geometric camera model.
+pub fn thesis_endpoint(
+    registry: &Registry,
+    seeds: Range<u64>,
+    jobs: usize,
+    rendered: bool,
+) -> Result<Endpoint, ExperimentError> {
     let estimators = [
         ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
     ];
     let mut scenarios = Vec::new();
     for (label, name, text, zigzag) in ROUTES {
-        let base = load(registry, name, text)?;
+        let mut base = load(registry, name, text)?;
+        if let (true, Some(camera)) = (rendered, base.robot.camera.as_mut()) {
+            camera.images = Some(ubf_robots::sim::render::RenderConfig::default());
+        }
         for (estimator, kind) in estimators {
             for technique in TECHNIQUES {
                 scenarios.push((
@@ -213,7 +228,8 @@ pub fn thesis_endpoint(registry: &Registry, seeds: Range<u64>, jobs: usize) -> R
         let report = report.map_err(|e| ExperimentError::Scenario { name: "endpoint", message: e.to_string() })?;
         by_case.entry(i).or_default().push(report);
     }
-    let mut routes: Endpoint = Endpoint { seeds: [seeds.start, seeds.end], routes: BTreeMap::new() };
+    let camera = if rendered { "rendered" } else { "geometric" };
+    let mut routes: Endpoint = Endpoint { seeds: [seeds.start, seeds.end], camera, routes: BTreeMap::new() };
     for (i, reports) in by_case {
         let (route, estimator, technique, _) = &scenarios[i];
         routes.routes.entry(route).or_default().entry(estimator).or_default().insert(technique, cell(&reports));

@@ -16,6 +16,7 @@
 pub mod cli;
 pub mod drive;
 pub mod experiment;
+pub mod frames;
 pub mod plot;
 pub mod run;
 pub mod scenario;

@@ -8,6 +8,8 @@
 //! - [`egomotion`]: frame matching and the two egomotion estimators.
 //! - [`features`]: landmarks from a pair of real images: corners,
 //!   descriptors, stereo matching, triangulation.
+//! - [`source`]: where stereo pairs come from: a directory of images, the
+//!   simulator's renderer.
 //!
 //! Shared by the simulated and the real robot, so that both feed the same
 //! landmark observations to the behaviours.
@@ -18,6 +20,7 @@ pub mod egomotion;
 pub mod error_model;
 pub mod features;
 pub mod fusion;
+pub mod source;
 pub mod stereo;
 
 pub use stereo::{CameraMount, StereoCamera};

@@ -4,13 +4,16 @@
 //! growing depth error of real stereo comes out of the triangulation.
 
 use super::geometry::Segment;
+use super::render::{RenderConfig, Renderer};
 use super::world::{World, WorldLandmark};
+use image::GrayImage;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
 use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoPixels};
+use ubf_perception::features::StereoPipeline;
 use ubf_perception::StereoCamera;
 
 /// The simulated camera's settings, as written in a scenario file.
@@ -56,6 +59,12 @@ pub struct SimCameraConfig {
     /// noise), out of 256.
     #[serde(default = "SimCameraConfig::default_descriptor_noise")]
     pub descriptor_noise_bits: u32,
+    /// Render images and find the landmarks in them with the feature
+    /// pipeline, instead of projecting the landmarks (the geometric camera
+    /// model, the default). The settings above then do not apply; what the
+    /// pipeline finds is what there is.
+    #[serde(default)]
+    pub images: Option<RenderConfig>,
 }
 
 impl SimCameraConfig {
@@ -96,6 +105,7 @@ impl Default for SimCameraConfig {
             max_stereo_viewpoint_deg: Self::default_stereo_viewpoint(),
             max_incidence_deg: Self::default_incidence(),
             descriptor_noise_bits: Self::default_descriptor_noise(),
+            images: None,
         }
     }
 }
@@ -136,6 +146,10 @@ pub struct SimCamera {
     config: SimCameraConfig,
     next_frame: f64,
     frames: u64,
+    /// With rendered images: the renderer (built at the first frame, from
+    /// the world) and the pipeline, and the last pair.
+    rendered: Option<(Renderer, StereoPipeline)>,
+    last_images: Option<(GrayImage, GrayImage)>,
 }
 
 /// The angle between two directions on the floor, signed, radians.
@@ -146,7 +160,7 @@ fn signed_angle(from: (f64, f64), to: (f64, f64)) -> f64 {
 impl SimCamera {
     /// A camera with these settings; its first frame is at time 0.
     pub fn new(config: SimCameraConfig) -> Self {
-        SimCamera { config, next_frame: 0.0, frames: 0 }
+        SimCamera { config, next_frame: 0.0, frames: 0, rendered: None, last_images: None }
     }
 
     /// The settings.
@@ -174,12 +188,30 @@ impl SimCamera {
         }
         self.frames += 1;
         out.clear();
+        if let Some(render) = self.config.images {
+            let stereo = self.config.stereo;
+            let (renderer, pipeline) = self.rendered.get_or_insert_with(|| {
+                let seed = rng.random();
+                (Renderer::new(world, stereo, render, seed), StereoPipeline::new(stereo, render.features))
+            });
+            let (left, right) = renderer.render(pose, self.frames);
+            // The renderer makes images of the calibrated size, which is all
+            // the pipeline can refuse.
+            out.extend(pipeline.process(&left, &right).unwrap_or_default());
+            self.last_images = Some((left, right));
+            return Some(self.frames);
+        }
         for landmark in &world.landmarks {
             if let Some(observation) = self.observe(landmark, time, pose, world, rng) {
                 out.push(observation);
             }
         }
         Some(self.frames)
+    }
+
+    /// The last pair of rendered images, if the camera renders them.
+    pub fn last_images(&self) -> Option<&(GrayImage, GrayImage)> {
+        self.last_images.as_ref()
     }
 
     fn observe(

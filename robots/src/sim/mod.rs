@@ -227,6 +227,11 @@ impl SimRobot {
         self.body.footprint_at(pose).0
     }
 
+    /// The last pair of images the camera rendered, if it renders them.
+    pub fn last_images(&self) -> Option<&(image::GrayImage, image::GrayImage)> {
+        self.camera.as_ref().and_then(SimCamera::last_images)
+    }
+
     /// The camera's settings, if the robot has one.
     pub fn camera(&self) -> Option<&SimCameraConfig> {
         self.camera.as_ref().map(SimCamera::config)

@@ -1,0 +1,229 @@
+//! Where stereo pairs come from, behind one trait: a directory of recorded
+//! or rendered pairs (replay), the simulator's renderer (in `ubf-robots`),
+//! a camera on the robot.
+//!
+//! A directory holds `frames.csv`, one line per pair after a header:
+//!
+//! ```text
+//! time_s,left,right
+//! 0.000,left/000001.png,right/000001.png
+//! 0.500,left/000002.png,right/000002.png
+//! ```
+//!
+//! Paths are relative to the directory; images are 8-bit grey PNGs,
+//! rectified, of the size the calibration says.
+
+use image::GrayImage;
+use std::fs;
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// A rectified stereo pair and when it was taken.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoPair {
+    /// Seconds from the source's start.
+    pub time: f64,
+    /// The left image.
+    pub left: GrayImage,
+    /// The right image.
+    pub right: GrayImage,
+}
+
+/// What went wrong reading or writing pairs.
+#[derive(Debug, thiserror::Error)]
+pub enum SourceError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: io::Error,
+    },
+    /// An image could not be decoded or encoded.
+    #[error("{path}: {message}")]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// A line of `frames.csv` is not `time_s,left,right`.
+    #[error("{path}:{line}: {message}")]
+    Index {
+        /// The index file.
+        path: PathBuf,
+        /// Its line, from 1.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// A source of stereo pairs.
+pub trait CameraSource {
+    /// The next pair, or `None` when there are no more.
+    fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError>;
+}
+
+/// One pair listed in a directory's index.
+#[derive(Clone, Debug, PartialEq)]
+struct Entry {
+    time: f64,
+    left: PathBuf,
+    right: PathBuf,
+}
+
+/// Replays a directory of pairs in the order of its index.
+#[derive(Clone, Debug)]
+pub struct ImageDirectory {
+    entries: Vec<Entry>,
+    next: usize,
+}
+
+/// The index file's name.
+const INDEX: &str = "frames.csv";
+
+impl ImageDirectory {
+    /// Reads the index of `dir`; images are read as they are asked for.
+    pub fn open(dir: &Path) -> Result<ImageDirectory, SourceError> {
+        let path = dir.join(INDEX);
+        let text = fs::read_to_string(&path).map_err(|source| SourceError::Io { path: path.clone(), source })?;
+        let mut entries = Vec::new();
+        for (number, line) in text.lines().enumerate().skip(1) {
+            if line.trim().is_empty() {
+                continue;
+            }
+            let bad = |message: String| SourceError::Index { path: path.clone(), line: number + 1, message };
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let [time, left, right] = fields[..] else {
+                return Err(bad(format!("expected time_s,left,right; got {} fields", fields.len())));
+            };
+            let time: f64 = time.parse().map_err(|_| bad(format!("time {time:?} is not a number")))?;
+            if !time.is_finite() || entries.last().is_some_and(|e: &Entry| time < e.time) {
+                return Err(bad(format!("time {time} is not finite and non-decreasing")));
+            }
+            entries.push(Entry { time, left: dir.join(left), right: dir.join(right) });
+        }
+        Ok(ImageDirectory { entries, next: 0 })
+    }
+
+    /// How many pairs the directory lists.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether it lists none.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
+    let image = image::open(path).map_err(|e| match e {
+        image::ImageError::IoError(source) => SourceError::Io { path: path.to_owned(), source },
+        other => SourceError::Image { path: path.to_owned(), message: other.to_string() },
+    })?;
+    Ok(image.into_luma8())
+}
+
+impl CameraSource for ImageDirectory {
+    fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError> {
+        let Some(entry) = self.entries.get(self.next) else { return Ok(None) };
+        self.next += 1;
+        Ok(Some(StereoPair { time: entry.time, left: read_grey(&entry.left)?, right: read_grey(&entry.right)? }))
+    }
+}
+
+/// Writes pairs into a directory that [`ImageDirectory`] replays.
+#[derive(Debug)]
+pub struct ImageDirectoryWriter {
+    dir: PathBuf,
+    index: io::BufWriter<fs::File>,
+    count: usize,
+}
+
+impl ImageDirectoryWriter {
+    /// Creates `dir` (and its `left/`, `right/`) and its index.
+    pub fn create(dir: &Path) -> Result<ImageDirectoryWriter, SourceError> {
+        let io_error = |path: &Path| {
+            let path = path.to_owned();
+            move |source| SourceError::Io { path, source }
+        };
+        for sub in ["left", "right"] {
+            fs::create_dir_all(dir.join(sub)).map_err(io_error(&dir.join(sub)))?;
+        }
+        let path = dir.join(INDEX);
+        let mut index = io::BufWriter::new(fs::File::create(&path).map_err(io_error(&path))?);
+        writeln!(index, "time_s,left,right").map_err(io_error(&path))?;
+        Ok(ImageDirectoryWriter { dir: dir.to_owned(), index, count: 0 })
+    }
+
+    /// Adds a pair.
+    pub fn push(&mut self, pair: &StereoPair) -> Result<(), SourceError> {
+        self.count += 1;
+        let names = [format!("left/{:06}.png", self.count), format!("right/{:06}.png", self.count)];
+        for (name, image) in names.iter().zip([&pair.left, &pair.right]) {
+            let path = self.dir.join(name);
+            image.save(&path).map_err(|e| SourceError::Image { path, message: e.to_string() })?;
+        }
+        let path = self.dir.join(INDEX);
+        writeln!(self.index, "{:.3},{},{}", pair.time, names[0], names[1])
+            .map_err(|source| SourceError::Io { path, source })
+    }
+
+    /// Flushes the index; the pairs written so far are complete.
+    pub fn finish(mut self) -> Result<usize, SourceError> {
+        let path = self.dir.join(INDEX);
+        self.index.flush().map_err(|source| SourceError::Io { path, source })?;
+        Ok(self.count)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pairs_written_are_replayed_in_order() {
+        let dir = std::env::temp_dir().join(format!("ubf-source-{}", std::process::id()));
+        let pair = |t: f64, v: u8| StereoPair {
+            time: t,
+            left: GrayImage::from_pixel(8, 6, image::Luma([v])),
+            right: GrayImage::from_pixel(8, 6, image::Luma([v + 1])),
+        };
+        let mut writer = ImageDirectoryWriter::create(&dir).unwrap();
+        writer.push(&pair(0.0, 10)).unwrap();
+        writer.push(&pair(0.5, 20)).unwrap();
+        assert_eq!(writer.finish().unwrap(), 2);
+        let mut source = ImageDirectory::open(&dir).unwrap();
+        assert_eq!(source.len(), 2);
+        assert_eq!(source.next_pair().unwrap(), Some(pair(0.0, 10)));
+        assert_eq!(source.next_pair().unwrap(), Some(pair(0.5, 20)));
+        assert_eq!(source.next_pair().unwrap(), None);
+        let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn bad_indexes_and_missing_images_are_reported_with_their_place() {
+        let dir = std::env::temp_dir().join(format!("ubf-source-bad-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let open_with = |text: &str| {
+            fs::write(dir.join(INDEX), text).unwrap();
+            ImageDirectory::open(&dir)
+        };
+        let err = open_with("time_s,left,right\n0.0,a.png\n").unwrap_err().to_string();
+        assert!(err.ends_with("frames.csv:2: expected time_s,left,right; got 2 fields"), "{err}");
+        let err = open_with("time_s,left,right\n1.0,a.png,b.png\n0.5,a.png,b.png\n").unwrap_err().to_string();
+        assert!(err.contains("frames.csv:3: time 0.5"), "{err}");
+        let err = open_with("h\nsoon,a.png,b.png\n").unwrap_err().to_string();
+        assert!(err.contains(":2: time \"soon\""), "{err}");
+        let mut source = open_with("h\n0,missing.png,b.png\n").unwrap();
+        let err = source.next_pair().unwrap_err().to_string();
+        assert!(err.contains("missing.png"), "{err}");
+        fs::write(dir.join("junk.png"), b"not a png").unwrap();
+        let mut source = open_with("h\n0,junk.png,junk.png\n").unwrap();
+        assert!(matches!(source.next_pair(), Err(SourceError::Image { .. })));
+        let _ = fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""Times OpenCV on the same stereo pairs as `ubf pipeline`, and prints both.
+
+    python3 scripts/opencv-compare.py DIR [--ubf PATH]
+
+DIR is a directory written by `ubf frames` (frames.csv, camera.ron, left/,
+right/). The script creates a virtual environment in .venv-opencv beside
+the repository's scripts/ and installs opencv-python-headless and numpy
+into it on first use, then re-runs itself there.
+
+Per pair, OpenCV does what our pipeline does, on one thread:
+  ORB (FAST corners + rotated BRIEF) on both images, up to 1000 each;
+  brute-force Hamming matching left to right, keeping matches on the same
+  row (±1 px), with positive disparity, under the distance threshold and
+  passing the ratio test; triangulation; matching the left descriptors to
+  the previous pair's; and a rigid planar estimate of the motion with
+  RANSAC (estimateAffinePartial2D on the floor-plane points).
+The median time per pair is compared with `ubf pipeline DIR --json`.
+"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VENV = os.path.join(ROOT, ".venv-opencv")
+PY = os.path.join(VENV, "bin", "python")
+
+
+def ensure_opencv():
+    try:
+        import cv2  # noqa: F401
+        import numpy  # noqa: F401
+        return
+    except ImportError:
+        pass
+    if os.path.abspath(sys.executable) == os.path.abspath(PY):
+        sys.exit("opencv-python-headless is not importable in " + VENV)
+    if not os.path.exists(PY):
+        subprocess.check_call([sys.executable, "-m", "venv", VENV])
+        subprocess.check_call([PY, "-m", "pip", "install", "--quiet", "opencv-python-headless", "numpy"])
+    os.execv(PY, [PY] + sys.argv)
+
+
+def camera(directory):
+    """Focal length, principal point and baseline from camera.ron (or the defaults)."""
+    values = {"width_px": 640.0, "height_px": 480.0, "focal_px": 554.2562584220408, "baseline_m": 0.6}
+    path = os.path.join(directory, "camera.ron")
+    if os.path.exists(path):
+        for line in open(path):
+            key, _, value = line.strip().rstrip(",").partition(":")
+            if key.strip() in values:
+                values[key.strip()] = float(value)
+    return values["focal_px"], values["width_px"] / 2, values["height_px"] / 2, values["baseline_m"]
+
+
+def main():
+    ensure_opencv()
+    import cv2
+    import numpy as np
+
+    args = sys.argv[1:]
+    if not args:
+        sys.exit(__doc__)
+    directory = args[0]
+    ubf = os.path.join(ROOT, "target", "release", "ubf")
+    if "--ubf" in args:
+        ubf = args[args.index("--ubf") + 1]
+    cv2.setNumThreads(1)
+    f, cx, cy, baseline = camera(directory)
+    lines = open(os.path.join(directory, "frames.csv")).read().split("\n")[1:]
+    pairs = [l.split(",") for l in lines if l.strip()]
+    images = [(cv2.imread(os.path.join(directory, l), cv2.IMREAD_GRAYSCALE),
+               cv2.imread(os.path.join(directory, r), cv2.IMREAD_GRAYSCALE)) for _, l, r in pairs]
+    orb = cv2.ORB_create(nfeatures=1000, fastThreshold=20)
+    matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
+    times, counts, previous = [], [], None
+    for left, right in images:
+        start = time.perf_counter()
+        kl, dl = orb.detectAndCompute(left, None)
+        kr, dr = orb.detectAndCompute(right, None)
+        points, descriptors = [], []
+        if dl is not None and dr is not None and len(dr) >= 2:
+            # Only right features on the same row (±1 px) with positive
+            # disparity are candidates: a mask, so the search stays in C++.
+            pl = np.float32([k.pt for k in kl])
+            pr = np.float32([k.pt for k in kr])
+            mask = ((np.abs(pl[:, None, 1] - pr[None, :, 1]) <= 1.0)
+                    & (pl[:, None, 0] - pr[None, :, 0] >= 1.0)).astype(np.uint8)
+            for pair in matcher.knnMatch(dl, dr, k=2, mask=mask):
+                if not pair or pair[0].distance > 64:
+                    continue
+                if len(pair) == 2 and pair[0].distance >= 0.8 * pair[1].distance:
+                    continue
+                m = pair[0]
+                (ul, v), (ur, _) = kl[m.queryIdx].pt, kr[m.trainIdx].pt
+                depth = f * baseline / (ul - ur)
+                x = (ul - cx) * depth / f - baseline / 2
+                points.append((x, depth))
+                descriptors.append(dl[m.queryIdx])
+        points = np.array(points, dtype=np.float32).reshape(-1, 2)
+        descriptors = np.array(descriptors, dtype=np.uint8)
+        if previous is not None and len(points) >= 3 and len(previous[0]) >= 3:
+            matches = matcher.match(previous[1], descriptors)
+            if len(matches) >= 3:
+                a = np.float32([previous[0][m.queryIdx] for m in matches])
+                b = np.float32([points[m.trainIdx] for m in matches])
+                cv2.estimateAffinePartial2D(a, b, method=cv2.RANSAC, ransacReprojThreshold=0.1)
+        previous = (points, descriptors)
+        times.append((time.perf_counter() - start) * 1e3)
+        counts.append(len(points))
+    times.sort()
+    theirs = times[len(times) // 2]
+    ours = json.loads(subprocess.check_output([ubf, "pipeline", directory, "--json"]))
+    print(f"{len(images)} stereo pairs from {directory}, one thread each")
+    print(f"| pipeline | median ms per pair | pairs/s | landmarks per pair |")
+    print(f"| --- | --- | --- | --- |")
+    print(f"| ubf (FAST-9, 256-bit BRIEF, row matching, rigid RANSAC) | {ours['total_ms_median']:.2f} | "
+          f"{ours['frames_per_s']:.0f} | {ours['landmarks_mean']:.0f} |")
+    print(f"| OpenCV {cv2.__version__} (ORB, BFMatcher, estimateAffinePartial2D) | {theirs:.2f} | "
+          f"{1e3 / theirs:.0f} | {sum(counts) / len(counts):.0f} |")
+    print(f"ubf's time is {ours['total_ms_median'] / theirs:.2f} of OpenCV's")
+
+
+if __name__ == "__main__":
+    main()

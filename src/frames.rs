@@ -1,0 +1,133 @@
+//! Stereo image files: `ubf frames` records the rendered pairs of a
+//! scenario run into a directory, and `ubf pipeline` replays a directory
+//! through the feature pipeline and the rigid egomotion estimator, timing
+//! each stage (the same files the OpenCV comparison script reads).
+
+use crate::scenario::Scenario;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame};
+use ubf_perception::egomotion::{EgomotionConfig, Tracker};
+use ubf_perception::features::{FeatureConfig, StereoPipeline};
+use ubf_perception::source::{CameraSource, ImageDirectory, ImageDirectoryWriter, StereoPair};
+use ubf_perception::StereoCamera;
+use ubf_robots::sim::render::RenderConfig;
+use ubf_robots::sim::SimRobot;
+
+/// The file beside `frames.csv` that holds the pair's calibration.
+pub const CAMERA_FILE: &str = "camera.ron";
+
+/// Runs `scenario` with rendered images (turned on if the camera uses the
+/// geometric model) and writes every pair into `dir`, with the camera's
+/// calibration. Returns the number of pairs.
+pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> Result<usize, String> {
+    let mut scenario = scenario.clone();
+    let camera = scenario.robot.camera.as_mut().ok_or("the scenario's robot has no camera: add `camera: ()`")?;
+    camera.images.get_or_insert_with(RenderConfig::default);
+    let stereo = camera.stereo;
+    let mut writer = ImageDirectoryWriter::create(dir).map_err(|e| e.to_string())?;
+    let calibration =
+        ron::ser::to_string_pretty(&stereo, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())?;
+    let path = dir.join(CAMERA_FILE);
+    std::fs::write(&path, calibration).map_err(|e| format!("{}: {e}", path.display()))?;
+
+    let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
+    let root = scenario.root.build(&BuildContext::new(seed));
+    let mut controller = Controller::new(sim, root, Box::new(SimClock::new(scenario.period_s)));
+    controller.set_goal(scenario.goal);
+    let max_ticks = (scenario.max_time_s / scenario.period_s).ceil() as u64;
+    let mut last_frame = 0;
+    for _ in 0..max_ticks {
+        controller.tick().map_err(|e| e.to_string())?;
+        let frame = &controller.state().stereo;
+        if frame.number != last_frame {
+            last_frame = frame.number;
+            if let Some((left, right)) = controller.robot().last_images() {
+                let pair = StereoPair { time: frame.time, left: left.clone(), right: right.clone() };
+                writer.push(&pair).map_err(|e| e.to_string())?;
+            }
+        }
+        if controller.state().goal_reached() || last_frame as usize >= max_frames {
+            break;
+        }
+    }
+    writer.finish().map_err(|e| e.to_string())
+}
+
+/// What replaying a directory measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct PipelineReport {
+    /// Pairs processed.
+    pub frames: usize,
+    /// Landmarks triangulated per pair, mean.
+    pub landmarks_mean: f64,
+    /// Median time of the feature pipeline per pair (detect and describe
+    /// both images, match them, refine, triangulate), ms.
+    pub pipeline_ms_median: f64,
+    /// Median time of the egomotion step per pair (match to the previous
+    /// frame, rigid estimate), ms.
+    pub egomotion_ms_median: f64,
+    /// Median end-to-end time per pair, ms.
+    pub total_ms_median: f64,
+    /// 1000 / the median end-to-end time.
+    pub frames_per_s: f64,
+    /// Egomotion steps that found no motion.
+    pub egomotion_failures: u32,
+    /// The visual odometry's end pose: x, y (m), heading (rad).
+    pub final_pose: [f64; 3],
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// Replays `dir` through the pipeline and the rigid estimator on this
+/// thread, with the calibration in its `camera.ron` (the default camera if
+/// there is none).
+pub fn replay(dir: &Path, features: &FeatureConfig) -> Result<PipelineReport, String> {
+    let camera_path = dir.join(CAMERA_FILE);
+    let camera: StereoCamera = match std::fs::read_to_string(&camera_path) {
+        Ok(text) => ron::from_str(&text).map_err(|e| format!("{}:{e}", camera_path.display()))?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => StereoCamera::default(),
+        Err(e) => return Err(format!("{}: {e}", camera_path.display())),
+    };
+    let mut source = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+    let pipeline = StereoPipeline::new(camera, *features);
+    let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+    let (mut pipeline_ms, mut egomotion_ms, mut total_ms) = (Vec::new(), Vec::new(), Vec::new());
+    let mut landmarks = 0usize;
+    let mut number = 0;
+    while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
+        number += 1;
+        let started = Instant::now();
+        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| format!("pair {number}: {e}"))?;
+        let processed = Instant::now();
+        landmarks += observed.len();
+        let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };
+        // No odometry on replay: the visual estimate stands in, so the
+        // journey CV is weighed by the distance it measured.
+        let odometry = tracker.state().pose.unwrap_or_default();
+        tracker.update(&frame, &odometry);
+        let done = Instant::now();
+        pipeline_ms.push((processed - started).as_secs_f64() * 1e3);
+        egomotion_ms.push((done - processed).as_secs_f64() * 1e3);
+        total_ms.push((done - started).as_secs_f64() * 1e3);
+    }
+    if number == 0 {
+        return Err(format!("{}: no pairs listed", dir.display()));
+    }
+    let pose = tracker.state().pose.unwrap_or_default();
+    let total = median(&mut total_ms);
+    Ok(PipelineReport {
+        frames: number as usize,
+        landmarks_mean: landmarks as f64 / number as f64,
+        pipeline_ms_median: median(&mut pipeline_ms),
+        egomotion_ms_median: median(&mut egomotion_ms),
+        total_ms_median: total,
+        frames_per_s: 1e3 / total,
+        egomotion_failures: tracker.state().failures,
+        final_pose: [pose.x, pose.y, pose.theta],
+    })
+}
