@@ -387,9 +387,12 @@ fn parse_room(text: &str) -> Result<(f64, f64), String> {
     }
 }
 
-/// Prints what the emulator saw of a client.
+/// Prints what the emulator saw of a client. Nobody reading the output is
+/// no reason to stop emulating: a closed pipe is ignored.
 fn print_emulator_report(report: &ubf_robots::arcos::emulator::EmulatorReport) {
-    println!(
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stdout(),
         "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m",
         report.commands,
         report.closed,

@@ -8,9 +8,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
-use ubf_core::{BehaviorSpec, BuildContext, Controller, EgomotionState, Goal, Registry, Robot, State, WallClock};
+use ubf_core::{BehaviorSpec, BuildContext, Controller, Goal, Registry, Robot, State, WallClock};
+use ubf_perception::egomotion::{EgomotionConfig, Tracker};
+use ubf_perception::features::FeatureConfig;
+use ubf_perception::source::ImageDirectory;
+use ubf_perception::StereoCamera;
 use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::link;
+use ubf_robots::camera::CameraRobot;
+use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::model::RobotModel;
 
 /// Which robot model a configuration names.
@@ -33,6 +39,30 @@ pub enum OnLinkLoss {
     Reconnect,
     /// Stop and exit with an error.
     Exit,
+}
+
+/// Where a robot's stereo pairs come from.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub enum CameraSourceChoice {
+    /// A directory of recorded pairs (`frames.csv`, as `ubf frames` writes),
+    /// relative to the configuration file, replayed at its own pace: for
+    /// trying the whole chain before the cameras are fitted.
+    Directory(String),
+}
+
+/// The robot's stereo camera.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveCamera {
+    /// Where pairs come from.
+    pub source: CameraSourceChoice,
+    /// The pair's calibration: focal length, image size (the principal
+    /// point is its centre), baseline and mounting.
+    #[serde(default)]
+    pub stereo: StereoCamera,
+    /// The feature pipeline's settings.
+    #[serde(default)]
+    pub features: FeatureConfig,
 }
 
 /// A robot configuration file: `RobotConfig(...)`.
@@ -60,6 +90,12 @@ pub struct DriveConfig {
     /// A goal in odometry coordinates, for trees that use one.
     #[serde(default)]
     pub goal: Option<Goal>,
+    /// A stereo camera, for trees that use landmarks (action aiding).
+    #[serde(default)]
+    pub camera: Option<DriveCamera>,
+    /// Visual egomotion on the camera's frames.
+    #[serde(default)]
+    pub egomotion: Option<EgomotionConfig>,
     /// Accelerations to set on the controller (unset: its own).
     #[serde(default)]
     pub accelerations: Option<Accelerations>,
@@ -81,15 +117,36 @@ impl DriveConfig {
         PathBuf::from("drive-log.csv")
     }
 
+    /// `robot` with the configured camera and egomotion around it.
+    fn equip(&self, robot: ArcosRobot) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, String> {
+        let Some(camera) = &self.camera else {
+            return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
+        };
+        let CameraSourceChoice::Directory(dir) = &camera.source;
+        let source = ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?;
+        let robot = CameraRobot::new(robot, Box::new(source), camera.stereo, camera.features, true)
+            .map_err(|e| e.to_string())?;
+        let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, ubf_core::Pose2::default(), 0));
+        Ok(EgomotionRobot::new(robot, tracker))
+    }
+
     /// How to open a session, motors on or not.
     fn connect_options(&self, enable_motors: bool) -> ConnectOptions {
         ConnectOptions { enable_motors, accelerations: self.accelerations }
     }
 
-    /// Reads a configuration file.
+    /// Reads a configuration file. Paths in it (a model file, a camera's
+    /// image directory) become relative to the file's directory.
     pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let config: DriveConfig = registry.from_ron(&text).map_err(|e: RonError| format!("{}:{e}", path.display()))?;
+        let mut config: DriveConfig =
+            registry.from_ron(&text).map_err(|e: RonError| format!("{}:{e}", path.display()))?;
+        if config.egomotion.is_some() && config.camera.is_none() {
+            return Err(format!("{}: egomotion needs a camera: add `camera: (...)`", path.display()));
+        }
+        if let Some(DriveCamera { source: CameraSourceChoice::Directory(dir), .. }) = &mut config.camera {
+            *dir = path.parent().unwrap_or(Path::new(".")).join(&*dir).to_string_lossy().into_owned();
+        }
         let model = match &config.model {
             ModelChoice::Powerbot => RobotModel::powerbot(),
             ModelChoice::P3dx => RobotModel::p3dx(),
@@ -153,6 +210,11 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Res
         if session > 1 {
             log_path = config.log.with_extension(format!("{session}.csv"));
         }
+        let robot = match config.equip(robot) {
+            Ok(robot) => robot,
+            // The session closes as the robot is dropped.
+            Err(e) => return Err(format!("camera: {e}")),
+        };
         let root = config.root.build(&BuildContext::new(0));
         let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
         controller.set_goal(config.goal);
@@ -178,8 +240,8 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Res
 }
 
 /// Ticks until stopped (returns `None`) or the link is lost (returns why).
-fn run_session(
-    controller: &mut Controller<ArcosRobot>,
+fn run_session<R: Robot>(
+    controller: &mut Controller<R>,
     log: &mut TrajectoryWriter,
     config: &DriveConfig,
     stop: &AtomicBool,
@@ -194,10 +256,8 @@ fn run_session(
             return Some(e.to_string());
         }
         let state: &State = controller.state();
-        let (pose, age) = (state.pose, state.sensor_age);
-        if let Err(e) =
-            log.write(controller.last_record(), controller.layout(), &pose, &pose, &EgomotionState::default())
-        {
+        let (pose, age, egomotion) = (state.pose, state.sensor_age, state.egomotion);
+        if let Err(e) = log.write(controller.last_record(), controller.layout(), &pose, &pose, &egomotion) {
             tracing::warn!("writing the log: {e}");
         }
         if age > stale_after {
@@ -217,8 +277,8 @@ fn run_session(
 /// the run like Ctrl-C: the session is closed either way.
 pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), String> {
     let link = link::open(&config.connection, config.baud).map_err(|e| format!("{}: {e}", config.connection))?;
-    let mut robot =
-        ArcosRobot::connect(link, model.clone(), &config.connect_options(false)).map_err(|e| e.to_string())?;
+    let robot = ArcosRobot::connect(link, model.clone(), &config.connect_options(false)).map_err(|e| e.to_string())?;
+    let mut robot = config.equip(robot)?;
     let result = show_robot(&mut robot, config, model, stop, &mut std::io::stdout().lock());
     let closed = robot.shutdown().map_err(|e| e.to_string());
     match result {
@@ -232,13 +292,14 @@ pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> R
 /// The dry run's report: I/O errors are the output's, the inner ones the
 /// robot's.
 fn show_robot(
-    robot: &mut ArcosRobot,
+    robot: &mut EgomotionRobot<CameraRobot<ArcosRobot>>,
     config: &DriveConfig,
     model: &RobotModel,
     stop: &AtomicBool,
     out: &mut impl std::io::Write,
 ) -> std::io::Result<Result<(), String>> {
-    let id = robot.identity().clone();
+    let arcos = robot.inner().inner();
+    let id = arcos.identity().clone();
     writeln!(out, "robot           {} ({} {})", id.name, id.class, id.subclass)?;
     writeln!(
         out,
@@ -248,7 +309,7 @@ fn show_robot(
         model.max_rot_velocity_deg,
         model.sonar.len()
     )?;
-    match robot.config() {
+    match arcos.config() {
         Some(c) => {
             writeln!(
                 out,
@@ -272,7 +333,7 @@ fn show_robot(
     while !stop.load(Ordering::SeqCst) && config.max_time_s.is_none_or(|t| started.elapsed().as_secs_f64() < t) {
         // Wake often enough to PULSE within the 500 ms; show once a second.
         std::thread::sleep(Duration::from_millis(250));
-        if let Err(e) = robot.keep_alive().and_then(|_| robot.sense(&mut state)) {
+        if let Err(e) = robot.inner_mut().inner_mut().keep_alive().and_then(|_| robot.sense(&mut state)) {
             return Ok(Err(e.to_string()));
         }
         if last_shown.elapsed() < Duration::from_secs(1) {
@@ -288,6 +349,16 @@ fn show_robot(
             state.pose.theta.to_degrees(),
             state.battery_volts.unwrap_or(f64::NAN)
         )?;
+        if config.camera.is_some() {
+            writeln!(
+                out,
+                "camera          frame {}: {} landmarks; egomotion {} steps, {} failures",
+                state.stereo.number,
+                state.stereo.landmarks.len(),
+                state.egomotion.steps,
+                state.egomotion.failures
+            )?;
+        }
         out.flush()?;
     }
     Ok(Ok(()))

@@ -176,3 +176,48 @@ fn exits_when_the_robot_vanishes_if_so_configured() {
     assert_eq!(status.code(), Some(1));
     assert!(std::fs::read_to_string(&log).unwrap().lines().count() > 5, "the log was flushed");
 }
+
+#[test]
+fn a_dry_run_with_a_camera_shows_live_landmark_counts() {
+    // Recorded rendered pairs stand in for the cameras: replayed at their
+    // own pace (2 Hz) through the pipeline and egomotion while the robot
+    // stays still with its motors off.
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    let record = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["frames", "scenarios/rendered-corridor.ron", "--max-frames", "8", "--out"])
+        .arg(&frames)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(record.status.success(), "{}", String::from_utf8_lossy(&record.stderr));
+    let (mut emulator, address, _) = emulator();
+    let file = dir.path().join("robot.ron");
+    let extra = r#"max_time_s: 3.5,
+            camera: (source: Directory("frames"), stereo: (focal_px: 554.3)),
+            egomotion: (estimator: Rigid()),"#;
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), extra)).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    let counts: Vec<(u64, usize)> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("camera          frame "))
+        .map(|l| {
+            let (frame, rest) = l.split_once(": ").unwrap();
+            (frame.parse().unwrap(), rest.split(' ').next().unwrap().parse().unwrap())
+        })
+        .collect();
+    assert!(counts.len() >= 2, "{text}");
+    let (last_frame, last_count) = *counts.last().unwrap();
+    assert!(last_frame >= 4 && last_count > 10, "{text}");
+    assert!(text.contains("egomotion") && !text.contains("egomotion 0 steps"), "{text}");
+    emulator.kill().unwrap();
+    // Egomotion without a camera is refused when the file is read.
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), "egomotion: (),")).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("egomotion needs a camera"));
+}

@@ -23,6 +23,11 @@ impl<R: Robot> EgomotionRobot<R> {
         &self.inner
     }
 
+    /// The wrapped robot, to talk to it directly.
+    pub fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+
     /// The estimator, if any.
     pub fn tracker(&self) -> Option<&Tracker> {
         self.tracker.as_ref()

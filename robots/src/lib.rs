@@ -3,11 +3,14 @@
 //! - [`sim`]: a headless simulated robot, deterministic for a given seed.
 //! - [`model`]: robot types (geometry, limits, sonar) read from RON files.
 //! - [`egomotion`]: a wrapper running visual egomotion on any robot.
+//! - [`camera`]: a wrapper giving any robot a stereo camera: pairs from a
+//!   source through the feature pipeline on a thread of their own.
 //! - [`arcos`]: the Pioneer/Powerbot controller protocol.
 
 #![warn(missing_docs)]
 
 pub mod arcos;
+pub mod camera;
 pub mod egomotion;
 pub mod model;
 pub mod sim;

@@ -1,0 +1,151 @@
+//! Cameras on any robot: a wrapper that takes stereo pairs from a
+//! [`CameraSource`], runs the feature pipeline on a thread of its own, and
+//! puts the newest frame's landmarks in the state, so the control loop
+//! never waits for an image.
+
+use crossbeam_channel::{Receiver, TryRecvError};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use ubf_core::{Command, LandmarkObservation, Limits, Robot, RobotError, State};
+use ubf_perception::features::{FeatureConfig, StereoPipeline};
+use ubf_perception::source::CameraSource;
+use ubf_perception::StereoCamera;
+
+/// A processed pair: when it was taken (seconds since the camera started)
+/// and what was found in it.
+type Frame = (f64, Vec<LandmarkObservation>);
+
+/// The camera's thread and what comes out of it.
+struct CameraThread {
+    frames: Receiver<Result<Frame, String>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+/// Wraps a robot with a stereo camera. Without one it passes everything
+/// straight through.
+pub struct CameraRobot<R> {
+    inner: R,
+    camera: Option<(StereoCamera, CameraThread)>,
+    frames: u64,
+}
+
+impl<R: Robot> CameraRobot<R> {
+    /// `inner` without a camera.
+    pub fn without_camera(inner: R) -> Self {
+        CameraRobot { inner, camera: None, frames: 0 }
+    }
+
+    /// `inner` with pairs from `source`, calibrated as `camera`. With
+    /// `paced`, pairs are taken at the times the source gives (a recording
+    /// replayed in real time); otherwise as fast as they come (a live
+    /// camera, which paces itself).
+    pub fn new(
+        inner: R,
+        mut source: Box<dyn CameraSource + Send>,
+        camera: StereoCamera,
+        features: FeatureConfig,
+        paced: bool,
+    ) -> Result<Self, RobotError> {
+        // One frame of slack: a slow pipeline drops pairs rather than
+        // falling ever further behind.
+        let (sender, frames) = crossbeam_channel::bounded(1);
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&stop);
+        let pipeline = StereoPipeline::new(camera, features);
+        let thread = std::thread::Builder::new()
+            .name("stereo-camera".into())
+            .spawn(move || {
+                let started = Instant::now();
+                let mut first_time = None;
+                while !flag.load(Ordering::Relaxed) {
+                    let pair = match source.next_pair() {
+                        Ok(Some(pair)) => pair,
+                        Ok(None) => return,
+                        Err(e) => {
+                            let _ = sender.send(Err(e.to_string()));
+                            return;
+                        }
+                    };
+                    if paced {
+                        let offset = pair.time - *first_time.get_or_insert(pair.time);
+                        let due = started + Duration::from_secs_f64(offset.max(0.0));
+                        // In short naps, so that a stop is not kept waiting.
+                        while !flag.load(Ordering::Relaxed) && Instant::now() < due {
+                            std::thread::sleep(
+                                due.saturating_duration_since(Instant::now()).min(Duration::from_millis(50)),
+                            );
+                        }
+                    }
+                    let taken = started.elapsed().as_secs_f64();
+                    let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
+                    match sender.try_send(found.map(|landmarks| (taken, landmarks))) {
+                        Ok(()) | Err(crossbeam_channel::TrySendError::Full(_)) => {}
+                        Err(crossbeam_channel::TrySendError::Disconnected(_)) => return,
+                    }
+                }
+            })
+            .map_err(RobotError::Io)?;
+        Ok(CameraRobot {
+            inner,
+            camera: Some((camera, CameraThread { frames, stop, thread: Some(thread) })),
+            frames: 0,
+        })
+    }
+
+    /// The wrapped robot.
+    pub fn inner(&self) -> &R {
+        &self.inner
+    }
+
+    /// The wrapped robot, to talk to it directly.
+    pub fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+
+    /// Frames delivered so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+}
+
+impl<R: Robot> Robot for CameraRobot<R> {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        self.inner.sense(state)?;
+        let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
+        loop {
+            match thread.frames.try_recv() {
+                Ok(Ok((time, landmarks))) => {
+                    self.frames += 1;
+                    state.stereo.number = self.frames;
+                    state.stereo.time = time;
+                    state.stereo.landmarks = landmarks;
+                    state.stereo.calibration = Some(camera.calibration());
+                }
+                Ok(Err(e)) => return Err(RobotError::Protocol(format!("camera: {e}"))),
+                // No new pair, or the source has ended: the last frame stays.
+                Err(TryRecvError::Empty | TryRecvError::Disconnected) => return Ok(()),
+            }
+        }
+    }
+
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        self.inner.act(command)
+    }
+
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        if let Some((_, thread)) = &mut self.camera {
+            thread.stop.store(true, Ordering::Relaxed);
+            if let Some(handle) = thread.thread.take() {
+                let _ = handle.join();
+            }
+        }
+        self.inner.shutdown()
+    }
+
+    fn limits(&self) -> Limits {
+        self.inner.limits()
+    }
+}
