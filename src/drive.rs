@@ -11,7 +11,7 @@ use ubf_core::config::{positive, RonError};
 use ubf_core::{BehaviorSpec, BuildContext, Controller, Goal, Registry, Robot, State, WallClock};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
-use ubf_perception::source::ImageDirectory;
+use ubf_perception::source::{CameraSource, ImageDirectory};
 use ubf_perception::StereoCamera;
 use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::link;
@@ -48,6 +48,47 @@ pub enum CameraSourceChoice {
     /// relative to the configuration file, replayed at its own pace: for
     /// trying the whole chain before the cameras are fitted.
     Directory(String),
+    /// Two Video4Linux cameras giving rectified images (builds with the
+    /// `v4l` feature only).
+    V4l {
+        /// The left camera's device, e.g. `/dev/video0`.
+        left: String,
+        /// The right camera's device.
+        right: String,
+    },
+}
+
+/// Opens the source a configuration names; `true` if it is a recording to
+/// be replayed at its own pace.
+fn open_source(
+    source: &CameraSourceChoice,
+    stereo: &StereoCamera,
+) -> Result<(Box<dyn CameraSource + Send>, bool), String> {
+    match source {
+        CameraSourceChoice::Directory(dir) => {
+            Ok((Box::new(ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?), true))
+        }
+        CameraSourceChoice::V4l { left, right } => open_v4l(left, right, stereo).map(|s| (s, false)),
+    }
+}
+
+#[cfg(feature = "v4l")]
+fn open_v4l(left: &str, right: &str, stereo: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, String> {
+    let pair = ubf_perception::v4l_source::V4lStereo::open(
+        Path::new(left),
+        Path::new(right),
+        stereo.width_px,
+        stereo.height_px,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(Box::new(pair))
+}
+
+#[cfg(not(feature = "v4l"))]
+fn open_v4l(_: &str, _: &str, _: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, String> {
+    Err("this build cannot read Video4Linux cameras: build with `cargo build --release --features v4l` \
+         (scripts/install-v4l-deps.sh installs what that needs)"
+        .into())
 }
 
 /// The robot's stereo camera.
@@ -122,10 +163,9 @@ impl DriveConfig {
         let Some(camera) = &self.camera else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };
-        let CameraSourceChoice::Directory(dir) = &camera.source;
-        let source = ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?;
-        let robot = CameraRobot::new(robot, Box::new(source), camera.stereo, camera.features, true)
-            .map_err(|e| e.to_string())?;
+        let (source, paced) = open_source(&camera.source, &camera.stereo)?;
+        let robot =
+            CameraRobot::new(robot, source, camera.stereo, camera.features, paced).map_err(|e| e.to_string())?;
         let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, ubf_core::Pose2::default(), 0));
         Ok(EgomotionRobot::new(robot, tracker))
     }

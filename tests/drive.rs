@@ -213,6 +213,15 @@ fn a_dry_run_with_a_camera_shows_live_landmark_counts() {
     let (last_frame, last_count) = *counts.last().unwrap();
     assert!(last_frame >= 4 && last_count > 10, "{text}");
     assert!(text.contains("egomotion") && !text.contains("egomotion 0 steps"), "{text}");
+    // Cameras this build cannot open are a clean error, not a panic: without
+    // the `v4l` feature it says how to get it; with it, the device is named.
+    let extra = r#"camera: (source: V4l(left: "/dev/video-left-missing", right: "/dev/video-right-missing")),"#;
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), extra)).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("--features v4l") || stderr.contains("video-left-missing"), "{stderr}");
     emulator.kill().unwrap();
     // Egomotion without a camera is refused when the file is read.
     std::fs::write(&file, config(&address, &dir.path().join("l.csv"), "egomotion: (),")).unwrap();

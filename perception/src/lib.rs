@@ -9,7 +9,8 @@
 //! - [`features`]: landmarks from a pair of real images: corners,
 //!   descriptors, stereo matching, triangulation.
 //! - [`source`]: where stereo pairs come from: a directory of images, the
-//!   simulator's renderer.
+//!   simulator's renderer, and with the `v4l` feature two Video4Linux
+//!   cameras (`v4l_source`).
 //!
 //! Shared by the simulated and the real robot, so that both feed the same
 //! landmark observations to the behaviours.
@@ -22,5 +23,7 @@ pub mod features;
 pub mod fusion;
 pub mod source;
 pub mod stereo;
+#[cfg(feature = "v4l")]
+pub mod v4l_source;
 
 pub use stereo::{CameraMount, StereoCamera};
