@@ -18,6 +18,7 @@ use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
 use ubf_core::Pose2;
 use ubf_perception::features::FeatureConfig;
+use ubf_perception::source::{CameraSource, SourceError, StereoPair};
 use ubf_perception::StereoCamera;
 
 /// Rendering settings, as written in a scenario file.
@@ -264,6 +265,30 @@ impl Renderer {
     }
 }
 
+/// The renderer as a camera source: the pairs seen along a path of timed
+/// poses, then no more.
+pub struct RenderedPath {
+    renderer: Renderer,
+    path: Vec<(f64, Pose2)>,
+    next: usize,
+}
+
+impl RenderedPath {
+    /// Pairs from `renderer` at each `(time, pose)` of `path`, in order.
+    pub fn new(renderer: Renderer, path: Vec<(f64, Pose2)>) -> Self {
+        RenderedPath { renderer, path, next: 0 }
+    }
+}
+
+impl CameraSource for RenderedPath {
+    fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError> {
+        let Some(&(time, pose)) = self.path.get(self.next) else { return Ok(None) };
+        self.next += 1;
+        let (left, right) = self.renderer.render(&pose, self.next as u64);
+        Ok(Some(StereoPair { time, left, right }))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -333,6 +358,17 @@ mod tests {
         // Sub-pixel disparity puts the posters on their walls to centimetres.
         let rms = (lateral_errors.iter().map(|e| e * e).sum::<f64>() / lateral_errors.len() as f64).sqrt();
         assert!(lateral_errors.len() > 30 && rms < 0.05, "{} posters, rms {rms}", lateral_errors.len());
+    }
+
+    #[test]
+    fn a_rendered_path_is_a_camera_source() {
+        let renderer = Renderer::new(&corridor_world(), StereoCamera::default(), RenderConfig::default(), 7);
+        let path = vec![(0.0, Pose2::new(0.5, 0.0, 0.0)), (0.5, Pose2::new(0.8, 0.0, 0.0))];
+        let mut source = RenderedPath::new(renderer.clone(), path);
+        let first = source.next_pair().unwrap().unwrap();
+        assert_eq!((first.left, first.right), renderer.render(&Pose2::new(0.5, 0.0, 0.0), 1));
+        assert_eq!(source.next_pair().unwrap().unwrap().time, 0.5);
+        assert!(source.next_pair().unwrap().is_none());
     }
 
     #[test]
