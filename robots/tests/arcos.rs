@@ -37,6 +37,12 @@ impl Emulator {
         Emulator { address, stop, thread: Some(thread) }
     }
 
+    /// A Powerbot client connected to this emulator, motors on.
+    fn connect(&self) -> ArcosRobot {
+        let link = link::open(&self.address, 9600).unwrap();
+        ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap()
+    }
+
     fn finish(mut self) -> EmulatorReport {
         std::thread::sleep(Duration::from_millis(100));
         self.stop.store(true, Ordering::Relaxed);
@@ -58,8 +64,7 @@ fn drive(robot: &mut ArcosRobot, command: Command, seconds: f64, state: &mut Sta
 #[test]
 fn handshake_drive_and_close_over_tcp() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
-    let link = link::open(&emulator.address, 9600).unwrap();
-    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
+    let mut robot = emulator.connect();
     assert_eq!(robot.identity().subclass, "powerbot");
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.4, turn: Turn::Rate(0.0) }, 1.5, &mut state);
@@ -90,8 +95,7 @@ fn the_wrong_robot_is_refused() {
 #[test]
 fn the_watchdog_stops_a_silent_client() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
-    let link = link::open(&emulator.address, 9600).unwrap();
-    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
+    let mut robot = emulator.connect();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.5, &mut state);
     assert!(state.velocity > 0.25);
@@ -152,12 +156,7 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
     let mut config = EmulatorConfig::new(RobotModel::powerbot());
     config.start_mm = (32768.0 * 0.5813 - 200.0, 0.0);
     let emulator = Emulator::tcp_with(config);
-    let mut robot = ArcosRobot::connect(
-        link::open(&emulator.address, 9600).unwrap(),
-        RobotModel::powerbot(),
-        &ConnectOptions::default(),
-    )
-    .unwrap();
+    let mut robot = emulator.connect();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 1.0, turn: Turn::Rate(0.0) }, 1.0, &mut state);
     // Relative to the first SIP: about +1 m, not −18 m.
@@ -171,12 +170,7 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
 #[test]
 fn a_dead_robot_is_reported_not_waited_for() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
-    let mut robot = ArcosRobot::connect(
-        link::open(&emulator.address, 9600).unwrap(),
-        RobotModel::powerbot(),
-        &ConnectOptions::default(),
-    )
-    .unwrap();
+    let mut robot = emulator.connect();
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.2, turn: Turn::Rate(0.0) }, 0.3, &mut state);
     // The robot side goes away mid-run.
@@ -233,12 +227,7 @@ fn accelerations_are_set_and_obeyed() {
 fn sonar_echoes_off_the_walls_of_the_room() {
     // The robot in the middle of an 6 m × 4 m room, facing along it.
     let emulator = Emulator::tcp_with(EmulatorConfig::new(RobotModel::powerbot()).in_room(6.0, 4.0));
-    let mut robot = ArcosRobot::connect(
-        link::open(&emulator.address, 9600).unwrap(),
-        RobotModel::powerbot(),
-        &ConnectOptions::default(),
-    )
-    .unwrap();
+    let mut robot = emulator.connect();
     let mut state = State::default();
     drive(&mut robot, Command::Stop, 0.3, &mut state);
     let range_of = |state: &State, heading_deg: f64| {
@@ -270,12 +259,7 @@ fn drives_a_square_on_its_own_odometry() {
     // 90° turns. The client's pose must agree with the emulator's truth, and
     // the square must close.
     let emulator = Emulator::tcp(RobotModel::powerbot());
-    let mut robot = ArcosRobot::connect(
-        link::open(&emulator.address, 9600).unwrap(),
-        RobotModel::powerbot(),
-        &ConnectOptions::default(),
-    )
-    .unwrap();
+    let mut robot = emulator.connect();
     let mut state = State::default();
     drive(&mut robot, Command::Stop, 0.3, &mut state);
     let wrap = |a: f64| a.sin().atan2(a.cos());
