@@ -36,9 +36,8 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let root = scenario.root.build(&BuildContext::new(seed));
     let mut controller = Controller::new(sim, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
-    let max_ticks = (scenario.max_time_s / scenario.period_s).ceil() as u64;
     let mut last_frame = 0;
-    for _ in 0..max_ticks {
+    for _ in 0..scenario.max_ticks() {
         controller.tick().map_err(|e| e.to_string())?;
         let frame = &controller.state().stereo;
         if frame.number != last_frame {

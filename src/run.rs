@@ -118,8 +118,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let mut decisions = Vec::new();
     let mut last_winner = None;
 
-    // Rounded so that 60 s at 0.1 s is 600 ticks, not 601 from 599.999….
-    let max_ticks = (scenario.max_time_s / scenario.period_s - 1e-9).ceil().max(1.0) as u64;
+    let max_ticks = scenario.max_ticks();
     let mut end = EndReason::TimeLimit;
     let mut failure = None;
     for _ in 0..max_ticks {

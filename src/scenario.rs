@@ -56,6 +56,12 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Ticks the time limit allows: at least one, and rounded so that 60 s
+    /// at 0.1 s is 600 ticks, not 601 from 599.999….
+    pub fn max_ticks(&self) -> u64 {
+        (self.max_time_s / self.period_s - 1e-9).ceil().max(1.0) as u64
+    }
+
     fn default_period_s() -> f64 {
         0.1
     }

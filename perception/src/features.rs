@@ -281,11 +281,6 @@ fn refine_disparity(left: &GrayImage, right: &GrayImage, xl: u32, xr: u32, y: u3
     Some(best_d as f64 + offset.clamp(-0.5, 0.5))
 }
 
-/// Hamming distance between two descriptors.
-fn hamming(a: &Descriptor, b: &Descriptor) -> u32 {
-    a.0.iter().zip(&b.0).map(|(x, y)| (x ^ y).count_ones()).sum()
-}
-
 /// Stereo matches `(left, right)` between two rectified images' features:
 /// for each left feature, the right features on its row (give or take the
 /// tolerance) within the disparity range; the nearest descriptor is kept if
@@ -308,7 +303,7 @@ pub fn match_stereo(left: &[Feature], right: &[Feature], config: &FeatureConfig)
                 if disparity < config.min_disparity_px || disparity > config.max_disparity_px {
                     continue;
                 }
-                let d = hamming(&l.descriptor, &right[j].descriptor);
+                let d = l.descriptor.hamming(&right[j].descriptor);
                 if d < best.0 {
                     second = best.0;
                     best = (d, j);

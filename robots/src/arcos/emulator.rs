@@ -6,6 +6,7 @@
 use super::codec::{baud_of_code, frame, ClientCommand, ConfigPacket, Identity, Sip, SipTail, StreamDecoder};
 use super::link::{is_timeout, Link};
 use crate::model::RobotModel;
+use crate::sim::approach;
 use crate::sim::geometry::Segment;
 use crate::sim::{Sonar, SonarConfig};
 use rand::SeedableRng;
@@ -98,7 +99,7 @@ fn client_left_terminal(e: &io::Error) -> bool {
 fn ramp(speed: f64, target: f64, accel: Option<f64>, decel: Option<f64>, dt: f64) -> f64 {
     let slowing = target.abs() < speed.abs() || target * speed < 0.0;
     match if slowing { decel } else { accel } {
-        Some(a) => speed + (target - speed).clamp(-a * dt, a * dt),
+        Some(a) => approach(speed, target, a * dt),
         None => target,
     }
 }

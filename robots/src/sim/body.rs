@@ -141,7 +141,7 @@ impl Move {
     }
 }
 
-fn approach(current: f64, target: f64, step: f64) -> f64 {
+pub(crate) fn approach(current: f64, target: f64, step: f64) -> f64 {
     current + (target - current).clamp(-step, step)
 }
 

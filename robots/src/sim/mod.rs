@@ -15,6 +15,7 @@ pub mod render;
 mod sonar;
 mod world;
 
+pub(crate) use body::approach;
 pub use body::{integrate, MotionProfile, OdometryErrors, StartPose};
 pub use camera::{descriptor_from, SimCameraConfig};
 pub use sonar::{Sonar, SonarConfig};

@@ -11,6 +11,7 @@
 //! noise comes from a hash of the seed, the frame and the pixel, so the
 //! same seed gives the same images.
 
+use super::camera::splitmix as mix;
 use super::geometry::Segment;
 use super::world::{Anchor, Side, World};
 use image::GrayImage;
@@ -85,14 +86,6 @@ struct Wall {
     /// Stretches along the wall (m from its first end) with nothing on them.
     featureless: Vec<(f64, f64)>,
     posters: Vec<Poster>,
-}
-
-/// SplitMix64, the hash behind textures and noise.
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 /// A uniform number in [0, 1) from a hash.
@@ -204,6 +197,9 @@ impl Renderer {
         let ceiling = self.config.wall_height_m;
         let mut image = GrayImage::new(w, h);
         let noise_key = mix(self.seed ^ mix(image_key));
+        // The posters a column crosses, with the poster cell column it sees:
+        // found once per column, not per pixel.
+        let mut across: Vec<(&Poster, usize)> = Vec::new();
         for px in 0..w {
             let lateral = (f64::from(px) + 0.5 - cx) / f;
             // Per unit of depth along the optical axis.
@@ -214,11 +210,14 @@ impl Renderer {
                 .enumerate()
                 .filter_map(|(i, wall)| wall.segment.ray_hit_at(eye, dir).map(|(t, share)| (t, share, i)))
                 .min_by(|a, b| a.0.total_cmp(&b.0));
+            let column = hit.map(|(depth, share, i)| (depth, i, self.wall_column(i, share, &mut across)));
             for py in 0..h {
                 let down = (f64::from(py) + 0.5 - cy) / f;
-                let grey = match hit {
-                    Some((depth, share, i)) if (0.0..=ceiling).contains(&(eye_height - down * depth)) => {
-                        self.wall_grey(i, share, eye_height - down * depth)
+                let grey = match column {
+                    Some((depth, i, (along, featureless)))
+                        if (0.0..=ceiling).contains(&(eye_height - down * depth)) =>
+                    {
+                        self.wall_grey(i, along, featureless, &across, eye_height - down * depth)
                     }
                     _ if down > 0.0 => {
                         let depth = eye_height / down;
@@ -241,16 +240,31 @@ impl Renderer {
         image
     }
 
-    /// The grey of wall `i` at `share` of its length and `height` metres.
-    fn wall_grey(&self, i: usize, share: f64, height: f64) -> f64 {
+    /// What a column sees of wall `i` at `share` of its length: how far
+    /// along it is, whether that stretch is featureless, and (into
+    /// `across`) the posters it crosses with the cell column of each.
+    fn wall_column<'a>(&'a self, i: usize, share: f64, across: &mut Vec<(&'a Poster, usize)>) -> (f64, bool) {
         let wall = &self.walls[i];
         let along = share * wall.length;
-        let half = self.config.poster_m / 2.0;
-        for poster in &wall.posters {
-            let (a, b) = (along - (poster.along - half), (poster.height + half) - height);
-            if (0.0..self.config.poster_m).contains(&a) && (0.0..self.config.poster_m).contains(&b) {
-                let cells = POSTER_CELLS as f64 / self.config.poster_m;
-                let (col, row) = ((a * cells) as usize, (b * cells) as usize);
+        let size = self.config.poster_m;
+        let cells = POSTER_CELLS as f64 / size;
+        across.clear();
+        across.extend(wall.posters.iter().filter_map(|poster| {
+            let a = along - (poster.along - size / 2.0);
+            (0.0..size).contains(&a).then_some((poster, (a * cells) as usize))
+        }));
+        (along, wall.featureless.iter().any(|&(from, to)| (from..=to).contains(&along)))
+    }
+
+    /// The grey of wall `i` at `along` metres and `height` metres, given
+    /// what [`Renderer::wall_column`] found for the column.
+    fn wall_grey(&self, i: usize, along: f64, featureless: bool, across: &[(&Poster, usize)], height: f64) -> f64 {
+        let size = self.config.poster_m;
+        let cells = POSTER_CELLS as f64 / size;
+        for &(poster, col) in across {
+            let b = (poster.height + size / 2.0) - height;
+            if (0.0..size).contains(&b) {
+                let row = (b * cells) as usize;
                 if col == 0 || row == 0 || col >= POSTER_CELLS - 1 || row >= POSTER_CELLS - 1 {
                     return INK;
                 }
@@ -258,7 +272,7 @@ impl Renderer {
                 return if poster.pattern >> bit & 1 == 1 { PAPER } else { INK };
             }
         }
-        if wall.featureless.iter().any(|&(from, to)| (from..=to).contains(&along)) {
+        if featureless {
             return 160.0;
         }
         150.0 + 10.0 * value_noise(10 + i as u64, along, height, 0.9)
