@@ -746,5 +746,14 @@ fn print_summary(s: &RunReport) {
     println!("collisions      {}", s.collisions);
     println!("true pose       {}", pose_text(&s.final_true_pose));
     println!("estimated pose  {}", pose_text(&s.final_estimated_pose));
+    if let (Some(error), Some(steps), Some(failures)) = (s.endpoint_error_m, s.egomotion_steps, s.egomotion_failures) {
+        println!("egomotion       end-point error {error:.2} m; {steps} steps, {failures} failed");
+        println!(
+            "outages         {} ({:.1} s, {:.2} m driven on odometry)",
+            s.outages.unwrap_or(0),
+            s.outage_s.unwrap_or(0.0),
+            s.outage_m.unwrap_or(0.0)
+        );
+    }
     println!("wall time       {:.3} s", s.wall_time_s);
 }

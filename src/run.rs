@@ -52,7 +52,15 @@ pub struct RunReport {
     pub egomotion_steps: Option<u32>,
     /// Egomotion steps that failed for want of usable landmarks.
     pub egomotion_failures: Option<u32>,
-    /// |true stop − egomotion stop|, m (thesis §4.4.3).
+    /// Egomotion outages: stretches of frames no keyframe matched, bridged
+    /// by odometry.
+    pub outages: Option<u32>,
+    /// Seconds spent in outages.
+    pub outage_s: Option<f64>,
+    /// Metres driven across outages.
+    pub outage_m: Option<f64>,
+    /// |true stop − egomotion stop|, m (thesis §4.4.3), both taken at the
+    /// last stereo frame: the estimate is only as new as the frame.
     pub endpoint_error_m: Option<f64>,
     /// The end-point error as a share of the distance driven, %.
     pub endpoint_error_pct: Option<f64>,
@@ -117,6 +125,10 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let mut estimated_path = Vec::new();
     let mut decisions = Vec::new();
     let mut last_winner = None;
+    // The true pose when the newest stereo frame was taken, to compare the
+    // egomotion estimate made from that frame with.
+    let mut truth_at_frame = None;
+    let mut frame_number = 0;
 
     let max_ticks = scenario.max_ticks();
     let mut end = EndReason::TimeLimit;
@@ -128,6 +140,10 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         }
         let sim = controller.robot().inner();
         let (truth, odometry) = (sim.true_pose(), sim.odometry_pose());
+        if controller.state().stereo.number != frame_number {
+            frame_number = controller.state().stereo.number;
+            truth_at_frame = Some(truth);
+        }
         if let Some((writer, path)) = &mut trajectory {
             if let Err(e) = writer.write(
                 controller.last_record(),
@@ -167,7 +183,8 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let robot = controller.robot().inner();
     let (truth, estimate) = (robot.true_pose(), robot.odometry_pose());
     let egomotion = controller.robot().tracker().map(|t| t.state());
-    let endpoint_error = egomotion.and_then(|e| e.pose).map(|p| truth.distance_to(p.x, p.y));
+    let endpoint_error =
+        egomotion.and_then(|e| e.pose).zip(truth_at_frame).map(|(p, truth)| truth.distance_to(p.x, p.y));
     let distance = robot.distance_travelled();
     let start = scenario.robot.start.pose();
     let straight = scenario.goal.map(|g| start.distance_to(g.x, g.y)).filter(|d| *d > 0.0);
@@ -186,6 +203,9 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         journey_cv: egomotion.map(|e| e.journey_cv),
         egomotion_steps: egomotion.map(|e| e.steps),
         egomotion_failures: egomotion.map(|e| e.failures),
+        outages: egomotion.map(|e| e.outages),
+        outage_s: egomotion.map(|e| e.outage_s),
+        outage_m: egomotion.map(|e| e.outage_m),
         endpoint_error_m: endpoint_error,
         endpoint_error_pct: endpoint_error.filter(|_| distance > 0.0).map(|e| 100.0 * e / distance),
         path_overhead_pct: straight.map(|s| 100.0 * (distance / s - 1.0)),

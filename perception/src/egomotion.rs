@@ -26,7 +26,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
+use ubf_core::{angle_difference, Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
 
 /// A planar motion of the robot between two frames, in the earlier frame's
 /// robot frame.
@@ -221,23 +221,58 @@ pub struct EgomotionConfig {
     /// Descriptor matching between frames.
     #[serde(default)]
     pub matching: MatchConfig,
-    /// After a failed step the last good frame stays the reference, so the
-    /// next good frame recovers the whole motion since; after this long
-    /// without success the reference is given up and that motion is lost, s.
-    #[serde(default = "EgomotionConfig::default_max_gap", deserialize_with = "positive")]
-    pub max_gap_s: f64,
+    /// Reference frames (keyframes) kept from distinct viewpoints, each a
+    /// frame new ones can be matched against.
+    #[serde(default = "EgomotionConfig::default_keyframes", deserialize_with = "at_least_one")]
+    pub keyframes: usize,
+    /// A frame becomes a keyframe when the robot is at least this far from
+    /// every keyframe, m…
+    #[serde(default = "EgomotionConfig::default_keyframe_spacing_m", deserialize_with = "positive")]
+    pub keyframe_spacing_m: f64,
+    /// …or turned at least this far from every keyframe's heading, °.
+    #[serde(default = "EgomotionConfig::default_keyframe_spacing_deg", deserialize_with = "positive")]
+    pub keyframe_spacing_deg: f64,
+    /// A keyframe is retired once the robot has driven this far from it:
+    /// little of what it saw is still in view, m.
+    #[serde(default = "EgomotionConfig::default_keyframe_range_m", deserialize_with = "positive")]
+    pub keyframe_range_m: f64,
+    /// A match to a keyframe is trusted outright with at least this many
+    /// consistent landmarks; with fewer (but enough for the estimator) the
+    /// next keyframe is tried and the best match kept.
+    #[serde(default = "EgomotionConfig::default_good_match", deserialize_with = "at_least_one")]
+    pub good_match_landmarks: usize,
     /// The robot's top speed: motions faster than this are impossible and
     /// rejected (thesis §4.4.6), m/s.
     #[serde(default = "EgomotionConfig::default_max_speed", deserialize_with = "positive")]
     pub max_speed: f64,
 }
 
+fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
+    let n = usize::deserialize(deserializer)?;
+    if n == 0 {
+        return Err(serde::de::Error::custom("must be at least 1"));
+    }
+    Ok(n)
+}
+
 impl EgomotionConfig {
     fn default_max_speed() -> f64 {
         0.6
     }
-    fn default_max_gap() -> f64 {
-        3.0
+    fn default_keyframes() -> usize {
+        10
+    }
+    fn default_keyframe_spacing_m() -> f64 {
+        1.0
+    }
+    fn default_keyframe_spacing_deg() -> f64 {
+        15.0
+    }
+    fn default_keyframe_range_m() -> f64 {
+        10.0
+    }
+    fn default_good_match() -> usize {
+        6
     }
 }
 
@@ -247,7 +282,11 @@ impl Default for EgomotionConfig {
             estimator: EstimatorKind::default(),
             model: ErrorModelKind::default(),
             matching: MatchConfig::default(),
-            max_gap_s: Self::default_max_gap(),
+            keyframes: Self::default_keyframes(),
+            keyframe_spacing_m: Self::default_keyframe_spacing_m(),
+            keyframe_spacing_deg: Self::default_keyframe_spacing_deg(),
+            keyframe_range_m: Self::default_keyframe_range_m(),
+            good_match_landmarks: Self::default_good_match(),
             max_speed: Self::default_max_speed(),
         }
     }
@@ -265,9 +304,10 @@ struct Pair {
 pub struct Simple2d;
 
 impl Simple2d {
-    /// The motion the pairs vote for, or `None` when no landmark gives a
-    /// usable vote. `max_step` is the longest translation possible.
-    fn estimate(config: &Simple2dConfig, pairs: &[Pair], max_step: f64) -> Option<PlanarMotion> {
+    /// The motion the pairs vote for and how many voted for it, or `None`
+    /// when no landmark gives a usable vote. `max_step` is the longest
+    /// translation possible.
+    fn estimate(config: &Simple2dConfig, pairs: &[Pair], max_step: f64) -> Option<(PlanarMotion, usize)> {
         let mut translation: Vec<(f64, f64)> = Vec::new();
         let mut rotation: Vec<(f64, f64)> = Vec::new();
         let mut stationary: Vec<f64> = Vec::new();
@@ -302,12 +342,14 @@ impl Simple2d {
             .enumerate()
             .filter_map(|(i, cv)| cv.map(|cv| (i, cv)))
             .min_by(|a, b| a.1.total_cmp(&b.1))?;
-        Some(match winner {
+        let voters = [translation.len(), rotation.len(), stationary.len()][winner];
+        let motion = match winner {
             0 => PlanarMotion { forward: config.tc * weighted_mean(translation)?, ..PlanarMotion::default() },
             // Eq. 59: the heading changes by minus the bearing change.
             1 => PlanarMotion { yaw: -config.rc * weighted_mean(rotation)?, ..PlanarMotion::default() },
             _ => PlanarMotion::default(),
-        })
+        };
+        Some((motion, voters))
     }
 }
 
@@ -396,7 +438,7 @@ impl Rigid {
         pairs: &[Pair],
         max_step: f64,
         rng: &mut ChaCha8Rng,
-    ) -> Option<PlanarMotion> {
+    ) -> Option<(PlanarMotion, usize)> {
         if pairs.len() < 3 {
             return None;
         }
@@ -429,24 +471,64 @@ impl Rigid {
         let (yaw, t) = kabsch(&chosen, &weights)?;
         let (yaw, t) = Self::refine(&chosen, &chosen_info, yaw, t);
         let motion = PlanarMotion { forward: t[0], left: t[1], yaw };
-        (motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()).then_some(motion)
+        (motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()).then_some((motion, inliers.len()))
     }
 }
 
-/// Integrates egomotion over a run: one step per new stereo frame.
+/// A reference frame new frames are matched against.
+#[derive(Clone, Debug)]
+struct Keyframe {
+    landmarks: Vec<LandmarkObservation>,
+    time: f64,
+    /// Egomotion's pose of the robot when it was taken.
+    pose: Pose2,
+    /// The odometric pose then: how far the robot has since driven and
+    /// turned, to keep keyframes apart and retire them.
+    odometry: Pose2,
+    /// How its pose was reached: odometry bridges, then visual estimates,
+    /// chained since the start. Fewer of each means a better anchor.
+    lineage: (u32, u32),
+}
+
+/// Integrates egomotion over a run: each new stereo frame is matched against
+/// a bank of keyframes taken from distinct viewpoints.
+///
+/// With the rigid estimator, the keyframe tried first is the one whose pose
+/// rests on the fewest chained estimates (then the oldest): driving straight, a frame is matched
+/// to a keyframe metres back instead of to the frame before it, so a far
+/// landmark's depth error does not enter step after step; after a physical
+/// scan, the frame at the chosen heading is matched to the keyframe taken
+/// before the sweep, so the sweep costs one rotation estimate. A keyframe is
+/// retired once the robot has driven `keyframe_range_m` from it (or, with
+/// the bank full, the farthest one makes room), never for elapsed time: a
+/// person standing in front of the camera for a minute loses nothing.
+///
+/// When no keyframe matches, the pose is carried across by odometry and the
+/// stretch is counted as an outage (its duration and distance are in the
+/// state). A later frame that matches a keyframe from before the outage
+/// replaces the odometry bridge with a visual estimate.
 pub struct Tracker {
     config: EgomotionConfig,
     camera: StereoCamera,
     table: CvTable,
     rng: ChaCha8Rng,
-    previous: Vec<LandmarkObservation>,
-    /// The reference frame's number, time and odometric pose.
-    previous_frame: Option<(u64, f64, Pose2)>,
-    /// The number of the newest frame taken in.
-    newest: u64,
+    keyframes: Vec<Keyframe>,
+    /// The newest frame taken in: its number, and the odometric pose then.
+    newest: (u64, Pose2),
+    /// When the latest frame matched (or the first was taken), s.
+    last_match: f64,
+    /// When the current outage began, if one is under way.
+    outage_since: Option<f64>,
     state: EgomotionState,
     matches: Vec<(usize, usize)>,
     pairs: Vec<Pair>,
+}
+
+/// The result of matching a frame against one keyframe.
+struct Estimate {
+    motion: PlanarMotion,
+    landmarks: usize,
+    step_cv: Option<f64>,
 }
 
 impl Tracker {
@@ -459,9 +541,10 @@ impl Tracker {
             camera,
             table,
             rng: ChaCha8Rng::seed_from_u64(seed),
-            previous: Vec::new(),
-            previous_frame: None,
-            newest: 0,
+            keyframes: Vec::new(),
+            newest: (0, Pose2::default()),
+            last_match: 0.0,
+            outage_since: None,
             state: EgomotionState { pose: Some(start), ..EgomotionState::default() },
             matches: Vec::new(),
             pairs: Vec::new(),
@@ -478,43 +561,150 @@ impl Tracker {
         &self.table
     }
 
-    /// Takes in `frame` if it is new: matches it to the reference frame,
-    /// estimates the motion and integrates it. A step without a usable
-    /// estimate is a failure: the pose stays put and the reference frame is
-    /// kept, so the next good frame recovers the motion across the gap; a
-    /// reference older than `max_gap_s` is given up (pure egomotion takes no
-    /// help from odometry, so that motion is lost).
+    /// Keyframes in the bank now.
+    pub fn keyframes(&self) -> usize {
+        self.keyframes.len()
+    }
+
+    /// Takes in `frame` if it is new: matches it against the keyframes,
+    /// best anchored first, and sets the pose from the first good match. A
+    /// frame no keyframe matches is a failure: the pose is carried on by
+    /// odometry and an outage is counted.
     ///
-    /// `odometry` is the robot's odometric pose when the frame was taken; it
-    /// only measures how far each step drove, to weigh the step's CV in the
-    /// journey CV (eq. 7 per metre), never the motion itself.
+    /// `odometry` is the robot's odometric pose when the frame was taken. It
+    /// measures how far each step drove (to weigh the step's CV in the
+    /// journey CV, eq. 7 per metre), keeps keyframes apart, and bridges
+    /// outages; it never enters a visual estimate.
     pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
-        if frame.number == 0 || frame.number == self.newest {
+        if frame.number == 0 || frame.number == self.newest.0 {
             return;
         }
-        self.newest = frame.number;
-        let succeeded = match self.previous_frame {
-            Some((_, before, from)) => {
-                let driven = from.distance_to(odometry.x, odometry.y);
-                self.step(&frame.landmarks, (frame.time - before).max(1e-6), driven)
+        let previous_odometry = std::mem::replace(&mut self.newest, (frame.number, *odometry)).1;
+        let Some(pose) = self.state.pose else { return };
+        if self.keyframes.is_empty() {
+            self.last_match = frame.time;
+            self.add_keyframe(frame, pose, *odometry, (0, 0));
+            return;
+        }
+        self.keyframes.retain(|k| k.odometry.distance_to(odometry.x, odometry.y) <= self.config.keyframe_range_m);
+        let driven = previous_odometry.distance_to(odometry.x, odometry.y);
+        self.state.steps += 1;
+        match self.best_estimate(frame, odometry) {
+            Some((anchor, estimate)) => {
+                let keyframe = &self.keyframes[anchor];
+                let pose = keyframe.pose.compose(&estimate.motion.as_pose());
+                let lineage = (keyframe.lineage.0, keyframe.lineage.1 + 1);
+                self.state.pose = Some(pose);
+                self.state.last_step_cv = estimate.step_cv;
+                self.state.journey_cv += estimate.step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
+                self.state.bridging = false;
+                self.last_match = frame.time;
+                if let Some(since) = self.outage_since.take() {
+                    self.state.outage_s += frame.time - since;
+                }
+                if self.frame_to_frame() || self.distinct(odometry) {
+                    self.add_keyframe(frame, pose, *odometry, lineage);
+                }
             }
-            None => true,
-        };
-        let stale = self.previous_frame.is_some_and(|(_, t, _)| frame.time - t > self.config.max_gap_s);
-        if succeeded || stale {
-            self.previous.clone_from(&frame.landmarks);
-            self.previous_frame = Some((frame.number, frame.time, *odometry));
+            None => {
+                // Carry the pose on by what odometry says the robot did
+                // since the last frame, and say so.
+                let pose = pose.compose(&odometry.relative_to(&previous_odometry));
+                self.state.pose = Some(pose);
+                self.state.failures += 1;
+                self.state.last_step_cv = None;
+                self.state.bridging = true;
+                self.state.outage_m += driven;
+                if self.outage_since.is_none() {
+                    self.outage_since = Some(self.last_match);
+                    self.state.outages += 1;
+                }
+                // A frame nothing matches, from a new viewpoint, anchors the
+                // frames after it (through the odometry bridge) once the old
+                // keyframes are out of sight.
+                if frame.landmarks.len() >= 3 && self.distinct(odometry) {
+                    let lineage = self.keyframes.iter().map(|k| k.lineage).min().unwrap_or_default();
+                    self.add_keyframe(frame, pose, *odometry, (lineage.0 + 1, 0));
+                }
+            }
         }
     }
 
-    /// One step from the reference frame to `current`, over which the robot
-    /// drove `driven` metres; whether it succeeded.
-    fn step(&mut self, current: &[LandmarkObservation], dt: f64, driven: f64) -> bool {
-        match_frames(&self.previous, current, &self.config.matching, &mut self.matches);
+    /// Whether the estimator must work frame to frame: the simplified one
+    /// reads each step as either a turn or a translation (thesis §4.4.7), so
+    /// it is given the newest keyframe first and every matched frame becomes
+    /// one; the bank still bridges failed frames without losing motion.
+    fn frame_to_frame(&self) -> bool {
+        matches!(self.config.estimator, EstimatorKind::Simple2d(_))
+    }
+
+    /// Whether a frame taken at `odometry` is far enough from every
+    /// keyframe, in position or heading, to be one.
+    fn distinct(&self, odometry: &Pose2) -> bool {
+        let (spacing, turn) = (self.config.keyframe_spacing_m, self.config.keyframe_spacing_deg.to_radians());
+        self.keyframes.iter().all(|k| {
+            k.odometry.distance_to(odometry.x, odometry.y) >= spacing
+                || angle_difference(odometry.theta, k.odometry.theta).abs() >= turn
+        })
+    }
+
+    fn add_keyframe(&mut self, frame: &StereoFrame, pose: Pose2, odometry: Pose2, lineage: (u32, u32)) {
+        if self.keyframes.len() >= self.config.keyframes {
+            // Make room by retiring the keyframe farthest from here.
+            let farthest = self
+                .keyframes
+                .iter()
+                .enumerate()
+                .max_by(|a, b| {
+                    let d = |k: &Keyframe| k.odometry.distance_to(odometry.x, odometry.y);
+                    d(a.1).total_cmp(&d(b.1))
+                })
+                .map(|(i, _)| i);
+            if let Some(i) = farthest {
+                self.keyframes.remove(i);
+            }
+        }
+        self.keyframes.push(Keyframe { landmarks: frame.landmarks.clone(), time: frame.time, pose, odometry, lineage });
+    }
+
+    /// The first good match against the keyframes, best anchored first,
+    /// skipping those facing too far away to share the view; failing a good
+    /// one, the match with the most landmarks.
+    fn best_estimate(&mut self, frame: &StereoFrame, odometry: &Pose2) -> Option<(usize, Estimate)> {
+        let fov = self.camera.horizontal_fov();
+        let mut order: Vec<usize> = (0..self.keyframes.len())
+            .filter(|&i| angle_difference(odometry.theta, self.keyframes[i].odometry.theta).abs() < fov)
+            .collect();
+        if self.frame_to_frame() {
+            order.sort_by(|&a, &b| self.keyframes[b].time.total_cmp(&self.keyframes[a].time));
+        } else {
+            order.sort_by(|&a, &b| {
+                let (ka, kb) = (&self.keyframes[a], &self.keyframes[b]);
+                ka.lineage.cmp(&kb.lineage).then(ka.time.total_cmp(&kb.time))
+            });
+        }
+        let mut best: Option<(usize, Estimate)> = None;
+        for i in order {
+            let Some(estimate) = self.estimate_from(i, frame) else { continue };
+            if estimate.landmarks >= self.config.good_match_landmarks {
+                return Some((i, estimate));
+            }
+            if best.as_ref().is_none_or(|(_, b)| estimate.landmarks > b.landmarks) {
+                best = Some((i, estimate));
+            }
+        }
+        best
+    }
+
+    /// The motion from keyframe `index` to `frame`, if the estimator finds
+    /// one.
+    fn estimate_from(&mut self, index: usize, frame: &StereoFrame) -> Option<Estimate> {
+        let keyframe = &self.keyframes[index];
+        match_frames(&keyframe.landmarks, &frame.landmarks, &self.config.matching, &mut self.matches);
         let mount = self.camera.mount;
         self.pairs.clear();
         for &(i, j) in &self.matches {
-            let (before, after) = (self.previous[i].point_cam, current[j].point_cam);
+            let (before, after) = (keyframe.landmarks[i].point_cam, frame.landmarks[j].point_cam);
             let cv = self.table.cv(after[0], after[1]);
             self.pairs.push(match self.config.estimator {
                 EstimatorKind::Simple2d(_) => Pair { before, after, cv },
@@ -524,26 +714,13 @@ impl Tracker {
                 }
             });
         }
+        let dt = (frame.time - keyframe.time).max(1e-6);
         let max_step = self.config.max_speed * dt * 1.5 + 0.02;
-        let estimate = match &self.config.estimator {
+        let (motion, landmarks) = match &self.config.estimator {
             EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.pairs, max_step),
             EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng),
-        };
-        self.state.steps += 1;
-        match estimate {
-            Some(motion) => {
-                let step_cv = fuse_cv(self.pairs.iter().map(|p| p.cv));
-                self.state.last_step_cv = step_cv;
-                self.state.journey_cv += step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
-                self.state.pose = self.state.pose.map(|p| p.compose(&motion.as_pose()));
-                true
-            }
-            None => {
-                self.state.failures += 1;
-                self.state.last_step_cv = None;
-                false
-            }
-        }
+        }?;
+        Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)) })
     }
 }
 
@@ -695,6 +872,110 @@ mod tests {
         let seen = frame(&landmarks(), Pose2::new(0.75, 0.0, 0.0), &camera);
         tracker.update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None }, &Pose2::default());
         assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
+    }
+
+    /// `frame`, with every point moved by a fixed pseudo-random offset of
+    /// up to `size` m per axis: noise that is the same for two trackers.
+    fn disturbed(mut observations: Vec<LandmarkObservation>, seed: u64, size: f64) -> Vec<LandmarkObservation> {
+        for o in &mut observations {
+            let h = (o.source_id.unwrap_or(0) as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ seed;
+            for (k, v) in o.point_cam.iter_mut().enumerate() {
+                let bits = h.rotate_left(13 * k as u32 + 7) >> 11;
+                *v += size * (bits as f64 / (1u64 << 53) as f64 - 0.5);
+            }
+        }
+        observations
+    }
+
+    fn at(number: u64, time: f64, landmarks: Vec<LandmarkObservation>) -> StereoFrame {
+        StereoFrame { number, time, landmarks, calibration: None }
+    }
+
+    #[test]
+    fn a_long_blackout_loses_no_motion_and_is_counted() {
+        // Something covers the camera for 30 s while the robot drives 2 m
+        // and turns; odometry, which bridges the gap, is 10 % short. The
+        // first frame after it matches a keyframe from before it, so the
+        // visual estimate replaces the bridge.
+        let camera = StereoCamera::default();
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+        let start = Pose2::default();
+        tracker.update(&at(1, 0.0, frame(&landmarks(), start, &camera)), &start);
+        let end = Pose2::new(2.0, 0.1, 0.1);
+        for k in 0..60u32 {
+            let share = f64::from(k + 1) / 61.0;
+            let odometry = Pose2::new(0.9 * end.x * share, 0.9 * end.y * share, end.theta * share);
+            tracker.update(&at(u64::from(k) + 2, 0.5 * f64::from(k + 1), Vec::new()), &odometry);
+            assert!(tracker.state().bridging);
+        }
+        let s = tracker.state();
+        assert_eq!((s.outages, s.failures), (1, 60));
+        assert!((s.outage_m - 0.9 * end.x.hypot(end.y) * 60.0 / 61.0).abs() < 1e-9, "{s:?}");
+        // On odometry the pose is 10 % short…
+        assert!((s.pose.unwrap().x - 0.9 * end.x * 60.0 / 61.0).abs() < 1e-9);
+        // …until the camera sees again.
+        tracker.update(&at(62, 30.5, frame(&landmarks(), end, &camera)), &Pose2::new(0.9 * end.x, 0.9 * end.y, 0.1));
+        let s = tracker.state();
+        let pose = s.pose.unwrap();
+        assert!(pose.distance_to(end.x, end.y) < 1e-6 && (pose.theta - end.theta).abs() < 1e-6, "{pose:?}");
+        assert!(!s.bridging);
+        assert_eq!(s.outages, 1);
+        assert!((s.outage_s - 30.5).abs() < 1e-9, "from the last match to the next: {}", s.outage_s);
+    }
+
+    #[test]
+    fn a_scan_and_back_costs_one_estimate() {
+        // The robot turns on the spot to +40°, to −40° and back to 0°,
+        // 10° a frame; the noise is the same in every frame of a pose. The
+        // last frame is matched against the keyframe from before the sweep,
+        // so its pose is the one a direct match of the two gives, and the
+        // sweep's own estimates leave no trace.
+        let camera = StereoCamera::default();
+        let wall: Vec<[f64; 3]> = (0..40)
+            .map(|i| {
+                let a = f64::from(i) * 9f64.to_radians();
+                [2.0 + 8.0 * a.cos(), 8.0 * a.sin(), 1.0]
+            })
+            .collect();
+        let seen = |pose: Pose2, k: u64| disturbed(frame(&wall, pose, &camera), k, 0.05);
+        let mut headings: Vec<f64> = (0..=4).chain((-4..4).rev()).chain(-3..=0).map(|d| f64::from(d) * 10.0).collect();
+        headings.dedup();
+        let mut sweeping = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 5);
+        for (n, h) in headings.iter().enumerate() {
+            let pose = Pose2::new(0.0, 0.0, h.to_radians());
+            sweeping.update(&at(n as u64 + 1, 0.5 * n as f64, seen(pose, h.to_bits())), &pose);
+        }
+        let end = Pose2::default();
+        let mut direct = Tracker::new(EgomotionConfig::default(), camera, end, 5);
+        direct.update(&at(1, 0.0, seen(end, 0f64.to_bits())), &end);
+        direct.update(&at(2, 0.5, seen(end, 0f64.to_bits())), &end);
+        let (a, b) = (sweeping.state().pose.unwrap(), direct.state().pose.unwrap());
+        assert!(a.distance_to(b.x, b.y) < 1e-9 && (a.theta - b.theta).abs() < 1e-9, "{a:?} vs {b:?}");
+        assert_eq!(sweeping.state().failures, 0);
+    }
+
+    #[test]
+    fn driving_straight_matches_keyframes_metres_back() {
+        // Chaining frame to frame adds every step's depth error; matching
+        // against the keyframe 8 m back gives the error of one estimate:
+        // exactly what a direct match of the first and last frames gives.
+        let camera = StereoCamera::default();
+        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
+        let seen = |k: u32| {
+            let pose = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+            disturbed(frame(&far, pose, &camera), u64::from(k), 0.1)
+        };
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
+        for k in 0..=32u32 {
+            let odometry = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+            tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen(k)), &odometry);
+        }
+        let mut direct = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
+        direct.update(&at(1, 0.0, seen(0)), &Pose2::default());
+        direct.update(&at(2, 16.0, seen(32)), &Pose2::default());
+        let (a, b) = (tracker.state().pose.unwrap(), direct.state().pose.unwrap());
+        assert!(a.distance_to(b.x, b.y) < 1e-9 && (a.theta - b.theta).abs() < 1e-9, "{a:?} vs {b:?}");
+        assert!(tracker.keyframes() > 1, "new keyframes are still taken as the robot moves on");
     }
 
     #[test]

@@ -47,6 +47,14 @@ impl Pose2 {
         let (x, y) = self.transform_point(other.x, other.y);
         Pose2::new(x, y, wrap_angle(self.theta + other.theta))
     }
+
+    /// The pose `p` with `from ∘ p = self`: this pose seen from `from`'s
+    /// frame (the motion from `from` to here).
+    pub fn relative_to(&self, from: &Pose2) -> Pose2 {
+        let (s, c) = from.theta.sin_cos();
+        let (dx, dy) = (self.x - from.x, self.y - from.y);
+        Pose2::new(c * dx + s * dy, -s * dx + c * dy, wrap_angle(self.theta - from.theta))
+    }
 }
 
 /// Wraps an angle to (−π, π].
@@ -80,6 +88,15 @@ mod tests {
         assert!((wrap_angle(3.0 * PI) - PI).abs() < 1e-12);
         assert!((wrap_angle(2.5 * PI) - 0.5 * PI).abs() < 1e-12);
         assert!((wrap_angle(-2.5 * PI) + 0.5 * PI).abs() < 1e-12);
+    }
+
+    #[test]
+    fn relative_to_undoes_compose() {
+        let from = Pose2::new(1.0, -2.0, 2.5);
+        let motion = Pose2::new(0.7, 0.3, -1.1);
+        let back = from.compose(&motion).relative_to(&from);
+        assert!((back.x - motion.x).abs() < 1e-12 && (back.y - motion.y).abs() < 1e-12);
+        assert!((back.theta - motion.theta).abs() < 1e-12);
     }
 
     #[test]

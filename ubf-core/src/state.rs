@@ -73,8 +73,17 @@ pub struct EgomotionState {
     pub journey_cv: f64,
     /// Frame-to-frame steps estimated.
     pub steps: u32,
-    /// Steps that failed for want of usable landmarks while the robot moved.
+    /// Steps that failed: no keyframe matched the frame.
     pub failures: u32,
+    /// Outages: stretches of failed frames, each bridged by odometry.
+    pub outages: u32,
+    /// Seconds spent in outages, from the last matched frame to the next.
+    pub outage_s: f64,
+    /// Metres driven (by odometry) across outages.
+    pub outage_m: f64,
+    /// The latest frame matched no keyframe: the pose is carried on by
+    /// odometry until one does.
+    pub bridging: bool,
 }
 
 /// Everything a behaviour may know this tick.
