@@ -6,7 +6,7 @@
 //! technique and the estimator under test; nothing else changes between the
 //! runs being compared.
 
-use crate::run::{run, RunReport};
+use crate::run::{run, EndReason, RunReport};
 use crate::scenario::Scenario;
 use crate::sweep::{run_parallel, stats, FieldStats};
 use serde::Serialize;
@@ -152,8 +152,15 @@ pub struct EndpointCell {
     pub egomotion_failures: FieldStats,
     /// Runs with at least one egomotion failure.
     pub runs_with_failures: usize,
-    /// Runs that did not reach the goal in time.
+    /// Runs whose true stop was outside the goal's tolerance (the robot
+    /// navigates on odometry, so it may believe it arrived when it has not).
     pub runs_not_finished: usize,
+    /// Runs that ended on the time limit instead of at the goal.
+    pub runs_time_limit: usize,
+    /// Egomotion outages per run (stretches bridged by odometry).
+    pub outages: FieldStats,
+    /// Metres driven on odometry across outages, per run.
+    pub outage_m: FieldStats,
     /// Journey CV.
     pub journey_cv: FieldStats,
     /// Path length over the straight line, %.
@@ -183,6 +190,9 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
         egomotion_failures: field(&|r| r.egomotion_failures.map(f64::from)),
         runs_with_failures: reports.iter().filter(|r| r.egomotion_failures.unwrap_or(0) > 0).count(),
         runs_not_finished: reports.iter().filter(|r| !r.reached_goal).count(),
+        runs_time_limit: reports.iter().filter(|r| r.end == EndReason::TimeLimit).count(),
+        outages: field(&|r| r.outages.map(f64::from)),
+        outage_m: field(&|r| r.outage_m),
         journey_cv: field(&|r| r.journey_cv),
         path_overhead_pct: field(&|r| r.path_overhead_pct),
         time_overhead_pct: field(&|r| r.time_overhead_pct),

@@ -6,31 +6,46 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
-use ubf_behaviors::decision::{best_heading, DecisionRules};
+use ubf_behaviors::decision::{best_heading, DecisionCosts, DecisionRules, KnownLandmark, Objective};
 use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
 
 fn decision(c: &mut Criterion) {
     let camera = StereoCamera::default();
     let table = CvTable::for_camera(ErrorModelKind::Geometric, &camera, MODEL_STEP_M, 80.0);
-    let rules =
-        DecisionRules { half_fov: camera.horizontal_fov() / 2.0, step_m: 1.0, min_slant_m: 0.5, max_range_m: 80.0 };
+    let rules = DecisionRules {
+        half_fov: camera.horizontal_fov() / 2.0,
+        step_m: 1.0,
+        min_slant_m: 0.5,
+        max_range_m: 80.0,
+        baseline_m: camera.baseline_m,
+        min_stereo_range_m: 1.12,
+        max_viewpoint_change: 20f64.to_radians(),
+        min_landmarks: 4,
+    };
     // 1 000 landmarks on the walls and far end of a 6 m × 60 m corridor.
     let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let landmarks: Vec<(f64, f64)> = (0..1000)
-        .map(|_| match rng.random_range(0..3) {
-            0 => (rng.random_range(0.0..60.0), 3.0),
-            1 => (rng.random_range(0.0..60.0), -3.0),
-            _ => (60.0, rng.random_range(-3.0..3.0)),
+    // Each last seen from the robot's position.
+    let at = (10.0, 0.0);
+    let landmarks: Vec<KnownLandmark> = (0..1000)
+        .map(|_| {
+            let position = match rng.random_range(0..3) {
+                0 => (rng.random_range(0.0..60.0), 3.0),
+                1 => (rng.random_range(0.0..60.0), -3.0),
+                _ => (60.0, rng.random_range(-3.0..3.0)),
+            };
+            KnownLandmark { position, viewpoint: (position.1 - at.1).atan2(position.0 - at.0) }
         })
         .collect();
+    let objective =
+        Objective::EndPoint { heading: 0.1, goal_bearing: 0.0, remaining_m: 30.0, costs: DecisionCosts::default() };
     // 73 headings: ±90° every 2.5°.
     let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
     c.bench_function("decision/73_headings_1000_landmarks", |b| {
-        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, (10.0, 0.0), candidates.iter().copied())))
+        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, at, candidates.iter().copied(), &objective)))
     });
     c.bench_function("decision/indexing_only", |b| {
-        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, (10.0, 0.0), std::iter::empty())))
+        b.iter(|| black_box(best_heading(&table, &rules, &landmarks, at, std::iter::empty(), &objective)))
     });
 }
 

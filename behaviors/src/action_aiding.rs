@@ -2,7 +2,7 @@
 //! stereo egomotion is least uncertain.
 
 use crate::clearance::{echo_points, free_distance};
-use crate::decision::{best_heading, DecisionRules};
+use crate::decision::{best_heading, DecisionCosts, DecisionRules, KnownLandmark, Objective};
 use crate::tracking::{TrackingConfig, TrackingList};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -38,6 +38,20 @@ impl Technique {
             Technique::Tracking => "tracking",
         }
     }
+}
+
+/// What the evaluative techniques minimise when they choose a heading.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DecisionObjective {
+    /// The predicted end-point variance: the step's translation variance
+    /// plus the heading variance of the turn (now and back to the goal
+    /// bearing) times the remaining distance squared. Driving straight at
+    /// the goal is always a candidate, so it is chosen when nothing beats it.
+    #[default]
+    EndPoint,
+    /// The thesis's objective (§3.5.2.2): the step's fused CV alone, turns
+    /// free. For thesis-faithful runs.
+    Cv,
 }
 
 /// Settings of [`ActionAiding`], as written in a scenario file.
@@ -94,6 +108,21 @@ pub struct ActionAidingConfig {
     /// Half the width of that strip, m (the Powerbot's 0.34 m and a margin).
     #[serde(default = "ActionAidingConfig::default_half_width", deserialize_with = "positive")]
     pub path_half_width: f64,
+    /// What a heading is chosen to minimise.
+    #[serde(default)]
+    pub objective: DecisionObjective,
+    /// Egomotion's error coefficients, for the end-point objective.
+    #[serde(default)]
+    pub costs: DecisionCosts,
+    /// Landmarks a heading must keep in view: the estimator's minimum and a
+    /// margin (the rigid estimator needs three consistent ones).
+    #[serde(default = "ActionAidingConfig::default_min_landmarks")]
+    pub min_landmarks: usize,
+    /// Largest angle between the two cameras' lines of sight at a landmark
+    /// for stereo matching, ° (thesis §4.4.10.3); nearer landmarks are not
+    /// counted.
+    #[serde(default = "ActionAidingConfig::default_stereo_viewpoint", deserialize_with = "positive")]
+    pub max_stereo_viewpoint_deg: f64,
     /// The error model used to evaluate headings.
     #[serde(default)]
     pub model: ErrorModelKind,
@@ -156,6 +185,12 @@ impl ActionAidingConfig {
         // in both.
         20.0
     }
+    fn default_min_landmarks() -> usize {
+        4
+    }
+    fn default_stereo_viewpoint() -> f64 {
+        30.0
+    }
     fn default_vote_min() -> f64 {
         0.3
     }
@@ -184,6 +219,10 @@ impl ActionAidingConfig {
             heading_tolerance_deg: Self::default_tolerance(),
             turn_gain: Self::default_turn_gain(),
             max_turn_deg: Self::default_max_turn(),
+            objective: DecisionObjective::default(),
+            costs: DecisionCosts::default(),
+            min_landmarks: Self::default_min_landmarks(),
+            max_stereo_viewpoint_deg: Self::default_stereo_viewpoint(),
             model: ErrorModelKind::default(),
             tracking: TrackingConfig::default(),
             vote_min: Self::default_vote_min(),
@@ -198,8 +237,10 @@ enum Phase {
     /// Choose the next heading now.
     Decide,
     /// Physical scan: turning to the left edge, then the right edge of the
-    /// permitted headings (world angles), looking on the way.
-    Scan { edges: [f64; 2], leg: usize, centre: f64 },
+    /// permitted headings (world angles), looking on the way; `from` is the
+    /// heading before the sweep, which egomotion measures the chosen
+    /// heading against.
+    Scan { edges: [f64; 2], leg: usize, centre: f64, from: f64 },
     /// Turning on the spot to the chosen heading.
     Turn { heading: f64 },
     /// Driving one step along the heading.
@@ -224,7 +265,7 @@ pub struct ActionAiding {
     path: Option<((f64, f64), f64)>,
     zig_side: f64,
     zig_limit: f64,
-    positions: Vec<(f64, f64)>,
+    known: Vec<KnownLandmark>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
 }
@@ -244,7 +285,7 @@ impl ActionAiding {
             path: None,
             zig_side: 1.0,
             zig_limit: 0.0,
-            positions: Vec::new(),
+            known: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
         }
@@ -256,11 +297,16 @@ impl ActionAiding {
     }
 
     fn rules(&self, camera: &StereoCamera) -> DecisionRules {
+        let c = &self.config;
         DecisionRules {
             half_fov: camera.horizontal_fov() / 2.0,
-            step_m: self.config.step_m,
-            min_slant_m: self.config.min_slant_m,
-            max_range_m: self.config.max_range_m,
+            step_m: c.step_m,
+            min_slant_m: c.min_slant_m,
+            max_range_m: c.max_range_m,
+            baseline_m: camera.baseline_m,
+            min_stereo_range_m: camera.baseline_m / 2.0 / (c.max_stereo_viewpoint_deg.to_radians() / 2.0).tan(),
+            max_viewpoint_change: c.tracking.drop_viewpoint_deg.to_radians(),
+            min_landmarks: c.min_landmarks,
         }
     }
 
@@ -272,28 +318,39 @@ impl ActionAiding {
     }
 
     /// The permitted headings around `centre`, centre first so that ties
-    /// keep to the path: within the angle limits and clear of walls.
+    /// keep to the path: within the angle limits and clear of walls. The
+    /// centre (the goal's bearing) is always a candidate.
     fn candidates(&self, pose: &Pose2, centre: f64) -> Vec<f64> {
         let n = (self.config.max_angle_deg / self.config.angle_step_deg).floor() as i32;
         let step = self.config.angle_step_deg.to_radians();
         let mut out = vec![centre];
         for k in 1..=n {
-            out.push(centre + f64::from(k) * step);
-            out.push(centre - f64::from(k) * step);
+            for h in [centre + f64::from(k) * step, centre - f64::from(k) * step] {
+                if self.clear(pose, h) {
+                    out.push(h);
+                }
+            }
         }
-        out.retain(|&h| self.clear(pose, h));
         out
     }
 
-    /// Chooses the heading from `landmarks`; without a usable heading, the
-    /// goal's bearing.
-    fn evaluate(&mut self, pose: &Pose2, centre: f64) -> f64 {
+    /// Chooses the heading from the tracking list for a robot at `pose`
+    /// whose heading egomotion last fixed was `facing`; without a feasible
+    /// heading, the goal's bearing `centre`.
+    fn evaluate(&mut self, pose: &Pose2, facing: f64, centre: f64, remaining_m: f64) -> f64 {
         let Some((camera, table)) = &self.camera else { return centre };
-        self.positions.clear();
-        self.positions.extend(self.list.landmarks().iter().map(|l| l.position));
+        self.known.clear();
+        self.known
+            .extend(self.list.confirmed().map(|l| KnownLandmark { position: l.position, viewpoint: l.viewpoint }));
         let rules = self.rules(camera);
-        best_heading(table, &rules, &self.positions, (pose.x, pose.y), self.candidates(pose, centre))
-            .map_or(centre, |(h, _)| h)
+        let objective = match self.config.objective {
+            DecisionObjective::Cv => Objective::Cv,
+            DecisionObjective::EndPoint => {
+                Objective::EndPoint { heading: facing, goal_bearing: centre, remaining_m, costs: self.config.costs }
+            }
+        };
+        let candidates = self.candidates(pose, centre);
+        best_heading(table, &rules, &self.known, (pose.x, pose.y), candidates, &objective).map_or(centre, |d| d.heading)
     }
 
     fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {
@@ -371,31 +428,35 @@ impl Behavior for ActionAiding {
                         match self.config.technique {
                             Technique::None => to_goal,
                             Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
-                            Technique::Tracking => self.evaluate(&pose, to_goal),
+                            Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
                             Technique::Scan => {
                                 // Sweep the allowable headings: within the
                                 // angle limits and clear of walls.
                                 let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
                                 let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
                                 self.list.clear();
-                                self.phase =
-                                    Phase::Scan { edges: [to_goal + high, to_goal + low], leg: 0, centre: to_goal };
+                                self.phase = Phase::Scan {
+                                    edges: [to_goal + high, to_goal + low],
+                                    leg: 0,
+                                    centre: to_goal,
+                                    from: pose.theta,
+                                };
                                 continue;
                             }
                         }
                     };
                     self.phase = Phase::Turn { heading };
                 }
-                Phase::Scan { edges, leg, centre } => {
+                Phase::Scan { edges, leg, centre, from } => {
                     if angle_difference(edges[leg], pose.theta).abs() > self.config.heading_tolerance_deg.to_radians() {
                         let rate = self.config.scan_rate_deg.to_radians();
                         let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
                     if leg == 0 {
-                        self.phase = Phase::Scan { edges, leg: 1, centre };
+                        self.phase = Phase::Scan { edges, leg: 1, centre, from };
                     } else {
-                        let heading = self.evaluate(&pose, centre);
+                        let heading = self.evaluate(&pose, from, centre, distance);
                         self.phase = Phase::Turn { heading };
                     }
                 }

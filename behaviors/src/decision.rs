@@ -1,6 +1,10 @@
 //! The evaluative decision engine (thesis §3.5.2.2, eq. 38–48): which
-//! heading puts the known landmarks where egomotion is least uncertain.
+//! heading puts the known landmarks where egomotion is least uncertain, and
+//! whether turning to it is worth what the turn costs.
 
+use serde::Deserialize;
+use ubf_core::angle_difference;
+use ubf_core::config::non_negative;
 use ubf_perception::error_model::CvTable;
 
 /// What the engine needs to know of the camera and the rules.
@@ -15,6 +19,136 @@ pub struct DecisionRules {
     pub min_slant_m: f64,
     /// Landmarks farther than this are not seen, m.
     pub max_range_m: f64,
+    /// The distance between the cameras: a landmark counts only if it is
+    /// in both images, m.
+    pub baseline_m: f64,
+    /// Nearer than this, the two cameras see a landmark from too different
+    /// directions for their descriptors to match (thesis §4.4.10.3), m.
+    pub min_stereo_range_m: f64,
+    /// A landmark counts only if it would be seen from within this angle of
+    /// the direction it was last seen from (the tracking list's drop angle:
+    /// descriptors stop matching, and a wall poster turns edge-on), rad.
+    pub max_viewpoint_change: f64,
+    /// Fewer landmarks in view than this and egomotion would fail: the
+    /// heading is infeasible.
+    pub min_landmarks: usize,
+}
+
+/// A landmark the engine plans with: where it is, and from which world
+/// direction (robot to landmark) it was last seen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnownLandmark {
+    /// World position on the floor, m.
+    pub position: (f64, f64),
+    /// World direction from the robot to it when last seen, rad.
+    pub viewpoint: f64,
+}
+
+/// The error coefficients of egomotion the end-point objective weighs, both
+/// measured from run logs by `ubf model fit-costs`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecisionCosts {
+    /// Translation error σ of a step per unit of its fused CV and metre
+    /// driven, m.
+    #[serde(default = "DecisionCosts::default_step_sigma", deserialize_with = "non_negative")]
+    pub step_sigma_per_cv: f64,
+    /// Heading variance a turn leaves behind, per radian turned, rad².
+    #[serde(default = "DecisionCosts::default_heading_var", deserialize_with = "non_negative")]
+    pub heading_var_per_rad: f64,
+    /// Heading variance any turn leaves behind, however small, rad².
+    #[serde(default = "DecisionCosts::default_turn_var", deserialize_with = "non_negative")]
+    pub heading_var_per_turn: f64,
+}
+
+impl DecisionCosts {
+    fn default_step_sigma() -> f64 {
+        STEP_SIGMA_PER_CV
+    }
+    fn default_heading_var() -> f64 {
+        HEADING_VAR_PER_RAD
+    }
+    fn default_turn_var() -> f64 {
+        HEADING_VAR_PER_TURN
+    }
+
+    /// The predicted end-point variance of a step at `heading` whose landmarks
+    /// fuse to `cv`, for a robot now facing `now`, whose goal lies along
+    /// `goal_bearing`, `remaining_m` away: the step's own translation
+    /// variance, plus the heading variance of turning to the heading and
+    /// back to the goal bearing, carried over the remaining distance.
+    pub fn end_point_variance(&self, cv: f64, step_m: f64, turn: f64, remaining_m: f64) -> f64 {
+        let step = (self.step_sigma_per_cv * cv * step_m).powi(2);
+        let turned =
+            if turn > TURN_EPSILON { self.heading_var_per_turn + self.heading_var_per_rad * turn } else { 0.0 };
+        step + turned * remaining_m * remaining_m
+    }
+}
+
+/// Measured by `ubf model fit-costs` on the logs of
+/// `scripts/fit-costs.sh` (see `docs/results.md`).
+const STEP_SIGMA_PER_CV: f64 = 1.0;
+/// As above.
+const HEADING_VAR_PER_RAD: f64 = 1e-5;
+/// As above.
+const HEADING_VAR_PER_TURN: f64 = 0.0;
+/// Turns smaller than this are no turn, rad (a tenth of a degree).
+const TURN_EPSILON: f64 = 1.7e-3;
+
+impl Default for DecisionCosts {
+    fn default() -> Self {
+        DecisionCosts {
+            step_sigma_per_cv: STEP_SIGMA_PER_CV,
+            heading_var_per_rad: HEADING_VAR_PER_RAD,
+            heading_var_per_turn: HEADING_VAR_PER_TURN,
+        }
+    }
+}
+
+/// What the engine minimises.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Objective {
+    /// The thesis's objective: the step's fused CV alone (eq. 6).
+    Cv,
+    /// The predicted end-point variance: the step's translation variance
+    /// plus the heading variance of the turn it needs, now and back to the
+    /// goal bearing, times the remaining distance squared.
+    EndPoint {
+        /// The robot's heading now, rad.
+        heading: f64,
+        /// The bearing to the goal, rad.
+        goal_bearing: f64,
+        /// The distance still to go, m.
+        remaining_m: f64,
+        /// The error coefficients.
+        costs: DecisionCosts,
+    },
+}
+
+impl Objective {
+    /// The cost of `heading` whose step's landmarks fuse to `cv`.
+    fn cost(&self, heading: f64, cv: f64, step_m: f64) -> f64 {
+        match *self {
+            Objective::Cv => cv,
+            Objective::EndPoint { heading: now, goal_bearing, remaining_m, costs } => {
+                let turn = angle_difference(heading, now).abs() + angle_difference(goal_bearing, heading).abs();
+                costs.end_point_variance(cv, step_m, turn, remaining_m)
+            }
+        }
+    }
+}
+
+/// The engine's choice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Decision {
+    /// The heading, rad (world).
+    pub heading: f64,
+    /// Its fused CV over the landmarks predicted in view.
+    pub cv: f64,
+    /// The objective's value.
+    pub cost: f64,
+    /// Landmarks predicted in view.
+    pub landmarks: usize,
 }
 
 /// Bearing buckets over the full circle: one degree each.
@@ -28,12 +162,11 @@ const NEAR_STEPS: f64 = 4.0;
 const BANDS: usize = 4;
 
 /// The best heading among `candidates` (world angles) for a robot at
-/// `position` among `landmarks` (world floor positions): the one whose fused
-/// CV (eq. 6) over the landmarks in view after one projected step is least.
-/// A heading with no landmark in view (egomotion would fail) or one nearer
-/// than the slant limit is rejected. Ties go to the candidate listed first.
-/// Returns the heading and its fused CV, or `None` if every heading is
-/// rejected.
+/// `position` among `landmarks`: the one of least `objective` over the
+/// landmarks predicted in view after one projected step. A heading with
+/// fewer than `min_landmarks` in view (egomotion would fail) or with one
+/// nearer than the slant limit is rejected. Ties go to the candidate listed
+/// first. `None` if every heading is rejected.
 ///
 /// For speed, landmarks are sorted once by distance band and bearing, and
 /// each candidate reads, in each band, only the bearings its field of view
@@ -42,13 +175,12 @@ const BANDS: usize = 4;
 pub fn best_heading(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[KnownLandmark],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
-) -> Option<(f64, f64)> {
+    objective: &Objective,
+) -> Option<Decision> {
     use std::f64::consts::TAU;
-    let tan_half = rules.half_fov.tan();
-    let (min_slant2, max_range2) = (rules.min_slant_m.powi(2), rules.max_range_m.powi(2));
     let bucket_width = TAU / BUCKETS as f64;
     // For an angle in [0, 2π].
     let bucket_of = |angle: f64| ((angle / bucket_width) as usize).min(BUCKETS - 1);
@@ -74,8 +206,8 @@ pub fn best_heading(
     // A counting sort by key.
     let mut starts = vec![0usize; NEAR + 2];
     let mut keys = Vec::with_capacity(landmarks.len());
-    for &(lx, ly) in landmarks {
-        let key = key_of(lx - position.0, ly - position.1);
+    for l in landmarks {
+        let key = key_of(l.position.0 - position.0, l.position.1 - position.1);
         starts[key + 1] += 1;
         keys.push(key);
     }
@@ -83,9 +215,9 @@ pub fn best_heading(
         starts[k + 1] += starts[k];
     }
     let mut fill = starts.clone();
-    let mut sorted = vec![(0.0, 0.0); landmarks.len()];
-    for (&(lx, ly), &key) in landmarks.iter().zip(&keys) {
-        sorted[fill[key]] = (lx - position.0, ly - position.1);
+    let mut sorted = vec![Offset::default(); landmarks.len()];
+    for (l, &key) in landmarks.iter().zip(&keys) {
+        sorted[fill[key]] = Offset::new(l, position);
         fill[key] += 1;
     }
     let nearby = &sorted[starts[NEAR]..starts[NEAR + 1]];
@@ -97,18 +229,17 @@ pub fn best_heading(
         (reach / bucket_width).ceil() as usize + 2
     });
 
-    let mut best: Option<(f64, f64)> = None;
+    let mut best: Option<Decision> = None;
     for heading in candidates {
-        let (s, c) = heading.sin_cos();
         // Eq. 40–43: the robot projected one step ahead along the heading.
-        let view = View { sin: s, cos: c, step: rules.step_m, tan_half, min_slant2, max_range2 };
+        let view = View::new(rules, heading);
         let centre = bucket_of(heading.rem_euclid(TAU));
-        let mut information = view.information(table, nearby);
+        let mut seen = view.information(table, nearby);
         for (band, &span) in spans.iter().enumerate() {
-            let Some(sum) = information else { break };
+            let Some(sum) = seen else { break };
             let within = |from: usize, to: usize| &sorted[starts[band * BUCKETS + from]..starts[band * BUCKETS + to]];
             // The window is one run of the band, or two where it wraps.
-            let runs: [&[(f64, f64)]; 2] = if 2 * span + 1 >= BUCKETS {
+            let runs: [&[Offset]; 2] = if 2 * span + 1 >= BUCKETS {
                 [within(0, BUCKETS), &[]]
             } else {
                 let (lo, hi) = ((centre + BUCKETS - span) % BUCKETS, (centre + span) % BUCKETS);
@@ -118,16 +249,27 @@ pub fn best_heading(
                     [within(lo, BUCKETS), within(0, hi + 1)]
                 }
             };
-            information = runs.iter().try_fold(sum, |sum, run| Some(sum + view.information(table, run)?));
+            seen = runs.iter().try_fold(sum, |sum, run| Some(sum.add(view.information(table, run)?)));
         }
-        if let Some(information) = information.filter(|i| *i > 0.0) {
-            let cv = 1.0 / information;
-            if best.is_none_or(|(_, b)| cv < b) {
-                best = Some((heading, cv));
-            }
-        }
+        consider(&mut best, rules, objective, heading, seen);
     }
     best
+}
+
+/// Keeps `heading` in `best` if its view is feasible and cheaper.
+fn consider(
+    best: &mut Option<Decision>,
+    rules: &DecisionRules,
+    objective: &Objective,
+    heading: f64,
+    seen: Option<Seen>,
+) {
+    let Some(seen) = seen.filter(|s| s.count >= rules.min_landmarks.max(1) && s.information > 0.0) else { return };
+    let cv = 1.0 / seen.information;
+    let cost = objective.cost(heading, cv, rules.step_m);
+    if best.is_none_or(|b| cost < b.cost) {
+        *best = Some(Decision { heading, cv, cost, landmarks: seen.count });
+    }
 }
 
 /// `atan2(y, x)` within 2e-5 rad, several times faster than the exact one:
@@ -151,28 +293,77 @@ fn fast_atan2(y: f64, x: f64) -> f64 {
     }
 }
 
+/// A landmark as an offset from the robot, with the unit vector of the
+/// direction it was last seen from.
+#[derive(Clone, Copy, Debug, Default)]
+struct Offset {
+    dx: f64,
+    dy: f64,
+    seen_x: f64,
+    seen_y: f64,
+}
+
+impl Offset {
+    fn new(landmark: &KnownLandmark, from: (f64, f64)) -> Self {
+        let (s, c) = landmark.viewpoint.sin_cos();
+        Offset { dx: landmark.position.0 - from.0, dy: landmark.position.1 - from.1, seen_x: c, seen_y: s }
+    }
+}
+
+/// What a view holds: summed information (Σ 1/CV) and landmarks counted.
+#[derive(Clone, Copy, Debug, Default)]
+struct Seen {
+    information: f64,
+    count: usize,
+}
+
+impl Seen {
+    fn add(self, other: Seen) -> Seen {
+        Seen { information: self.information + other.information, count: self.count + other.count }
+    }
+}
+
 /// One candidate heading's view from the projected position.
 struct View {
     sin: f64,
     cos: f64,
     step: f64,
     tan_half: f64,
+    half_baseline: f64,
     min_slant2: f64,
+    min_stereo2: f64,
     max_range2: f64,
+    cos_viewpoint: f64,
 }
 
 impl View {
-    /// The summed information (Σ 1/CV) of the landmarks in view, given as
-    /// offsets from the robot's current position, or `None` if one is nearer
-    /// than the slant limit (an obstacle).
+    fn new(rules: &DecisionRules, heading: f64) -> Self {
+        let (sin, cos) = heading.sin_cos();
+        View {
+            sin,
+            cos,
+            step: rules.step_m,
+            tan_half: rules.half_fov.tan(),
+            half_baseline: rules.baseline_m / 2.0,
+            min_slant2: rules.min_slant_m.powi(2),
+            min_stereo2: rules.min_stereo_range_m.powi(2),
+            max_range2: rules.max_range_m.powi(2),
+            cos_viewpoint: rules.max_viewpoint_change.min(std::f64::consts::PI).cos(),
+        }
+    }
+
+    /// The information and count of the landmarks in view, or `None` if one
+    /// is nearer than the slant limit (an obstacle). A landmark counts if it
+    /// is in both images, within range, far enough for stereo matching, and
+    /// seen from near the direction it was last seen from.
     #[inline]
-    fn information(&self, table: &CvTable, offsets: &[(f64, f64)]) -> Option<f64> {
-        let mut sum = 0.0;
-        for &(dx, dy) in offsets {
+    fn information(&self, table: &CvTable, offsets: &[Offset]) -> Option<Seen> {
+        let mut seen = Seen::default();
+        for o in offsets {
             // Eq. 44–48 without trigonometry: depth along the heading from
             // the projected position, lateral offset to the right.
-            let depth = dx * self.cos + dy * self.sin - self.step;
-            let lateral = dx * self.sin - dy * self.cos;
+            let depth = o.dx * self.cos + o.dy * self.sin - self.step;
+            let lateral = o.dx * self.sin - o.dy * self.cos;
             if depth <= 0.0 || lateral.abs() > depth * self.tan_half {
                 continue;
             }
@@ -180,11 +371,22 @@ impl View {
             if range2 < self.min_slant2 {
                 return None;
             }
-            if range2 <= self.max_range2 {
-                sum += table.information(lateral, depth);
+            if range2 > self.max_range2
+                || range2 < self.min_stereo2
+                || lateral.abs() + self.half_baseline > depth * self.tan_half
+            {
+                continue;
             }
+            // The line of sight from the projected position against the
+            // one it was last seen along: cos of the angle between them.
+            let (sight_x, sight_y) = (o.dx - self.step * self.cos, o.dy - self.step * self.sin);
+            if sight_x * o.seen_x + sight_y * o.seen_y < range2.sqrt() * self.cos_viewpoint {
+                continue;
+            }
+            seen.information += table.information(lateral, depth);
+            seen.count += 1;
         }
-        Some(sum)
+        Some(seen)
     }
 }
 
@@ -193,27 +395,16 @@ impl View {
 pub fn best_heading_exhaustive(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[KnownLandmark],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
-) -> Option<(f64, f64)> {
-    let offsets: Vec<(f64, f64)> = landmarks.iter().map(|&(x, y)| (x - position.0, y - position.1)).collect();
-    let mut best: Option<(f64, f64)> = None;
+    objective: &Objective,
+) -> Option<Decision> {
+    let offsets: Vec<Offset> = landmarks.iter().map(|l| Offset::new(l, position)).collect();
+    let mut best = None;
     for heading in candidates {
-        let (s, c) = heading.sin_cos();
-        let view = View {
-            sin: s,
-            cos: c,
-            step: rules.step_m,
-            tan_half: rules.half_fov.tan(),
-            min_slant2: rules.min_slant_m.powi(2),
-            max_range2: rules.max_range_m.powi(2),
-        };
-        if let Some(information) = view.information(table, &offsets).filter(|i| *i > 0.0) {
-            if best.is_none_or(|(_, b)| 1.0 / information < b) {
-                best = Some((heading, 1.0 / information));
-            }
-        }
+        let seen = View::new(rules, heading).information(table, &offsets);
+        consider(&mut best, rules, objective, heading, seen);
     }
     best
 }
@@ -225,7 +416,16 @@ mod tests {
     use ubf_perception::StereoCamera;
 
     fn rules() -> DecisionRules {
-        DecisionRules { half_fov: 30f64.to_radians(), step_m: 0.25, min_slant_m: 0.5, max_range_m: 80.0 }
+        DecisionRules {
+            half_fov: 30f64.to_radians(),
+            step_m: 0.25,
+            min_slant_m: 0.5,
+            max_range_m: 80.0,
+            baseline_m: 0.6,
+            min_stereo_range_m: 1.12,
+            max_viewpoint_change: 20f64.to_radians(),
+            min_landmarks: 1,
+        }
     }
 
     fn table() -> CvTable {
@@ -236,15 +436,25 @@ mod tests {
         (-9..=9).map(|i| f64::from(i) * 5f64.to_radians())
     }
 
+    /// Landmarks last seen from `from`.
+    fn seen_from(from: (f64, f64), points: &[(f64, f64)]) -> Vec<KnownLandmark> {
+        points
+            .iter()
+            .map(|&(x, y)| KnownLandmark { position: (x, y), viewpoint: (y - from.1).atan2(x - from.0) })
+            .collect()
+    }
+
     #[test]
     fn prefers_putting_a_landmark_off_centre_and_near() {
         let t = table();
         // One landmark 10 m ahead, 2 m left: looking straight at it is the
         // worst choice; turning so it sits near the edge of the view is best.
-        let (heading, cv) = best_heading(&t, &rules(), &[(10.0, 2.0)], (0.0, 0.0), headings()).unwrap();
+        let landmarks = seen_from((0.0, 0.0), &[(10.0, 2.0)]);
+        let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
         let straight_at = 2f64.atan2(10.0);
-        assert!((heading - straight_at).abs() > 15f64.to_radians(), "{}", heading.to_degrees());
-        assert!(cv < 1.0 / t.information(0.0, 10.0));
+        assert!((d.heading - straight_at).abs() > 15f64.to_radians(), "{}", d.heading.to_degrees());
+        assert!(d.cv < 1.0 / t.information(0.0, 10.0));
+        assert_eq!(d.landmarks, 1);
     }
 
     #[test]
@@ -266,28 +476,46 @@ mod tests {
     fn indexing_changes_nothing() {
         // Every heading on its own, so a landmark missed by any window would
         // show: corridors of many landmarks, and sparse landmarks all round
-        // at every distance band with headings all round the circle.
+        // at every distance band with headings all round the circle; random
+        // viewpoints, both objectives, and one or four landmarks needed.
         use rand::{Rng, SeedableRng};
         let t = table();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         for round in 0..100 {
             let (count, radius) = if round % 2 == 0 { (300, 0.0) } else { (rng.random_range(1..12), 30.0) };
-            let landmarks: Vec<(f64, f64)> = (0..count)
-                .map(|_| match radius {
-                    0.0 => (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0)),
-                    r => {
-                        let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
-                        (d * a.cos(), d * a.sin())
-                    }
+            let landmarks: Vec<KnownLandmark> = (0..count)
+                .map(|_| {
+                    let position = match radius {
+                        0.0 => (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0)),
+                        r => {
+                            let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
+                            (d * a.cos(), d * a.sin())
+                        }
+                    };
+                    KnownLandmark { position, viewpoint: rng.random_range(-4.0..4.0) }
                 })
                 .collect();
             let at = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
+            let rules = DecisionRules { min_landmarks: 1 + 3 * (round % 3 == 0) as usize, ..rules() };
+            let objective = if round % 4 < 2 {
+                Objective::Cv
+            } else {
+                Objective::EndPoint {
+                    heading: 0.3,
+                    goal_bearing: 0.0,
+                    remaining_m: 20.0,
+                    costs: DecisionCosts::default(),
+                }
+            };
             for k in -80..=80 {
                 let heading = [f64::from(k) * 2.5f64.to_radians() + rng.random_range(-0.02..0.02)];
-                let fast = best_heading(&t, &rules(), &landmarks, at, heading);
-                let slow = best_heading_exhaustive(&t, &rules(), &landmarks, at, heading);
+                let fast = best_heading(&t, &rules, &landmarks, at, heading, &objective);
+                let slow = best_heading_exhaustive(&t, &rules, &landmarks, at, heading, &objective);
                 match (fast, slow) {
-                    (Some(a), Some(b)) => assert!((a.1 / b.1 - 1.0).abs() < 1e-9, "{round} {k}"),
+                    (Some(a), Some(b)) => {
+                        assert!((a.cv / b.cv - 1.0).abs() < 1e-9, "{round} {k}");
+                        assert_eq!(a.landmarks, b.landmarks, "{round} {k}");
+                    }
                     (a, b) => assert_eq!(a, b, "{round} {k}"),
                 }
             }
@@ -298,13 +526,62 @@ mod tests {
     fn rejects_headings_without_landmarks_or_with_one_too_near() {
         let t = table();
         // Only landmark far to the left, out of view for right headings.
-        let (heading, _) = best_heading(&t, &rules(), &[(5.0, 4.0)], (0.0, 0.0), headings()).unwrap();
-        assert!(heading > 0.0);
+        let left = seen_from((0.0, 0.0), &[(5.0, 4.0)]);
+        let d = best_heading(&t, &rules(), &left, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
+        assert!(d.heading > 0.0);
         // A landmark right in front is an obstacle: straight ahead is out;
         // 34° left puts it out of view and a far landmark in.
-        let landmarks = [(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)];
-        let (heading, _) = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0, 0.6]).unwrap();
-        assert_eq!(heading, 0.6);
-        assert!(best_heading(&t, &rules(), &[], (0.0, 0.0), headings()).is_none());
+        let landmarks = seen_from((0.0, 0.0), &[(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)]);
+        let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0, 0.6], &Objective::Cv).unwrap();
+        assert_eq!(d.heading, 0.6);
+        assert!(best_heading(&t, &rules(), &[], (0.0, 0.0), headings(), &Objective::Cv).is_none());
+    }
+
+    #[test]
+    fn a_heading_needs_enough_landmarks_in_both_images() {
+        let t = table();
+        // Three landmarks ahead and one at the edge of the left camera's
+        // view only: with four needed, no heading that sees just those is
+        // feasible.
+        let three = [(10.0, 0.0), (12.0, 1.0), (14.0, -1.0)];
+        let edge = (10.0, -(10.0 - 0.25) * 30f64.to_radians().tan() + 0.1);
+        let mut points = three.to_vec();
+        points.push(edge);
+        let landmarks = seen_from((0.0, 0.0), &points);
+        let four = DecisionRules { min_landmarks: 4, ..rules() };
+        assert!(best_heading(&t, &four, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
+        let three_needed = DecisionRules { min_landmarks: 3, ..rules() };
+        let d = best_heading(&t, &three_needed, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).unwrap();
+        assert_eq!(d.landmarks, 3);
+    }
+
+    #[test]
+    fn a_landmark_seen_from_elsewhere_does_not_count() {
+        let t = table();
+        // Last seen from 90° round (a poster on a side wall, seen face on):
+        // from here it is edge-on.
+        let landmarks = [KnownLandmark { position: (10.0, 0.0), viewpoint: std::f64::consts::FRAC_PI_2 }];
+        assert!(best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
+    }
+
+    #[test]
+    fn the_end_point_objective_turns_only_when_it_pays() {
+        let t = table();
+        // A far wall across the whole view, and a near cluster 40° left: the
+        // CV objective turns to the cluster; with 40 m still to go, the
+        // end-point objective stays on the goal bearing, and with half a
+        // metre to go it turns.
+        let mut points: Vec<(f64, f64)> = (0..11).map(|i| (50.0, -25.0 + 5.0 * f64::from(i))).collect();
+        points.extend((0..6).map(|i| (3.0 + 0.3 * f64::from(i), 3.5 + 0.2 * f64::from(i))));
+        let landmarks = seen_from((0.0, 0.0), &points);
+        let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
+        let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
+        assert!(cv.heading > 20f64.to_radians(), "{}", cv.heading.to_degrees());
+        let costs = DecisionCosts { step_sigma_per_cv: 1.0, heading_var_per_rad: 1e-5, heading_var_per_turn: 0.0 };
+        let end_point = |remaining_m| Objective::EndPoint { heading: 0.0, goal_bearing: 0.0, remaining_m, costs };
+        let far = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &end_point(40.0)).unwrap();
+        assert_eq!(far.heading, 0.0);
+        let near = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &end_point(0.5)).unwrap();
+        assert!(near.heading > 20f64.to_radians(), "{}", near.heading.to_degrees());
     }
 }

@@ -59,6 +59,10 @@ pub struct TrackedLandmark {
     pub descriptor: Descriptor,
     /// The world direction from the robot to it when last seen (eq. 37).
     pub viewpoint: f64,
+    /// Times it was seen where the list expected it. A landmark seen once
+    /// may be a wrong stereo match or a look-alike of another; it is
+    /// planned with only once seen again within the gate.
+    pub sightings: u32,
 }
 
 /// What one update did, for tests and logs.
@@ -66,8 +70,12 @@ pub struct TrackedLandmark {
 pub struct TrackingUpdate {
     /// Observations matched to a remembered landmark.
     pub matched: usize,
-    /// Observations registered as new landmarks.
+    /// Observations registered as new landmarks (unconfirmed until seen
+    /// again within the gate).
     pub registered: usize,
+    /// Observations that looked like a confirmed landmark but lay outside
+    /// its gate: a look-alike or a wrong stereo match, ignored.
+    pub outside_gate: usize,
     /// Observations ignored because two remembered landmarks looked alike.
     pub ambiguous: usize,
     /// Landmarks dropped for a changed viewpoint.
@@ -79,6 +87,8 @@ pub struct TrackingUpdate {
 pub struct TrackingList {
     config: TrackingConfig,
     entries: Vec<TrackedLandmark>,
+    /// Scratch: the entries within an observation's gate.
+    in_gate: Vec<usize>,
 }
 
 /// Where an observation is in the world, from the robot's pose (eq. 25–29).
@@ -92,7 +102,7 @@ pub fn world_position(observation: &LandmarkObservation, calibration: &StereoCal
 impl TrackingList {
     /// An empty list.
     pub fn new(config: TrackingConfig) -> Self {
-        TrackingList { config, entries: Vec::new() }
+        TrackingList { config, entries: Vec::new(), in_gate: Vec::new() }
     }
 
     /// The remembered landmarks.
@@ -100,15 +110,24 @@ impl TrackingList {
         &self.entries
     }
 
+    /// The landmarks seen at least twice where expected: those worth
+    /// planning with.
+    pub fn confirmed(&self) -> impl Iterator<Item = &TrackedLandmark> {
+        self.entries.iter().filter(|e| e.sightings >= 2)
+    }
+
     /// Forgets everything.
     pub fn clear(&mut self) {
         self.entries.clear();
     }
 
-    /// Takes in one frame's observations seen from `pose`: each is matched
+    /// Takes in one frame's observations seen from `pose`. Each is matched
     /// by descriptor (nearest, within the threshold, clearly nearer than the
-    /// second) and position (within the gate) and updated, or registered as
-    /// new; an observation that two entries resemble equally is ignored.
+    /// second, eq. 30–34) among the landmarks within its position gate
+    /// (eq. 35) and updates it, or, failing that, is registered as a new,
+    /// unconfirmed landmark. One that resembles a confirmed landmark lying
+    /// outside its gate is a look-alike or a wrong stereo match and is
+    /// ignored: it must not enter the list as a landmark of its own.
     pub fn observe(
         &mut self,
         observations: &[LandmarkObservation],
@@ -120,30 +139,31 @@ impl TrackingList {
             let position = world_position(obs, calibration, pose);
             let range = pose.distance_to(position.0, position.1);
             let viewpoint = (position.1 - pose.y).atan2(position.0 - pose.x);
-            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, viewpoint };
-            let best =
-                match self.config.matching.best_match(&obs.descriptor, self.entries.iter().map(|e| &e.descriptor)) {
-                    Ok(i) => i,
-                    Err(false) => {
+            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, viewpoint, sightings: 1 };
+            let gate = self.config.gate_m + self.config.gate_per_m * range;
+            self.in_gate.clear();
+            self.in_gate.extend((0..self.entries.len()).filter(|&i| {
+                let e = &self.entries[i].position;
+                (e.0 - position.0).hypot(e.1 - position.1) <= gate
+            }));
+            let matching = &self.config.matching;
+            match matching.best_match(&obs.descriptor, self.in_gate.iter().map(|&i| &self.entries[i].descriptor)) {
+                Ok(k) => {
+                    // The thesis keeps only the latest position (§3.5.2.1).
+                    let entry = &mut self.entries[self.in_gate[k]];
+                    *entry = TrackedLandmark { sightings: entry.sightings + 1, ..fresh };
+                    update.matched += 1;
+                }
+                Err(true) => update.ambiguous += 1,
+                Err(false) => {
+                    let confirmed = self.entries.iter().filter(|e| e.sightings >= 2).map(|e| &e.descriptor);
+                    if matching.best_match(&obs.descriptor, confirmed).is_ok() {
+                        update.outside_gate += 1;
+                    } else {
                         self.entries.push(fresh);
                         update.registered += 1;
-                        continue;
                     }
-                    Err(true) => {
-                        update.ambiguous += 1;
-                        continue;
-                    }
-                };
-            let entry = &mut self.entries[best];
-            let gate = self.config.gate_m + self.config.gate_per_m * range;
-            let moved = (entry.position.0 - position.0).hypot(entry.position.1 - position.1);
-            if moved <= gate {
-                // The thesis keeps only the latest position (§3.5.2.1).
-                *entry = fresh;
-                update.matched += 1;
-            } else {
-                self.entries.push(fresh);
-                update.registered += 1;
+                }
             }
         }
         update
@@ -205,10 +225,35 @@ mod tests {
     }
 
     #[test]
-    fn a_lookalike_in_the_wrong_place_is_a_new_landmark() {
+    fn a_lookalike_outside_the_gate_is_not_a_landmark() {
         let mut list = TrackingList::new(TrackingConfig::default());
-        list.observe(&[obs([0.0, 5.0, 0.0], 1)], &calibration(), &Pose2::default());
-        let u = list.observe(&[obs([0.0, 15.0, 0.0], 1)], &calibration(), &Pose2::default());
+        let pose = Pose2::default();
+        list.observe(&[obs([0.0, 5.0, 0.0], 1)], &calibration(), &pose);
+        assert_eq!(list.confirmed().count(), 0, "seen once: not yet planned with");
+        list.observe(&[obs([0.0, 5.1, 0.0], 1)], &calibration(), &pose);
+        assert_eq!(list.confirmed().count(), 1);
+        let u = list.observe(&[obs([0.0, 15.0, 0.0], 1)], &calibration(), &pose);
+        assert_eq!((u.registered, u.outside_gate), (0, 1));
+        assert_eq!(list.landmarks().len(), 1);
+        assert!((list.landmarks()[0].position.0 - 5.1).abs() < 1e-9);
+        // A different landmark there is a landmark.
+        let mut other = obs([0.0, 15.0, 0.0], 1);
+        other.descriptor = Descriptor(other.descriptor.0.map(|w| !w));
+        let u = list.observe(&[other], &calibration(), &pose);
         assert_eq!(u.registered, 1);
+    }
+
+    #[test]
+    fn a_first_sighting_out_of_place_never_confirms() {
+        // A wrong stereo match registered the landmark 10 m off; the next
+        // sightings register and confirm it where it is.
+        let mut list = TrackingList::new(TrackingConfig::default());
+        let pose = Pose2::default();
+        list.observe(&[obs([0.0, 15.0, 0.0], 1)], &calibration(), &pose);
+        list.observe(&[obs([0.0, 5.0, 0.0], 1)], &calibration(), &pose);
+        list.observe(&[obs([0.0, 5.1, 0.0], 1)], &calibration(), &pose);
+        let confirmed: Vec<_> = list.confirmed().collect();
+        assert_eq!(confirmed.len(), 1);
+        assert!((confirmed[0].position.0 - 5.1).abs() < 1e-9);
     }
 }
