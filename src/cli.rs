@@ -183,6 +183,18 @@ enum ModelCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Fit the coefficients the end-point decision weighs (turn heading
+    /// variance, step translation error per CV) from run logs with ground
+    /// truth: `trajectory.csv` files, or directories searched for them (as
+    /// `ubf sweep --trajectories` writes them).
+    FitCosts {
+        /// Logs or directories of logs.
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+        /// Print the fit as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Draw the model as a heat map over the field of view (thesis figure 16).
     Heatmap {
         #[command(flatten)]
@@ -572,10 +584,35 @@ fn parse_depths(text: &str) -> Result<[f64; 2], String> {
     Ok([near, far])
 }
 
+fn fit_costs_command(logs: &[PathBuf], json: bool) -> ExitCode {
+    use crate::cost_fit::{find_logs, fit_costs};
+    let fit = match find_logs(logs).and_then(|paths| fit_costs(&paths)) {
+        Ok(fit) => fit,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    if json {
+        println!("{}", serde_json::to_string_pretty(&fit).expect("a fit serialises"));
+        return ExitCode::SUCCESS;
+    }
+    println!("logs            {} ({} turns, {} straight steps)", fit.logs, fit.turns, fit.steps);
+    println!("turns           mean {:.1}°, RMS heading error {:.3}°", fit.turn_mean_deg, fit.turn_rms_error_deg);
+    println!("steps           RMS translation error {:.4} m", fit.step_rms_error_m);
+    println!("as the decision's costs (paste into ActionAiding(costs: ...)):");
+    println!(
+        "  (step_sigma_per_cv: {:.4e}, heading_var_per_rad: {:.4e}, heading_var_per_turn: {:.4e})",
+        fit.step_sigma_per_cv, fit.heading_var_per_rad, fit.heading_var_per_turn
+    );
+    ExitCode::SUCCESS
+}
+
 fn model_command(registry: &Registry, action: ModelCommand) -> ExitCode {
     use ubf_perception::error_model::{fit_exponential, GeometricModel};
     let args = match &action {
         ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
+        ModelCommand::FitCosts { logs, json } => return fit_costs_command(logs, *json),
     };
     if !(args.step.is_finite() && args.step > 0.0) {
         eprintln!("error: --step must be a positive number of metres");
@@ -622,6 +659,8 @@ fn model_command(registry: &Registry, action: ModelCommand) -> ExitCode {
                 100.0 * fit.pair_order_agreement
             );
         }
+        // Answered before a camera was needed.
+        ModelCommand::FitCosts { .. } => {}
         ModelCommand::Heatmap { exponential, out, .. } => {
             let m = fit.model;
             let (title, cv): (&str, &dyn Fn(f64, f64) -> f64) = if exponential {

@@ -296,8 +296,8 @@ fn run_session<R: Robot>(
             return Some(e.to_string());
         }
         let state: &State = controller.state();
-        let (pose, age, egomotion) = (state.pose, state.sensor_age, state.egomotion);
-        if let Err(e) = log.write(controller.last_record(), controller.layout(), &pose, &pose, &egomotion) {
+        let (pose, age, egomotion, frame) = (state.pose, state.sensor_age, state.egomotion, state.stereo.number);
+        if let Err(e) = log.write(controller.last_record(), controller.layout(), &pose, &pose, &egomotion, frame) {
             tracing::warn!("writing the log: {e}");
         }
         if age > stale_after {

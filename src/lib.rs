@@ -8,12 +8,14 @@
 //! - [`run`]: a scenario run headless on the simulator;
 //! - [`sweep`]: many runs in parallel, summarised;
 //! - [`experiment`]: the thesis's experiments;
+//! - [`cost_fit`]: egomotion's error coefficients, fitted from run logs;
 //! - [`cli`]: the `ubf` command line, which a user's crate can reuse with its
 //!   own registry so that its behaviours work from scenario files by name.
 
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod cost_fit;
 pub mod drive;
 pub mod experiment;
 pub mod frames;

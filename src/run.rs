@@ -138,8 +138,9 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
             failure = Some(RunError::from(e));
             break;
         }
-        let sim = controller.robot().inner();
-        let (truth, odometry) = (sim.true_pose(), sim.odometry_pose());
+        // The truth and odometry the tick's state was sensed at, which the
+        // egomotion estimate from its frame describes.
+        let (truth, odometry) = (controller.robot().inner().sensed_true_pose(), controller.state().pose);
         if controller.state().stereo.number != frame_number {
             frame_number = controller.state().stereo.number;
             truth_at_frame = Some(truth);
@@ -151,6 +152,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
                 &truth,
                 &odometry,
                 &controller.state().egomotion,
+                controller.state().stereo.number,
             ) {
                 failure = Some(output_error(path)(e));
                 break;

@@ -6,8 +6,9 @@ use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use ubf_core::{Command, EgomotionState, Pose2, TickRecord, TreeLayout, Turn};
 
-/// Writes one CSV row per tick: time, true and odometric pose, the command,
-/// the winning behaviour, and every node's vote.
+/// Writes one CSV row per tick: time, true and odometric pose, the
+/// egomotion pose with its failures and latest step CV, the stereo frame's
+/// number, the command, the winning behaviour, and every node's vote.
 pub struct TrajectoryWriter {
     out: BufWriter<File>,
 }
@@ -16,7 +17,7 @@ impl TrajectoryWriter {
     /// Creates `path` and writes the header for the tree `layout`.
     pub fn create(path: &Path, layout: &TreeLayout) -> io::Result<Self> {
         let mut out = BufWriter::new(File::create(path)?);
-        write!(out, "time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,cmd_velocity,cmd_rot_velocity,winner")?;
+        write!(out, "time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,cmd_velocity,cmd_rot_velocity,winner")?;
         for node in layout.nodes.iter().skip(1) {
             write!(out, ",vote:{}", node.path)?;
         }
@@ -33,6 +34,7 @@ impl TrajectoryWriter {
         truth: &Pose2,
         odometry: &Pose2,
         egomotion: &EgomotionState,
+        frame: u64,
     ) -> io::Result<()> {
         let (v, w) = match record.command {
             Command::Stop => (0.0, 0.0),
@@ -50,6 +52,11 @@ impl TrajectoryWriter {
             Some(p) => write!(self.out, "{:.5},{:.5},{:.5},{},", p.x, p.y, p.theta, egomotion.failures)?,
             None => write!(self.out, ",,,,")?,
         }
+        match egomotion.last_step_cv {
+            Some(cv) => write!(self.out, "{cv:.6},")?,
+            None => write!(self.out, ",")?,
+        }
+        write!(self.out, "{frame},")?;
         write!(self.out, "{v:.4},{w:.4},{winner}")?;
         for node in record.nodes.iter().skip(1) {
             write!(self.out, ",{:.4}", node.action.effective_vote())?;

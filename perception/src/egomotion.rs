@@ -245,6 +245,11 @@ pub struct EgomotionConfig {
     /// rejected (thesis §4.4.6), m/s.
     #[serde(default = "EgomotionConfig::default_max_speed", deserialize_with = "positive")]
     pub max_speed: f64,
+    /// The robot's top turn rate: turns faster than this, or wider than
+    /// the field of view, are impossible between frames that share
+    /// landmarks and rejected, °/s.
+    #[serde(default = "EgomotionConfig::default_max_turn_rate", deserialize_with = "positive")]
+    pub max_turn_rate_deg: f64,
 }
 
 fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
@@ -258,6 +263,9 @@ fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usi
 impl EgomotionConfig {
     fn default_max_speed() -> f64 {
         0.6
+    }
+    fn default_max_turn_rate() -> f64 {
+        100.0
     }
     fn default_keyframes() -> usize {
         10
@@ -288,6 +296,7 @@ impl Default for EgomotionConfig {
             keyframe_range_m: Self::default_keyframe_range_m(),
             good_match_landmarks: Self::default_good_match(),
             max_speed: Self::default_max_speed(),
+            max_turn_rate_deg: Self::default_max_turn_rate(),
         }
     }
 }
@@ -720,6 +729,13 @@ impl Tracker {
             EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.pairs, max_step),
             EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng),
         }?;
+        // Frames that share landmarks cannot have turned further apart than
+        // the view is wide, nor faster than the robot turns (§4.4.6).
+        let max_turn = (self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians())
+            .min(self.camera.horizontal_fov());
+        if motion.yaw.abs() > max_turn {
+            return None;
+        }
         Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)) })
     }
 }

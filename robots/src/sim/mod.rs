@@ -159,6 +159,9 @@ pub struct SimRobot {
     bumpers: Bumpers,
     stalled: bool,
     collisions: u32,
+    /// The true pose when the robot last sensed: what this tick's state,
+    /// and any frame taken in it, describe.
+    sensed: Pose2,
 }
 
 impl SimRobot {
@@ -195,12 +198,20 @@ impl SimRobot {
             bumpers: Bumpers::default(),
             stalled: false,
             collisions: 0,
+            sensed: config.start.pose(),
         }
     }
 
     /// Where the robot really is.
     pub fn true_pose(&self) -> Pose2 {
         self.body.true_pose
+    }
+
+    /// Where the robot really was when it last sensed: the ground truth of
+    /// the latest state and stereo frame ([`Robot::act`] has moved it on
+    /// since by one period).
+    pub fn sensed_true_pose(&self) -> Pose2 {
+        self.sensed
     }
 
     /// Where its odometry says it is.
@@ -249,6 +260,7 @@ impl Robot for SimRobot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.world.people_at(self.time, &mut self.people);
         let pose = self.body.true_pose;
+        self.sensed = pose;
         state.pose = self.body.odometry;
         state.velocity = self.body.velocity;
         state.rot_velocity = self.body.rot_velocity;
