@@ -16,6 +16,7 @@ use crate::scenario::Scenario;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use ubf_behaviors::DecisionObjective;
 use ubf_core::{Pose2, Registry};
 
 /// Exit code for bad input: a malformed file, a bad argument.
@@ -145,6 +146,11 @@ enum ExperimentCommand {
         /// Corridors (seeds of their layouts).
         #[arg(long, default_value = "0..10", value_parser = parse_seeds)]
         seeds: std::ops::Range<u64>,
+        /// What the evaluative techniques minimise: `end-point` (the
+        /// predicted end-point variance, turns included) or `cv` (the
+        /// thesis's step CV, turns free).
+        #[arg(long, default_value = "cv", value_parser = parse_objective)]
+        objective: DecisionObjective,
         /// Runs at once; by default one per core.
         #[arg(long)]
         jobs: Option<usize>,
@@ -169,6 +175,15 @@ enum ExperimentCommand {
         /// 30 ms a frame: a few seconds a run; use fewer seeds).
         #[arg(long)]
         rendered: bool,
+        /// Replace each route's fixed landmark layout with one drawn from
+        /// this seed (layouts nobody tuned on).
+        #[arg(long)]
+        layout_seed: Option<u64>,
+        /// What the evaluative techniques minimise: `end-point` (the
+        /// predicted end-point variance, turns included) or `cv` (the
+        /// thesis's step CV, turns free).
+        #[arg(long, default_value = "end-point", value_parser = parse_objective)]
+        objective: DecisionObjective,
     },
 }
 
@@ -496,11 +511,11 @@ fn emulate_command(listen: &str, config: &ubf_robots::arcos::emulator::EmulatorC
 }
 
 fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode {
-    use crate::experiment::{thesis_endpoint, thesis_table4, TECHNIQUES};
+    use crate::experiment::{thesis_endpoint, thesis_table4, EndpointOptions, TECHNIQUES};
     let cores = || std::thread::available_parallelism().map_or(1, |n| n.get());
     let result = match which {
-        ExperimentCommand::ThesisTable4 { seeds, jobs, json } => {
-            thesis_table4(registry, seeds, jobs.unwrap_or_else(cores)).map(|table| {
+        ExperimentCommand::ThesisTable4 { seeds, objective, jobs, json } => {
+            thesis_table4(registry, seeds, jobs.unwrap_or_else(cores), objective).map(|table| {
                 if json {
                     println!("{}", serde_json::to_string_pretty(&table).expect("results serialise"));
                     return;
@@ -527,35 +542,49 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
                 println!("\n(* did not reach the goal in time)");
             })
         }
-        ExperimentCommand::ThesisEndpoint { seeds, jobs, json, rendered } => {
-            thesis_endpoint(registry, seeds, jobs.unwrap_or_else(cores), rendered).map(|result| {
+        ExperimentCommand::ThesisEndpoint { seeds, jobs, json, rendered, layout_seed, objective } => {
+            let options = EndpointOptions { seeds, jobs: jobs.unwrap_or_else(cores), rendered, layout_seed, objective };
+            thesis_endpoint(registry, &options).map(|result| {
                 if json {
                     println!("{}", serde_json::to_string_pretty(&result).expect("results serialise"));
                     return;
                 }
+                let layout = result.layout_seed.map_or("each route's own layout".into(), |s| format!("layout seed {s}"));
                 println!(
-                    "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera",
-                    result.seeds[0], result.seeds[1], result.camera
+                    "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective",
+                    result.seeds[0], result.seeds[1], result.camera, result.objective
                 );
                 for (route, estimators) in &result.routes {
                     for (estimator, techniques) in estimators {
                         println!("\n{route}, {estimator} estimator");
                         println!(
-                            "{:>9} {:>24} {:>9} {:>10} {:>10} {:>9} {:>9}",
-                            "technique", "end-point error m", "% dist", "failures", "runs w/ f", "path +%", "time +%"
+                            "{:>9} {:>24} {:>7} {:>8} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7}",
+                            "technique",
+                            "end-point error m",
+                            "% dist",
+                            "pred σ",
+                            "act/pred",
+                            "failures",
+                            "outages",
+                            "time lim",
+                            "path +%",
+                            "time +%"
                         );
                         for t in TECHNIQUES {
                             let Some(c) = techniques.get(t.name()) else { continue };
                             let e = &c.endpoint_error_m;
                             println!(
-                                "{:>9} {:>7.2} [{:>6.2}, {:>6.2}] {:>9.2} {:>10.1} {:>10} {:>9.1} {:>9.1}",
+                                "{:>9} {:>7.2} [{:>6.2}, {:>6.2}] {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
                                 t.name(),
                                 e.mean,
                                 e.ci95[0],
                                 e.ci95[1],
                                 c.endpoint_error_pct.mean,
+                                c.predicted_sigma_m.mean,
+                                c.actual_over_predicted,
                                 c.egomotion_failures.mean,
-                                c.runs_with_failures,
+                                c.outages.mean,
+                                c.runs_time_limit,
                                 c.path_overhead_pct.mean,
                                 c.time_overhead_pct.mean
                             );
@@ -571,6 +600,14 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
             eprintln!("error: {e}");
             ExitCode::from(EXIT_FAILURE)
         }
+    }
+}
+
+fn parse_objective(text: &str) -> Result<DecisionObjective, String> {
+    match text {
+        "end-point" => Ok(DecisionObjective::EndPoint),
+        "cv" => Ok(DecisionObjective::Cv),
+        _ => Err("expected `end-point` or `cv`".into()),
     }
 }
 
@@ -787,6 +824,9 @@ fn print_summary(s: &RunReport) {
     println!("estimated pose  {}", pose_text(&s.final_estimated_pose));
     if let (Some(error), Some(steps), Some(failures)) = (s.endpoint_error_m, s.egomotion_steps, s.egomotion_failures) {
         println!("egomotion       end-point error {error:.2} m; {steps} steps, {failures} failed");
+        if let Some(sigma) = s.predicted_endpoint_sigma_m {
+            println!("predicted       end-point σ {sigma:.2} m (the decision's error model)");
+        }
         println!(
             "outages         {} ({:.1} s, {:.2} m driven on odometry)",
             s.outages.unwrap_or(0),

@@ -12,7 +12,7 @@ use crate::sweep::{run_parallel, stats, FieldStats};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
-use ubf_behaviors::Technique;
+use ubf_behaviors::{DecisionObjective, Technique};
 use ubf_core::{BehaviorSpec, Registry};
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
 
@@ -37,20 +37,21 @@ fn load(registry: &Registry, name: &'static str, text: &str) -> Result<Scenario,
 }
 
 /// `base` with its tree driven by `technique` (with the zig-zag's largest
-/// offset `zigzag_offset`, which depends on the corridor's width) and
-/// egomotion by `estimator`.
+/// offset `zigzag_offset`, which depends on the corridor's width, and the
+/// evaluative techniques' `objective`) and egomotion by `estimator`.
 fn variant(
     registry: &Registry,
     base: &Scenario,
     technique: Technique,
     zigzag_offset: f64,
+    objective: DecisionObjective,
     estimator: EstimatorKind,
 ) -> Result<Scenario, ExperimentError> {
     let technique_name = format!("{technique:?}");
-    let offset = format!(", zigzag_max_offset_m: {zigzag_offset:.1}");
+    let settings = format!(", zigzag_max_offset_m: {zigzag_offset:.1}, objective: {objective:?}");
     let tree = format!(
         "Composite(arbiter: CommandFusion, children: [(behavior: Stop(), weight: 1.0), \
-         (behavior: AvoidCollision(), weight: 2.0), (behavior: ActionAiding(technique: {technique_name}{offset}))])"
+         (behavior: AvoidCollision(), weight: 2.0), (behavior: ActionAiding(technique: {technique_name}{settings}))])"
     );
     let root: BehaviorSpec =
         registry.from_ron(&tree).map_err(|e| ExperimentError::Scenario { name: "tree", message: e.to_string() })?;
@@ -107,12 +108,19 @@ pub struct Table4 {
 }
 
 /// Table 4: one run per technique per corridor, the corridors drawn by
-/// `seeds`.
-pub fn thesis_table4(registry: &Registry, seeds: Range<u64>, jobs: usize) -> Result<Table4, ExperimentError> {
+/// `seeds`, the evaluative techniques minimising `objective`.
+pub fn thesis_table4(
+    registry: &Registry,
+    seeds: Range<u64>,
+    jobs: usize,
+    objective: DecisionObjective,
+) -> Result<Table4, ExperimentError> {
     let base = load(registry, "table4", TABLE4)?;
     let rigid = EstimatorKind::Rigid(RigidConfig::default());
-    let scenarios: Vec<Scenario> =
-        TECHNIQUES.iter().map(|&t| variant(registry, &base, t, TABLE4_ZIGZAG_M, rigid)).collect::<Result<_, _>>()?;
+    let scenarios: Vec<Scenario> = TECHNIQUES
+        .iter()
+        .map(|&t| variant(registry, &base, t, TABLE4_ZIGZAG_M, objective, rigid))
+        .collect::<Result<_, _>>()?;
     let tasks: Vec<(u64, usize)> = seeds.flat_map(|c| (0..TECHNIQUES.len()).map(move |t| (c, t))).collect();
     let reports = run_parallel(&tasks, jobs, |&(corridor, t)| run(&scenarios[t], corridor, None));
     let mut runs = Vec::new();
@@ -157,6 +165,12 @@ pub struct EndpointCell {
     pub runs_not_finished: usize,
     /// Runs that ended on the time limit instead of at the goal.
     pub runs_time_limit: usize,
+    /// The end-point σ the decision's model predicted, per run, m.
+    pub predicted_sigma_m: FieldStats,
+    /// The RMS of the actual end-point errors over the RMS of the predicted
+    /// σ: near 1 when the model is calibrated, above 1 when it is
+    /// optimistic.
+    pub actual_over_predicted: f64,
     /// Egomotion outages per run (stretches bridged by odometry).
     pub outages: FieldStats,
     /// Metres driven on odometry across outages, per run.
@@ -174,6 +188,10 @@ pub struct EndpointCell {
 pub struct Endpoint {
     /// The seeds run.
     pub seeds: [u64; 2],
+    /// The landmark layout's seed, when it replaced each route's own.
+    pub layout_seed: Option<u64>,
+    /// What the evaluative techniques minimised.
+    pub objective: DecisionObjective,
     /// Where the landmarks came from: `geometric` (the camera model
     /// projects them) or `rendered` (the feature pipeline finds them in
     /// rendered images).
@@ -191,6 +209,14 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
         runs_with_failures: reports.iter().filter(|r| r.egomotion_failures.unwrap_or(0) > 0).count(),
         runs_not_finished: reports.iter().filter(|r| !r.reached_goal).count(),
         runs_time_limit: reports.iter().filter(|r| r.end == EndReason::TimeLimit).count(),
+        predicted_sigma_m: field(&|r| r.predicted_endpoint_sigma_m),
+        actual_over_predicted: {
+            let rms = |f: &dyn Fn(&RunReport) -> Option<f64>| {
+                let v: Vec<f64> = reports.iter().filter_map(f).collect();
+                (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+            };
+            rms(&|r| r.endpoint_error_m) / rms(&|r| r.predicted_endpoint_sigma_m)
+        },
         outages: field(&|r| r.outages.map(f64::from)),
         outage_m: field(&|r| r.outage_m),
         journey_cv: field(&|r| r.journey_cv),
@@ -199,17 +225,27 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
     }
 }
 
+/// How the end-point experiment is run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EndpointOptions {
+    /// The run seeds (noise) per cell.
+    pub seeds: Range<u64>,
+    /// Runs at once.
+    pub jobs: usize,
+    /// Render images and find the landmarks in them with the feature
+    /// pipeline, instead of the geometric camera model.
+    pub rendered: bool,
+    /// Replaces each route's fixed landmark layout seed, so that results
+    /// can be checked on layouts nobody tuned on.
+    pub layout_seed: Option<u64>,
+    /// What the evaluative techniques minimise.
+    pub objective: DecisionObjective,
+}
+
 /// End-point egomotion error of every technique on every route with both
-/// estimators, over `seeds`.
-///
-/// With `rendered`, the cameras render images and the feature pipeline
-/// finds the landmarks in them, instead of the geometric camera model.
-pub fn thesis_endpoint(
-    registry: &Registry,
-    seeds: Range<u64>,
-    jobs: usize,
-    rendered: bool,
-) -> Result<Endpoint, ExperimentError> {
+/// estimators.
+pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result<Endpoint, ExperimentError> {
+    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective } = options.clone();
     let estimators = [
         ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
@@ -220,13 +256,16 @@ pub fn thesis_endpoint(
         if let (true, Some(camera)) = (rendered, base.robot.camera.as_mut()) {
             camera.images = Some(ubf_robots::sim::render::RenderConfig::default());
         }
+        if let (Some(seed), Some(landmarks)) = (layout_seed, base.world.random_landmarks.as_mut()) {
+            landmarks.seed = Some(seed);
+        }
         for (estimator, kind) in estimators {
             for technique in TECHNIQUES {
                 scenarios.push((
                     label,
                     estimator,
                     technique.name(),
-                    variant(registry, &base, technique, zigzag, kind)?,
+                    variant(registry, &base, technique, zigzag, objective, kind)?,
                 ));
             }
         }
@@ -239,7 +278,8 @@ pub fn thesis_endpoint(
         by_case.entry(i).or_default().push(report);
     }
     let camera = if rendered { "rendered" } else { "geometric" };
-    let mut routes: Endpoint = Endpoint { seeds: [seeds.start, seeds.end], camera, routes: BTreeMap::new() };
+    let mut routes =
+        Endpoint { seeds: [seeds.start, seeds.end], layout_seed, objective, camera, routes: BTreeMap::new() };
     for (i, reports) in by_case {
         let (route, estimator, technique, _) = &scenarios[i];
         routes.routes.entry(route).or_default().entry(estimator).or_default().insert(technique, cell(&reports));

@@ -6,6 +6,7 @@ use crate::scenario::Scenario;
 use crate::trajectory::TrajectoryWriter;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch};
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
@@ -52,6 +53,10 @@ pub struct RunReport {
     pub egomotion_steps: Option<u32>,
     /// Egomotion steps that failed for want of usable landmarks.
     pub egomotion_failures: Option<u32>,
+    /// The end-point σ the decision's error model predicts for the path
+    /// driven (from odometry and the step CVs, with the default
+    /// coefficients), m: compare with `endpoint_error_m`.
+    pub predicted_endpoint_sigma_m: Option<f64>,
     /// Egomotion outages: stretches of frames no keyframe matched, bridged
     /// by odometry.
     pub outages: Option<u32>,
@@ -129,6 +134,8 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     // egomotion estimate made from that frame with.
     let mut truth_at_frame = None;
     let mut frame_number = 0;
+    let mut predictor = EndPointPredictor::new(DecisionCosts::default());
+    let mut odometry_at_frame = None;
 
     let max_ticks = scenario.max_ticks();
     let mut end = EndReason::TimeLimit;
@@ -144,6 +151,8 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         if controller.state().stereo.number != frame_number {
             frame_number = controller.state().stereo.number;
             truth_at_frame = Some(truth);
+            odometry_at_frame = Some(odometry);
+            predictor.frame(&odometry, controller.state().egomotion.last_step_cv);
         }
         if let Some((writer, path)) = &mut trajectory {
             if let Err(e) = writer.write(
@@ -205,6 +214,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         journey_cv: egomotion.map(|e| e.journey_cv),
         egomotion_steps: egomotion.map(|e| e.steps),
         egomotion_failures: egomotion.map(|e| e.failures),
+        predicted_endpoint_sigma_m: egomotion.and(odometry_at_frame).map(|p| predictor.sigma((p.x, p.y))),
         outages: egomotion.map(|e| e.outages),
         outage_s: egomotion.map(|e| e.outage_s),
         outage_m: egomotion.map(|e| e.outage_m),

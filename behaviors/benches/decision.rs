@@ -37,8 +37,13 @@ fn decision(c: &mut Criterion) {
             KnownLandmark { position, viewpoint: (position.1 - at.1).atan2(position.0 - at.0) }
         })
         .collect();
-    let objective =
-        Objective::EndPoint { heading: 0.1, goal_bearing: 0.0, remaining_m: 30.0, costs: DecisionCosts::default() };
+    let objective = Objective::EndPoint {
+        heading: 0.1,
+        goal_bearing: 0.0,
+        remaining_m: 30.0,
+        turn_tolerance: 2f64.to_radians(),
+        costs: DecisionCosts::default(),
+    };
     // 73 headings: ±90° every 2.5°.
     let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
     c.bench_function("decision/73_headings_1000_landmarks", |b| {

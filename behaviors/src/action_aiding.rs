@@ -247,6 +247,42 @@ enum Phase {
     Step { heading: f64, from: (f64, f64) },
 }
 
+/// Watches a turn on the spot for progress. Beside another behaviour that
+/// turns the other way (AvoidCollision facing a wall, say), a command fusion
+/// can cancel the turn and leave the robot sitting still; a turn that gains
+/// less than a degree in `STUCK_S` is stuck.
+#[derive(Clone, Copy, Debug)]
+struct TurnWatch {
+    since: f64,
+    best: f64,
+    /// Going the long way round, after the short way stuck.
+    reversed: bool,
+}
+
+/// Seconds without a degree of progress after which a turn is stuck.
+const STUCK_S: f64 = 5.0;
+
+impl TurnWatch {
+    fn new() -> Self {
+        TurnWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, reversed: false }
+    }
+
+    /// Takes in the angle still to turn at `now`; whether the turn is stuck.
+    fn stuck(&mut self, now: f64, remaining: f64) -> bool {
+        if remaining < self.best - 1f64.to_radians() || !self.since.is_finite() {
+            self.best = remaining;
+            self.since = now;
+            return false;
+        }
+        if now - self.since > STUCK_S {
+            self.since = now;
+            self.best = f64::INFINITY;
+            return true;
+        }
+        false
+    }
+}
+
 /// The action-aiding behaviour: drives to the goal in steps of `step_m`,
 /// choosing each step's heading by its technique, and votes more when the
 /// egomotion of the step just done was less certain (thesis §3.5.3).
@@ -268,6 +304,7 @@ pub struct ActionAiding {
     known: Vec<KnownLandmark>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
+    watch: TurnWatch,
 }
 
 impl ActionAiding {
@@ -288,6 +325,7 @@ impl ActionAiding {
             known: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
+            watch: TurnWatch::new(),
         }
     }
 
@@ -345,9 +383,13 @@ impl ActionAiding {
         let rules = self.rules(camera);
         let objective = match self.config.objective {
             DecisionObjective::Cv => Objective::Cv,
-            DecisionObjective::EndPoint => {
-                Objective::EndPoint { heading: facing, goal_bearing: centre, remaining_m, costs: self.config.costs }
-            }
+            DecisionObjective::EndPoint => Objective::EndPoint {
+                heading: facing,
+                goal_bearing: centre,
+                remaining_m,
+                turn_tolerance: self.config.heading_tolerance_deg.to_radians(),
+                costs: self.config.costs,
+            },
         };
         let candidates = self.candidates(pose, centre);
         best_heading(table, &rules, &self.known, (pose.x, pose.y), candidates, &objective).map_or(centre, |d| d.heading)
@@ -441,18 +483,24 @@ impl Behavior for ActionAiding {
                                     centre: to_goal,
                                     from: pose.theta,
                                 };
+                                self.watch = TurnWatch::new();
                                 continue;
                             }
                         }
                     };
                     self.phase = Phase::Turn { heading };
+                    self.watch = TurnWatch::new();
                 }
                 Phase::Scan { edges, leg, centre, from } => {
-                    if angle_difference(edges[leg], pose.theta).abs() > self.config.heading_tolerance_deg.to_radians() {
+                    let error = angle_difference(edges[leg], pose.theta).abs();
+                    // A leg that cannot be finished is cut short: the scan
+                    // has seen what it could.
+                    if error > self.config.heading_tolerance_deg.to_radians() && !self.watch.stuck(state.time, error) {
                         let rate = self.config.scan_rate_deg.to_radians();
                         let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
+                    self.watch = TurnWatch::new();
                     if leg == 0 {
                         self.phase = Phase::Scan { edges, leg: 1, centre, from };
                     } else {
@@ -461,8 +509,26 @@ impl Behavior for ActionAiding {
                     }
                 }
                 Phase::Turn { heading } => {
-                    if angle_difference(heading, pose.theta).abs() > self.config.heading_tolerance_deg.to_radians() {
-                        return Action::with_vote(vote).velocity(0.0).rot_velocity(self.turn_towards(&pose, heading));
+                    let error = angle_difference(heading, pose.theta);
+                    if error.abs() > self.config.heading_tolerance_deg.to_radians() {
+                        // Stuck the short way round: try the long way; stuck
+                        // both ways, steer while driving instead, as a go-to
+                        // beside collision avoidance does.
+                        let remaining =
+                            if self.watch.reversed { std::f64::consts::TAU - error.abs() } else { error.abs() };
+                        if self.watch.stuck(state.time, remaining) {
+                            if self.watch.reversed {
+                                self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
+                                continue;
+                            }
+                            self.watch.reversed = true;
+                        }
+                        let w = if self.watch.reversed {
+                            -error.signum() * self.config.max_turn_deg.to_radians()
+                        } else {
+                            self.turn_towards(&pose, heading)
+                        };
+                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
                     self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
                 }
