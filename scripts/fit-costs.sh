@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Measures the egomotion error coefficients the end-point decision weighs:
-# runs the thesis routes with the techniques that turn (tracking and the
-# scan with the thesis's CV-only objective, and the zig-zag) on training
-# seeds, keeps every run's trajectory.csv, and fits the coefficients to them.
+# runs the thesis routes straight and with the techniques that turn
+# (tracking and the scan with the thesis's CV-only objective, and the
+# zig-zag) on training seeds, keeps every run's trajectory.csv, and fits the
+# coefficients to them.
 #
 #   scripts/fit-costs.sh                 # seeds 100..110, logs in out/fit-costs
 #   SEEDS=200..230 OUT=/tmp/logs scripts/fit-costs.sh
@@ -15,7 +16,7 @@ ubf=target/release/ubf
 scenarios=$(mktemp -d)
 trap 'rm -rf "$scenarios"' EXIT
 for route in route-1-2 route-2-1 feature-poor; do
-    for technique in Tracking Scan ZigZag; do
+    for technique in None Tracking Scan ZigZag; do
         sed "s/technique: None/technique: $technique, objective: Cv/" \
             "scenarios/thesis/$route.ron" > "$scenarios/$route-$technique.ron"
     done

@@ -141,6 +141,23 @@ enum Command {
 
 #[derive(Debug, Subcommand)]
 enum ExperimentCommand {
+    /// Table 2: single-landmark egomotion errors for one frame step, beside
+    /// the thesis's, for a range of gross stereo mismatch shares; names the
+    /// share that matches (the route scenarios use it).
+    ThesisTable2 {
+        /// The step between the two frames, m (the thesis's robot: 0.15 m).
+        #[arg(long, default_value_t = 0.15)]
+        step: f64,
+        /// Frame pairs per outlier share.
+        #[arg(long, default_value_t = 200)]
+        trials: u64,
+        /// Runs at once; by default one per core.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Table 4: journey CV of every technique in 10 random 6 m × 60 m corridors.
     ThesisTable4 {
         /// Corridors (seeds of their layouts).
@@ -511,9 +528,43 @@ fn emulate_command(listen: &str, config: &ubf_robots::arcos::emulator::EmulatorC
 }
 
 fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode {
-    use crate::experiment::{thesis_endpoint, thesis_table4, EndpointOptions, TECHNIQUES};
+    use crate::experiment::{thesis_endpoint, thesis_table2, thesis_table4, EndpointOptions, TECHNIQUES};
     let cores = || std::thread::available_parallelism().map_or(1, |n| n.get());
     let result = match which {
+        ExperimentCommand::ThesisTable2 { step, trials, jobs, json } => {
+            if !(step.is_finite() && step > 0.0 && step < 10.0) || trials == 0 || trials > 100_000 {
+                eprintln!("error: need 0 < --step < 10 m and 1 ≤ --trials ≤ 100000");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+            let shares: Vec<f64> = (0..=20).map(|k| f64::from(k) / 100.0).collect();
+            thesis_table2(registry, step, trials, &shares, jobs.unwrap_or_else(cores)).map(|table| {
+                if json {
+                    println!("{}", serde_json::to_string_pretty(&table).expect("results serialise"));
+                    return;
+                }
+                println!(
+                    "Single-landmark egomotion error for one {:.2} m frame step, pixel noise {} px, {} frame pairs per row",
+                    table.step_m, table.pixel_noise_px, table.trials
+                );
+                println!("{:>10} {:>10} {:>12} {:>8} {:>8} {:>8}", "outliers", "landmarks", "median |e| m", ">0.1 m", ">1 m", ">2 m");
+                let row = |label: String, s: &crate::experiment::Table2Stats| {
+                    println!(
+                        "{label:>10} {:>10} {:>12.3} {:>7.0}% {:>7.0}% {:>7.0}%",
+                        s.landmarks,
+                        s.median_abs_m,
+                        100.0 * s.beyond_0_1_m,
+                        100.0 * s.beyond_1_m,
+                        100.0 * s.beyond_2_m
+                    );
+                };
+                row("thesis".into(), &table.thesis);
+                for r in &table.rows {
+                    let mark = if r.outlier_share == table.best_outlier_share { " *" } else { "" };
+                    row(format!("{:.0} %{mark}", 100.0 * r.outlier_share), &r.stats);
+                }
+                println!("(* nearest the thesis beyond 1 m and 2 m: outlier_share {:.2})", table.best_outlier_share);
+            })
+        }
         ExperimentCommand::ThesisTable4 { seeds, objective, jobs, json } => {
             thesis_table4(registry, seeds, jobs.unwrap_or_else(cores), objective).map(|table| {
                 if json {

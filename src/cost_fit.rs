@@ -6,14 +6,16 @@
 //! number changes) and the motion between consecutive frames compared with
 //! the truth:
 //!
-//! - **Turns.** A stretch of frames over which the robot turned on the spot
-//!   is one turn. The heading error it leaves, `e = Δθ_ego − Δθ_true`
-//!   between the matched frames on either side, is fitted as
-//!   `E[e²] = per_turn + per_rad · |Δθ_true|` by least squares.
-//! - **Steps.** Between two matched frames of straight driving, the
-//!   translation error `|Δp_ego − Δp_true|` is fitted as
-//!   `E[e²] = (σ_cv · CV · d)²` through the origin, with `CV` the later
-//!   frame's fused step CV and `d` the metres driven.
+//! Egomotion matches keyframes metres back, so the error of one
+//! frame-to-frame step, or of the frames either side of a turn, is mostly
+//! not what stays in the pose: the next frames re-anchor. What stays shows
+//! at the end of each run, so the coefficients are fitted there, over all
+//! runs at once, by non-negative least squares:
+//! `e_end² ≈ σ_cv² · Σ (CV · d)² + Σ_turns (per_turn + per_rad · |turn|) · lever²`,
+//! with `CV` each matched straight frame's fused step CV, `d` the metres it
+//! drove, a turn a stretch of frames turning on the spot, and `lever` the
+//! distance from the turn to the end. The heading error across each turn
+//! and the single steps' translation error are reported beside the fit.
 
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -66,13 +68,15 @@ pub struct CostFit {
     pub heading_var_per_rad: f64,
     /// Heading variance any turn leaves, rad².
     pub heading_var_per_turn: f64,
-    /// Translation σ per unit of step CV and metre driven.
+    /// Translation σ per unit of step CV and metre driven that stays in the
+    /// end point.
     pub step_sigma_per_cv: f64,
     /// RMS heading error of the turns, °, and their mean size, °.
     pub turn_rms_error_deg: f64,
     /// Mean turn, °.
     pub turn_mean_deg: f64,
-    /// RMS translation error of the straight steps, m.
+    /// RMS translation error of single frame-to-frame straight steps, m
+    /// (for reference: most of it does not stay).
     pub step_rms_error_m: f64,
 }
 
@@ -94,6 +98,19 @@ struct Frame {
     ego: Pose2,
     matched: bool,
     step_cv: Option<f64>,
+}
+
+/// What one log says of its whole run.
+#[derive(Clone, Debug, Default)]
+struct RunSummary {
+    /// Where each turn ended, and how far it turned, rad.
+    turns: Vec<((f64, f64), f64)>,
+    /// Σ (CV · d)² over the matched straight steps, m².
+    step_cv_m2: f64,
+    /// The true end position.
+    end: (f64, f64),
+    /// The squared end-point error, m².
+    error2: f64,
 }
 
 /// A turn on the spot: the true heading changed by more than this between
@@ -172,33 +189,53 @@ fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
     Ok(frames)
 }
 
-/// Least squares of `y = a + b·x` with `a, b ≥ 0`.
-fn fit_line_non_negative(points: &[(f64, f64)]) -> (f64, f64) {
-    let n = points.len() as f64;
-    let (sx, sy) = points.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
-    let (mx, my) = (sx / n, sy / n);
-    let sxx: f64 = points.iter().map(|(x, _)| (x - mx).powi(2)).sum();
-    let sxy: f64 = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
-    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    let intercept = my - slope * mx;
-    if slope < 0.0 {
-        return (my.max(0.0), 0.0);
+/// Least squares of `y = c·x` over `rows` with every coefficient ≥ 0: the
+/// unconstrained solution, refitted without any coefficient that came out
+/// negative until none does.
+fn non_negative_least_squares(rows: &[([f64; 3], f64)]) -> [f64; 3] {
+    let mut active = [true; 3];
+    loop {
+        let index: Vec<usize> = (0..3).filter(|&k| active[k]).collect();
+        let n = index.len();
+        let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+        let mut b = nalgebra::DVector::<f64>::zeros(n);
+        for (x, y) in rows {
+            for (i, &p) in index.iter().enumerate() {
+                b[i] += x[p] * y;
+                for (j, &q) in index.iter().enumerate() {
+                    a[(i, j)] += x[p] * x[q];
+                }
+            }
+        }
+        let solution = a.lu().solve(&b).unwrap_or_else(|| nalgebra::DVector::zeros(n));
+        let mut out = [0.0; 3];
+        let mut negative = None;
+        for (i, &p) in index.iter().enumerate() {
+            out[p] = solution[i];
+            if solution[i] < 0.0 && negative.is_none_or(|(_, v)| solution[i] < v) {
+                negative = Some((p, solution[i]));
+            }
+        }
+        match negative {
+            Some((p, _)) => active[p] = false,
+            None => return out,
+        }
+        if !active.iter().any(|a| *a) {
+            return [0.0; 3];
+        }
     }
-    if intercept < 0.0 {
-        let sxx0: f64 = points.iter().map(|(x, _)| x * x).sum();
-        let sxy0: f64 = points.iter().map(|(x, y)| x * y).sum();
-        return (0.0, if sxx0 > 0.0 { (sxy0 / sxx0).max(0.0) } else { 0.0 });
-    }
-    (intercept, slope)
 }
 
 /// Fits the coefficients to the logs at `paths`.
 pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
-    // (|turn| rad, e² rad²) and (CV·d, e² m²).
+    // (|turn| rad, e² rad²) and (CV·d, e² m²) over all logs; per log, the
+    // places of its turns, Σ (CV·d)² and its end-point error².
     let mut turns: Vec<(f64, f64)> = Vec::new();
     let mut steps: Vec<(f64, f64)> = Vec::new();
+    let mut runs: Vec<RunSummary> = Vec::new();
     for path in paths {
         let frames = read_frames(path)?;
+        let mut run = RunSummary::default();
         let mut k = 0;
         while k + 1 < frames.len() {
             let (a, b) = (frames[k], frames[k + 1]);
@@ -215,8 +252,9 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                     end += 1;
                 }
                 let (a, b) = (frames[k], frames[end]);
+                let turned = angle_difference(b.truth.theta, a.truth.theta);
+                run.turns.push(((b.truth.x, b.truth.y), turned.abs()));
                 if a.matched && b.matched {
-                    let turned = angle_difference(b.truth.theta, a.truth.theta);
                     let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), turned);
                     turns.push((turned.abs(), error * error));
                 }
@@ -229,17 +267,32 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                     let ego_step = b.ego.relative_to(&a.ego);
                     let error = (ego_step.x - true_step.x).hypot(ego_step.y - true_step.y);
                     steps.push((cv * driven, error * error));
+                    run.step_cv_m2 += (cv * driven).powi(2);
                 }
             }
             k += 1;
+        }
+        if let Some(last) = frames.last() {
+            run.end = (last.truth.x, last.truth.y);
+            run.error2 = (last.ego.x - last.truth.x).powi(2) + (last.ego.y - last.truth.y).powi(2);
+            runs.push(run);
         }
     }
     if turns.len() < 3 || steps.len() < 3 {
         return Err(CostFitError::TooLittle { logs: paths.len(), turns: turns.len(), steps: steps.len() });
     }
-    let (per_turn, per_rad) = fit_line_non_negative(&turns);
-    let (sxx, sxy) = steps.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x * x * x * x, b + x * x * y));
-    let step_var_per_cv2 = if sxx > 0.0 { (sxy / sxx).max(0.0) } else { 0.0 };
+    // What stays in the end point, fitted over the runs at once:
+    // e² ≈ σ_cv² · Σ (CV·d)² + Σ_turns (per_turn + per_rad · |turn|) · lever².
+    let rows: Vec<([f64; 3], f64)> = runs
+        .iter()
+        .map(|run| {
+            let lever2 = |(x, y): (f64, f64)| (run.end.0 - x).powi(2) + (run.end.1 - y).powi(2);
+            let per_turn: f64 = run.turns.iter().map(|(at, _)| lever2(*at)).sum();
+            let per_rad: f64 = run.turns.iter().map(|(at, t)| t * lever2(*at)).sum();
+            ([run.step_cv_m2, per_turn, per_rad], run.error2)
+        })
+        .collect();
+    let [step_var_per_cv2, per_turn, per_rad] = non_negative_least_squares(&rows);
     let mean = |v: &[(f64, f64)], f: &dyn Fn(&(f64, f64)) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
     Ok(CostFit {
         logs: paths.len(),
@@ -259,52 +312,61 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_line_is_fitted_and_kept_non_negative() {
-        let points: Vec<(f64, f64)> = (0..10).map(|i| (f64::from(i), 2.0 + 3.0 * f64::from(i))).collect();
-        let (a, b) = fit_line_non_negative(&points);
-        assert!((a - 2.0).abs() < 1e-9 && (b - 3.0).abs() < 1e-9);
-        let falling: Vec<(f64, f64)> = (0..10).map(|i| (f64::from(i), 10.0 - f64::from(i))).collect();
-        assert_eq!(fit_line_non_negative(&falling).1, 0.0);
-        let through_zero: Vec<(f64, f64)> = (1..10).map(|i| (f64::from(i), -1.0 + 2.0 * f64::from(i))).collect();
-        let (a, b) = fit_line_non_negative(&through_zero);
-        assert_eq!(a, 0.0);
-        assert!(b > 1.5 && b < 2.0, "{b}");
+    fn least_squares_recover_coefficients_and_keep_them_non_negative() {
+        let xs = [[1.0, 0.0, 2.0], [0.5, 3.0, 1.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0], [0.0, 2.0, 5.0]];
+        let exact: Vec<([f64; 3], f64)> = xs.iter().map(|x| (*x, 2.0 * x[0] + 0.5 * x[1] + 0.1 * x[2])).collect();
+        let c = non_negative_least_squares(&exact);
+        for (got, want) in c.iter().zip([2.0, 0.5, 0.1]) {
+            assert!((got - want).abs() < 1e-9, "{c:?}");
+        }
+        // A coefficient the data want negative is dropped, not kept below 0.
+        let negative: Vec<([f64; 3], f64)> = xs.iter().map(|x| (*x, 2.0 * x[0] - 0.5 * x[1])).collect();
+        let c = non_negative_least_squares(&negative);
+        assert!(c.iter().all(|v| *v >= 0.0), "{c:?}");
+        assert_eq!(c[1], 0.0, "{c:?}");
     }
 
     #[test]
-    fn coefficients_come_back_from_synthetic_logs() {
-        // A log whose egomotion overshoots every turn by sqrt(1e-4·|turn|):
-        // a heading variance of 1e-4 rad² per radian turned, and none per
-        // turn.
+    fn a_log_is_read_into_turns_steps_and_its_end_point() {
+        // Straight legs and turns on the spot; egomotion overshoots every
+        // turn by 0.01 rad, so the end point is off by what the last legs
+        // inherit.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("trajectory.csv");
         let mut text =
             String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
-        let (mut x, mut theta, mut ego_theta, mut frame) = (0.0, 0.0, 0.0, 0);
-        let mut push = |x: f64, theta: f64, ego_x: f64, ego_theta: f64, frame: u32| {
-            text += &format!("0,{x},0,{theta},{ego_x},0,{ego_theta},0,0.1,{frame}\n");
+        let (mut truth, mut ego, mut frame) = (Pose2::default(), Pose2::default(), 0);
+        let mut push = |t: &Pose2, e: &Pose2, frame: u32| {
+            text += &format!("0,{},{},{},{},{},{},0,0.1,{frame}\n", t.x, t.y, t.theta, e.x, e.y, e.theta);
         };
-        for leg in 0..12 {
+        for leg in 0..6 {
             for _ in 0..4 {
                 frame += 1;
-                x += 0.3;
-                push(x, theta, x * 1.0, ego_theta, frame);
+                truth = truth.compose(&Pose2::new(0.3, 0.0, 0.0));
+                ego = ego.compose(&Pose2::new(0.3, 0.0, 0.0));
+                push(&truth, &ego, frame);
             }
-            let turn: f64 = if leg % 2 == 0 { 0.5 } else { -0.25 };
-            let overshoot = (1e-4 * turn.abs()).sqrt();
+            let turn = if leg % 2 == 0 { 0.5 } else { -0.5 };
             for _ in 0..3 {
                 frame += 1;
-                theta += turn / 3.0;
-                ego_theta += (turn + overshoot) / 3.0;
-                push(x, theta, x, ego_theta, frame);
+                truth = truth.compose(&Pose2::new(0.0, 0.0, turn / 3.0));
+                ego = ego.compose(&Pose2::new(0.0, 0.0, (turn + 0.01) / 3.0));
+                push(&truth, &ego, frame);
             }
         }
         std::fs::write(&path, text).unwrap();
-        let fit = fit_costs(&[path]).unwrap();
-        assert_eq!(fit.turns, 12);
-        assert!((fit.heading_var_per_rad - 1e-4).abs() < 1e-8, "{fit:?}");
-        assert!(fit.heading_var_per_turn < 1e-9, "{fit:?}");
-        // The steps are exact but for the heading error they inherit.
-        assert!(fit.step_rms_error_m < 0.03, "{fit:?}");
+        let fit = fit_costs(std::slice::from_ref(&path)).unwrap();
+        assert_eq!((fit.logs, fit.turns), (1, 6));
+        assert!((fit.turn_rms_error_deg - 0.01f64.to_degrees()).abs() < 1e-6, "{fit:?}");
+        assert!((fit.turn_mean_deg - 0.5f64.to_degrees()).abs() < 1e-6, "{fit:?}");
+        assert!(fit.step_rms_error_m < 0.01, "steps inherit only the turns' error: {fit:?}");
+        // A log without ground truth is refused with its line.
+        std::fs::write(
+            &path,
+            "time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n0,,,,1,2,3,0,,1\n",
+        )
+        .unwrap();
+        let e = fit_costs(&[path]).unwrap_err().to_string();
+        assert!(e.contains(":2:") && e.contains("ground truth"), "{e}");
     }
 }

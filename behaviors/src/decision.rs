@@ -85,14 +85,15 @@ impl DecisionCosts {
     }
 }
 
-/// Measured by `scripts/fit-costs.sh` (`ubf model fit-costs` on 90 runs of
-/// the thesis routes with tracking, the scan and the zig-zag, seeds
-/// 100..110: 1 346 turns, 7 456 straight steps); see `docs/results.md`.
-const STEP_SIGMA_PER_CV: f64 = 3.1;
-/// As above: the turns' heading errors did not grow with the angle turned.
+/// Measured by `scripts/fit-costs.sh`: `ubf model fit-costs` on 120 runs of
+/// the thesis routes driven straight, with tracking, the scan and the
+/// zig-zag (seeds 100..110), fitting what stays in the end point; see
+/// `docs/results.md`.
+const STEP_SIGMA_PER_CV: f64 = 1.08;
+/// As above: the end points showed no growth with the angle turned.
 const HEADING_VAR_PER_RAD: f64 = 0.0;
-/// As above: 1.4° RMS per turn.
-const HEADING_VAR_PER_TURN: f64 = 6.2e-4;
+/// As above: 0.22° per turn on the spot.
+const HEADING_VAR_PER_TURN: f64 = 1.5e-5;
 
 impl Default for DecisionCosts {
     fn default() -> Self {
@@ -399,7 +400,8 @@ struct View {
     min_slant2: f64,
     min_stereo2: f64,
     max_range2: f64,
-    cos_viewpoint: f64,
+    /// cos² of the viewpoint limit, which is kept under 90°.
+    cos2_viewpoint: f64,
 }
 
 impl View {
@@ -414,7 +416,7 @@ impl View {
             min_slant2: rules.min_slant_m.powi(2),
             min_stereo2: rules.min_stereo_range_m.powi(2),
             max_range2: rules.max_range_m.powi(2),
-            cos_viewpoint: rules.max_viewpoint_change.min(std::f64::consts::PI).cos(),
+            cos2_viewpoint: rules.max_viewpoint_change.clamp(0.0, std::f64::consts::FRAC_PI_2).cos().powi(2),
         }
     }
 
@@ -444,9 +446,11 @@ impl View {
                 continue;
             }
             // The line of sight from the projected position against the
-            // one it was last seen along: cos of the angle between them.
+            // one it was last seen along: `dot ≥ |sight|·cos(limit)`,
+            // squared to spare a root (the limit is under 90°).
             let (sight_x, sight_y) = (o.dx - self.step * self.cos, o.dy - self.step * self.sin);
-            if sight_x * o.seen_x + sight_y * o.seen_y < range2.sqrt() * self.cos_viewpoint {
+            let dot = sight_x * o.seen_x + sight_y * o.seen_y;
+            if dot < 0.0 || dot * dot < range2 * self.cos2_viewpoint {
                 continue;
             }
             seen.information += table.information(lateral, depth);

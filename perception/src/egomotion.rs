@@ -245,6 +245,11 @@ pub struct EgomotionConfig {
     /// rejected (thesis §4.4.6), m/s.
     #[serde(default = "EgomotionConfig::default_max_speed", deserialize_with = "positive")]
     pub max_speed: f64,
+    /// Rejects a visual motion that disagrees with odometry's by more than
+    /// odometry can err over the same stretch: a wrong consensus of far
+    /// landmarks. `None` turns the check off (pure egomotion).
+    #[serde(default = "EgomotionConfig::default_odometry_gate")]
+    pub odometry_gate: Option<OdometryGate>,
     /// The robot's top turn rate: turns faster than this, or wider than
     /// the field of view, are impossible between frames that share
     /// landmarks and rejected, °/s.
@@ -263,6 +268,9 @@ fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usi
 impl EgomotionConfig {
     fn default_max_speed() -> f64 {
         0.6
+    }
+    fn default_odometry_gate() -> Option<OdometryGate> {
+        Some(OdometryGate::default())
     }
     fn default_max_turn_rate() -> f64 {
         100.0
@@ -297,6 +305,52 @@ impl Default for EgomotionConfig {
             good_match_landmarks: Self::default_good_match(),
             max_speed: Self::default_max_speed(),
             max_turn_rate_deg: Self::default_max_turn_rate(),
+            odometry_gate: Self::default_odometry_gate(),
+        }
+    }
+}
+
+/// How far a visual motion may disagree with odometry's before it is taken
+/// for a wrong match.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OdometryGate {
+    /// Position disagreement allowed at zero distance, m…
+    #[serde(default = "OdometryGate::default_metres", deserialize_with = "non_negative")]
+    pub metres: f64,
+    /// …plus this share of the distance odometry drove.
+    #[serde(default = "OdometryGate::default_share", deserialize_with = "non_negative")]
+    pub share: f64,
+    /// Heading disagreement allowed at zero distance, °…
+    #[serde(default = "OdometryGate::default_degrees", deserialize_with = "non_negative")]
+    pub degrees: f64,
+    /// …plus this much per metre driven.
+    #[serde(default = "OdometryGate::default_degrees_per_m", deserialize_with = "non_negative")]
+    pub degrees_per_m: f64,
+}
+
+impl OdometryGate {
+    fn default_metres() -> f64 {
+        0.3
+    }
+    fn default_share() -> f64 {
+        0.1
+    }
+    fn default_degrees() -> f64 {
+        5.0
+    }
+    fn default_degrees_per_m() -> f64 {
+        1.0
+    }
+}
+
+impl Default for OdometryGate {
+    fn default() -> Self {
+        OdometryGate {
+            metres: Self::default_metres(),
+            share: Self::default_share(),
+            degrees: Self::default_degrees(),
+            degrees_per_m: Self::default_degrees_per_m(),
         }
     }
 }
@@ -694,7 +748,7 @@ impl Tracker {
         }
         let mut best: Option<(usize, Estimate)> = None;
         for i in order {
-            let Some(estimate) = self.estimate_from(i, frame) else { continue };
+            let Some(estimate) = self.estimate_from(i, frame, odometry) else { continue };
             if estimate.landmarks >= self.config.good_match_landmarks {
                 return Some((i, estimate));
             }
@@ -707,7 +761,7 @@ impl Tracker {
 
     /// The motion from keyframe `index` to `frame`, if the estimator finds
     /// one.
-    fn estimate_from(&mut self, index: usize, frame: &StereoFrame) -> Option<Estimate> {
+    fn estimate_from(&mut self, index: usize, frame: &StereoFrame, odometry: &Pose2) -> Option<Estimate> {
         let keyframe = &self.keyframes[index];
         match_frames(&keyframe.landmarks, &frame.landmarks, &self.config.matching, &mut self.matches);
         let mount = self.camera.mount;
@@ -735,6 +789,21 @@ impl Tracker {
             .min(self.camera.horizontal_fov());
         if motion.yaw.abs() > max_turn {
             return None;
+        }
+        // Far landmarks fix a bearing well and a range poorly, so a wrong
+        // consensus among them can shift the motion along the line of sight
+        // by metres; such a motion disagrees with odometry by far more than
+        // odometry ever errs over a keyframe's reach.
+        if let Some(gate) = &self.config.odometry_gate {
+            let odometric = odometry.relative_to(&keyframe.odometry);
+            let driven = odometric.x.hypot(odometric.y);
+            let off = (motion.forward - odometric.x).hypot(motion.left - odometric.y);
+            let turned = angle_difference(motion.yaw, odometric.theta).abs();
+            if off > gate.metres + gate.share * driven
+                || turned > (gate.degrees + gate.degrees_per_m * driven).to_radians()
+            {
+                return None;
+            }
         }
         Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)) })
     }
@@ -872,21 +941,23 @@ mod tests {
                     landmarks: frame(&landmarks(), *pose, &camera),
                     calibration: None,
                 },
-                &Pose2::default(),
+                pose,
             );
         }
-        tracker
-            .update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &Pose2::default());
+        // Odometry says the robot stood still since: the failed frame is
+        // bridged by no motion.
+        let odometry = poses[1];
+        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &odometry);
         let s = tracker.state();
         assert_eq!((s.steps, s.failures), (2, 1));
         assert!((s.pose.unwrap().x - 0.25).abs() < 1e-6, "a failure moves nothing: {:?}", s.pose);
         // The same frame twice is not a new step.
-        tracker
-            .update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &Pose2::default());
+        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &odometry);
         assert_eq!(tracker.state().steps, 2);
         // The next good frame, 0.5 m on from the reference, recovers it all.
         let seen = frame(&landmarks(), Pose2::new(0.75, 0.0, 0.0), &camera);
-        tracker.update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None }, &Pose2::default());
+        let odometry = Pose2::new(0.7, 0.0, 0.0);
+        tracker.update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None }, &odometry);
         assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
     }
 
@@ -988,10 +1059,27 @@ mod tests {
         }
         let mut direct = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
         direct.update(&at(1, 0.0, seen(0)), &Pose2::default());
-        direct.update(&at(2, 16.0, seen(32)), &Pose2::default());
+        direct.update(&at(2, 16.0, seen(32)), &Pose2::new(8.0, 0.0, 0.0));
         let (a, b) = (tracker.state().pose.unwrap(), direct.state().pose.unwrap());
         assert!(a.distance_to(b.x, b.y) < 1e-9 && (a.theta - b.theta).abs() < 1e-9, "{a:?} vs {b:?}");
         assert!(tracker.keyframes() > 1, "new keyframes are still taken as the robot moves on");
+    }
+
+    #[test]
+    fn a_motion_odometry_cannot_explain_is_rejected() {
+        // Odometry says 0.25 m; the frames say 3 m (a wrong consensus):
+        // rejected, and bridged by odometry. Without the gate, accepted.
+        let camera = StereoCamera::default();
+        let seen = |x| frame(&landmarks(), Pose2::new(x, 0.0, 0.0), &camera);
+        for (gate, expected) in [(Some(OdometryGate::default()), 0.25), (None, 3.0)] {
+            let config = EgomotionConfig { odometry_gate: gate, max_speed: 10.0, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+            tracker.update(&at(1, 0.0, seen(0.0)), &Pose2::default());
+            tracker.update(&at(2, 0.5, seen(3.0)), &Pose2::new(0.25, 0.0, 0.0));
+            let s = tracker.state();
+            assert!((s.pose.unwrap().x - expected).abs() < 1e-6, "{gate:?}: {s:?}");
+            assert_eq!(s.failures, u32::from(gate.is_some()));
+        }
     }
 
     #[test]
