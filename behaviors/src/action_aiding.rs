@@ -2,7 +2,7 @@
 //! stereo egomotion is least uncertain.
 
 use crate::clearance::{echo_points, free_distance};
-use crate::decision::{best_heading, DecisionCosts, DecisionRules, KnownLandmark, Objective};
+use crate::decision::{best_heading, DecisionCosts, DecisionRules, Objective};
 use crate::tracking::{TrackingConfig, TrackingList};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -301,7 +301,7 @@ pub struct ActionAiding {
     path: Option<((f64, f64), f64)>,
     zig_side: f64,
     zig_limit: f64,
-    known: Vec<KnownLandmark>,
+    positions: Vec<(f64, f64)>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
     watch: TurnWatch,
@@ -322,7 +322,7 @@ impl ActionAiding {
             path: None,
             zig_side: 1.0,
             zig_limit: 0.0,
-            known: Vec::new(),
+            positions: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
             watch: TurnWatch::new(),
@@ -343,7 +343,6 @@ impl ActionAiding {
             max_range_m: c.max_range_m,
             baseline_m: camera.baseline_m,
             min_stereo_range_m: camera.baseline_m / 2.0 / (c.max_stereo_viewpoint_deg.to_radians() / 2.0).tan(),
-            max_viewpoint_change: c.tracking.drop_viewpoint_deg.to_radians(),
             min_landmarks: c.min_landmarks,
         }
     }
@@ -377,9 +376,10 @@ impl ActionAiding {
     /// heading, the goal's bearing `centre`.
     fn evaluate(&mut self, pose: &Pose2, facing: f64, centre: f64, remaining_m: f64) -> f64 {
         let Some((camera, table)) = &self.camera else { return centre };
-        self.known.clear();
-        self.known
-            .extend(self.list.confirmed().map(|l| KnownLandmark { position: l.position, viewpoint: l.viewpoint }));
+        // The tracking list has dropped the landmarks seen from too far round
+        // to be recognised from here.
+        self.positions.clear();
+        self.positions.extend(self.list.confirmed().map(|l| l.position));
         let rules = self.rules(camera);
         let objective = match self.config.objective {
             DecisionObjective::Cv => Objective::Cv,
@@ -392,7 +392,8 @@ impl ActionAiding {
             },
         };
         let candidates = self.candidates(pose, centre);
-        best_heading(table, &rules, &self.known, (pose.x, pose.y), candidates, &objective).map_or(centre, |d| d.heading)
+        best_heading(table, &rules, &self.positions, (pose.x, pose.y), candidates, &objective)
+            .map_or(centre, |d| d.heading)
     }
 
     fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {

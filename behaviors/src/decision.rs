@@ -25,23 +25,9 @@ pub struct DecisionRules {
     /// Nearer than this, the two cameras see a landmark from too different
     /// directions for their descriptors to match (thesis §4.4.10.3), m.
     pub min_stereo_range_m: f64,
-    /// A landmark counts only if it would be seen from within this angle of
-    /// the direction it was last seen from (the tracking list's drop angle:
-    /// descriptors stop matching, and a wall poster turns edge-on), rad.
-    pub max_viewpoint_change: f64,
     /// Fewer landmarks in view than this and egomotion would fail: the
     /// heading is infeasible.
     pub min_landmarks: usize,
-}
-
-/// A landmark the engine plans with: where it is, and from which world
-/// direction (robot to landmark) it was last seen.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KnownLandmark {
-    /// World position on the floor, m.
-    pub position: (f64, f64),
-    /// World direction from the robot to it when last seen, rad.
-    pub viewpoint: f64,
 }
 
 /// The error coefficients of egomotion the end-point objective weighs, both
@@ -229,8 +215,10 @@ const NEAR_STEPS: f64 = 4.0;
 const BANDS: usize = 4;
 
 /// The best heading among `candidates` (world angles) for a robot at
-/// `position` among `landmarks`: the one of least `objective` over the
-/// landmarks predicted in view after one projected step. A heading with
+/// `position` among `landmarks` (world floor positions, each recognisable
+/// from here: the tracking list drops those seen from too far round): the
+/// one of least `objective` over the landmarks predicted in view after one
+/// projected step. A heading with
 /// fewer than `min_landmarks` in view (egomotion would fail) or with one
 /// nearer than the slant limit is rejected. Ties go to the candidate listed
 /// first. `None` if every heading is rejected.
@@ -242,7 +230,7 @@ const BANDS: usize = 4;
 pub fn best_heading(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[KnownLandmark],
+    landmarks: &[(f64, f64)],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
     objective: &Objective,
@@ -273,8 +261,8 @@ pub fn best_heading(
     // A counting sort by key.
     let mut starts = vec![0usize; NEAR + 2];
     let mut keys = Vec::with_capacity(landmarks.len());
-    for l in landmarks {
-        let key = key_of(l.position.0 - position.0, l.position.1 - position.1);
+    for &(lx, ly) in landmarks {
+        let key = key_of(lx - position.0, ly - position.1);
         starts[key + 1] += 1;
         keys.push(key);
     }
@@ -282,9 +270,9 @@ pub fn best_heading(
         starts[k + 1] += starts[k];
     }
     let mut fill = starts.clone();
-    let mut sorted = vec![Offset::default(); landmarks.len()];
-    for (l, &key) in landmarks.iter().zip(&keys) {
-        sorted[fill[key]] = Offset::new(l, position);
+    let mut sorted = vec![(0.0, 0.0); landmarks.len()];
+    for (&(lx, ly), &key) in landmarks.iter().zip(&keys) {
+        sorted[fill[key]] = (lx - position.0, ly - position.1);
         fill[key] += 1;
     }
     let nearby = &sorted[starts[NEAR]..starts[NEAR + 1]];
@@ -298,6 +286,11 @@ pub fn best_heading(
 
     let mut best: Option<Decision> = None;
     for heading in candidates {
+        // A heading whose turns alone cost more than the best so far cannot
+        // win, whatever it sees.
+        if best.is_some_and(|b| objective.cost(heading, 0.0, rules.step_m) >= b.cost) {
+            continue;
+        }
         // Eq. 40–43: the robot projected one step ahead along the heading.
         let view = View::new(rules, heading);
         let centre = bucket_of(heading.rem_euclid(TAU));
@@ -306,7 +299,7 @@ pub fn best_heading(
             let Some(sum) = seen else { break };
             let within = |from: usize, to: usize| &sorted[starts[band * BUCKETS + from]..starts[band * BUCKETS + to]];
             // The window is one run of the band, or two where it wraps.
-            let runs: [&[Offset]; 2] = if 2 * span + 1 >= BUCKETS {
+            let runs: [&[(f64, f64)]; 2] = if 2 * span + 1 >= BUCKETS {
                 [within(0, BUCKETS), &[]]
             } else {
                 let (lo, hi) = ((centre + BUCKETS - span) % BUCKETS, (centre + span) % BUCKETS);
@@ -360,23 +353,6 @@ fn fast_atan2(y: f64, x: f64) -> f64 {
     }
 }
 
-/// A landmark as an offset from the robot, with the unit vector of the
-/// direction it was last seen from.
-#[derive(Clone, Copy, Debug, Default)]
-struct Offset {
-    dx: f64,
-    dy: f64,
-    seen_x: f64,
-    seen_y: f64,
-}
-
-impl Offset {
-    fn new(landmark: &KnownLandmark, from: (f64, f64)) -> Self {
-        let (s, c) = landmark.viewpoint.sin_cos();
-        Offset { dx: landmark.position.0 - from.0, dy: landmark.position.1 - from.1, seen_x: c, seen_y: s }
-    }
-}
-
 /// What a view holds: summed information (Σ 1/CV) and landmarks counted.
 #[derive(Clone, Copy, Debug, Default)]
 struct Seen {
@@ -400,8 +376,6 @@ struct View {
     min_slant2: f64,
     min_stereo2: f64,
     max_range2: f64,
-    /// cos² of the viewpoint limit, which is kept under 90°.
-    cos2_viewpoint: f64,
 }
 
 impl View {
@@ -416,22 +390,21 @@ impl View {
             min_slant2: rules.min_slant_m.powi(2),
             min_stereo2: rules.min_stereo_range_m.powi(2),
             max_range2: rules.max_range_m.powi(2),
-            cos2_viewpoint: rules.max_viewpoint_change.clamp(0.0, std::f64::consts::FRAC_PI_2).cos().powi(2),
         }
     }
 
-    /// The information and count of the landmarks in view, or `None` if one
-    /// is nearer than the slant limit (an obstacle). A landmark counts if it
-    /// is in both images, within range, far enough for stereo matching, and
-    /// seen from near the direction it was last seen from.
+    /// The information and count of the landmarks in view, given as offsets
+    /// from the robot's current position, or `None` if one is nearer than
+    /// the slant limit (an obstacle). A landmark counts if it is in both
+    /// images, within range, and far enough for stereo matching.
     #[inline]
-    fn information(&self, table: &CvTable, offsets: &[Offset]) -> Option<Seen> {
+    fn information(&self, table: &CvTable, offsets: &[(f64, f64)]) -> Option<Seen> {
         let mut seen = Seen::default();
-        for o in offsets {
+        for &(dx, dy) in offsets {
             // Eq. 44–48 without trigonometry: depth along the heading from
             // the projected position, lateral offset to the right.
-            let depth = o.dx * self.cos + o.dy * self.sin - self.step;
-            let lateral = o.dx * self.sin - o.dy * self.cos;
+            let depth = dx * self.cos + dy * self.sin - self.step;
+            let lateral = dx * self.sin - dy * self.cos;
             if depth <= 0.0 || lateral.abs() > depth * self.tan_half {
                 continue;
             }
@@ -443,14 +416,6 @@ impl View {
                 || range2 < self.min_stereo2
                 || lateral.abs() + self.half_baseline > depth * self.tan_half
             {
-                continue;
-            }
-            // The line of sight from the projected position against the
-            // one it was last seen along: `dot ≥ |sight|·cos(limit)`,
-            // squared to spare a root (the limit is under 90°).
-            let (sight_x, sight_y) = (o.dx - self.step * self.cos, o.dy - self.step * self.sin);
-            let dot = sight_x * o.seen_x + sight_y * o.seen_y;
-            if dot < 0.0 || dot * dot < range2 * self.cos2_viewpoint {
                 continue;
             }
             seen.information += table.information(lateral, depth);
@@ -465,12 +430,12 @@ impl View {
 pub fn best_heading_exhaustive(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[KnownLandmark],
+    landmarks: &[(f64, f64)],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
     objective: &Objective,
 ) -> Option<Decision> {
-    let offsets: Vec<Offset> = landmarks.iter().map(|l| Offset::new(l, position)).collect();
+    let offsets: Vec<(f64, f64)> = landmarks.iter().map(|&(x, y)| (x - position.0, y - position.1)).collect();
     let mut best = None;
     for heading in candidates {
         let seen = View::new(rules, heading).information(table, &offsets);
@@ -493,7 +458,6 @@ mod tests {
             max_range_m: 80.0,
             baseline_m: 0.6,
             min_stereo_range_m: 1.12,
-            max_viewpoint_change: 20f64.to_radians(),
             min_landmarks: 1,
         }
     }
@@ -506,20 +470,12 @@ mod tests {
         (-9..=9).map(|i| f64::from(i) * 5f64.to_radians())
     }
 
-    /// Landmarks last seen from `from`.
-    fn seen_from(from: (f64, f64), points: &[(f64, f64)]) -> Vec<KnownLandmark> {
-        points
-            .iter()
-            .map(|&(x, y)| KnownLandmark { position: (x, y), viewpoint: (y - from.1).atan2(x - from.0) })
-            .collect()
-    }
-
     #[test]
     fn prefers_putting_a_landmark_off_centre_and_near() {
         let t = table();
         // One landmark 10 m ahead, 2 m left: looking straight at it is the
         // worst choice; turning so it sits near the edge of the view is best.
-        let landmarks = seen_from((0.0, 0.0), &[(10.0, 2.0)]);
+        let landmarks = vec![(10.0, 2.0)];
         let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
         let straight_at = 2f64.atan2(10.0);
         assert!((d.heading - straight_at).abs() > 15f64.to_radians(), "{}", d.heading.to_degrees());
@@ -547,22 +503,19 @@ mod tests {
         // Every heading on its own, so a landmark missed by any window would
         // show: corridors of many landmarks, and sparse landmarks all round
         // at every distance band with headings all round the circle; random
-        // viewpoints, both objectives, and one or four landmarks needed.
+        // both objectives, and one or four landmarks needed.
         use rand::{Rng, SeedableRng};
         let t = table();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         for round in 0..100 {
             let (count, radius) = if round % 2 == 0 { (300, 0.0) } else { (rng.random_range(1..12), 30.0) };
-            let landmarks: Vec<KnownLandmark> = (0..count)
-                .map(|_| {
-                    let position = match radius {
-                        0.0 => (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0)),
-                        r => {
-                            let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
-                            (d * a.cos(), d * a.sin())
-                        }
-                    };
-                    KnownLandmark { position, viewpoint: rng.random_range(-4.0..4.0) }
+            let landmarks: Vec<(f64, f64)> = (0..count)
+                .map(|_| match radius {
+                    0.0 => (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0)),
+                    r => {
+                        let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
+                        (d * a.cos(), d * a.sin())
+                    }
                 })
                 .collect();
             let at = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
@@ -597,12 +550,12 @@ mod tests {
     fn rejects_headings_without_landmarks_or_with_one_too_near() {
         let t = table();
         // Only landmark far to the left, out of view for right headings.
-        let left = seen_from((0.0, 0.0), &[(5.0, 4.0)]);
+        let left = vec![(5.0, 4.0)];
         let d = best_heading(&t, &rules(), &left, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
         assert!(d.heading > 0.0);
         // A landmark right in front is an obstacle: straight ahead is out;
         // 34° left puts it out of view and a far landmark in.
-        let landmarks = seen_from((0.0, 0.0), &[(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)]);
+        let landmarks = vec![(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)];
         let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0, 0.6], &Objective::Cv).unwrap();
         assert_eq!(d.heading, 0.6);
         assert!(best_heading(&t, &rules(), &[], (0.0, 0.0), headings(), &Objective::Cv).is_none());
@@ -618,21 +571,12 @@ mod tests {
         let edge = (10.0, -(10.0 - 0.25) * 30f64.to_radians().tan() + 0.1);
         let mut points = three.to_vec();
         points.push(edge);
-        let landmarks = seen_from((0.0, 0.0), &points);
+        let landmarks = points;
         let four = DecisionRules { min_landmarks: 4, ..rules() };
         assert!(best_heading(&t, &four, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
         let three_needed = DecisionRules { min_landmarks: 3, ..rules() };
         let d = best_heading(&t, &three_needed, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).unwrap();
         assert_eq!(d.landmarks, 3);
-    }
-
-    #[test]
-    fn a_landmark_seen_from_elsewhere_does_not_count() {
-        let t = table();
-        // Last seen from 90° round (a poster on a side wall, seen face on):
-        // from here it is edge-on.
-        let landmarks = [KnownLandmark { position: (10.0, 0.0), viewpoint: std::f64::consts::FRAC_PI_2 }];
-        assert!(best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
     }
 
     #[test]
@@ -671,7 +615,7 @@ mod tests {
         // metre to go it turns.
         let mut points: Vec<(f64, f64)> = (0..11).map(|i| (50.0, -25.0 + 5.0 * f64::from(i))).collect();
         points.extend((0..6).map(|i| (3.0 + 0.3 * f64::from(i), 3.5 + 0.2 * f64::from(i))));
-        let landmarks = seen_from((0.0, 0.0), &points);
+        let landmarks = points;
         let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
         let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
         assert!(cv.heading > 20f64.to_radians(), "{}", cv.heading.to_degrees());

@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
-use ubf_core::{angle_difference, Descriptor, LandmarkObservation, Pose2, StereoCalibration};
+use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoCalibration};
 use ubf_perception::egomotion::MatchConfig;
 
 /// Settings of the tracking list.
@@ -57,8 +57,9 @@ pub struct TrackedLandmark {
     pub position: (f64, f64),
     /// Its descriptor when last seen.
     pub descriptor: Descriptor,
-    /// The world direction from the robot to it when last seen (eq. 37).
-    pub viewpoint: f64,
+    /// The world direction from the robot to it when last seen, as a unit
+    /// vector (eq. 37).
+    pub seen_along: (f64, f64),
     /// Times it was seen where the list expected it. A landmark seen once
     /// may be a wrong stereo match or a look-alike of another; it is
     /// planned with only once seen again within the gate.
@@ -89,6 +90,16 @@ pub struct TrackingList {
     entries: Vec<TrackedLandmark>,
     /// Scratch: the entries within an observation's gate.
     in_gate: Vec<usize>,
+}
+
+/// `(x, y)` scaled to unit length (the x axis for a zero vector).
+fn unit(x: f64, y: f64) -> (f64, f64) {
+    let length = x.hypot(y);
+    if length > 0.0 {
+        (x / length, y / length)
+    } else {
+        (1.0, 0.0)
+    }
 }
 
 /// Where an observation is in the world, from the robot's pose (eq. 25–29).
@@ -138,8 +149,8 @@ impl TrackingList {
         for obs in observations {
             let position = world_position(obs, calibration, pose);
             let range = pose.distance_to(position.0, position.1);
-            let viewpoint = (position.1 - pose.y).atan2(position.0 - pose.x);
-            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, viewpoint, sightings: 1 };
+            let seen_along = unit(position.0 - pose.x, position.1 - pose.y);
+            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, seen_along, sightings: 1 };
             let gate = self.config.gate_m + self.config.gate_per_m * range;
             self.in_gate.clear();
             self.in_gate.extend((0..self.entries.len()).filter(|&i| {
@@ -172,11 +183,11 @@ impl TrackingList {
     /// After a step: drops every landmark the robot now sees from more than
     /// the drop angle away from where it last saw it (eq. 37).
     pub fn prune(&mut self, pose: &Pose2) -> usize {
-        let limit = self.config.drop_viewpoint_deg.to_radians();
+        let cos_limit = self.config.drop_viewpoint_deg.to_radians().cos();
         let before = self.entries.len();
         self.entries.retain(|e| {
-            let now = (e.position.1 - pose.y).atan2(e.position.0 - pose.x);
-            angle_difference(now, e.viewpoint).abs() <= limit
+            let now = unit(e.position.0 - pose.x, e.position.1 - pose.y);
+            now.0 * e.seen_along.0 + now.1 * e.seen_along.1 >= cos_limit
         });
         before - self.entries.len()
     }
