@@ -22,5 +22,5 @@ for route in route-1-2 route-2-1 feature-poor; do
     done
 done
 rm -rf "$out"
-"$ubf" sweep "$scenarios"/*.ron --seeds "$seeds" --out "$out" --trajectories
+"$ubf" sweep "$scenarios"/*.ron --seeds "$seeds" --out "$out" --trajectories >&2
 "$ubf" model fit-costs "$out" "$@"

@@ -141,6 +141,31 @@ enum Command {
 
 #[derive(Debug, Subcommand)]
 enum ExperimentCommand {
+    /// Where aiding pays: vary one factor of route 1→2 at a time (corridor
+    /// width, landmark count, side-wall share, featureless stretch,
+    /// detection range, pixel noise), choose the best aided technique on the
+    /// development seeds, and measure its gain over straight driving on
+    /// held-out seeds in a held-out layout; table, JSON and a PNG map.
+    WhereAidingPays {
+        /// Seeds the best technique is chosen on.
+        #[arg(long, default_value = "0..30", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Seeds the gain is measured on.
+        #[arg(long, default_value = "1000..1030", value_parser = parse_seeds)]
+        held_out_seeds: std::ops::Range<u64>,
+        /// The held-out landmark layout.
+        #[arg(long, default_value_t = 101)]
+        layout_seed: u64,
+        /// Runs at once; by default one per core.
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Draw the map here (PNG).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Table 2: single-landmark egomotion errors for one frame step, beside
     /// the thesis's, for a range of gross stereo mismatch shares; names the
     /// share that matches (the route scenarios use it).
@@ -201,6 +226,10 @@ enum ExperimentCommand {
         /// thesis's step CV, turns free).
         #[arg(long, default_value = "end-point", value_parser = parse_objective)]
         objective: DecisionObjective,
+        /// Drive with the thesis's decoupled motion (turn on the spot, then
+        /// translate) instead of the routes' continuous profile.
+        #[arg(long)]
+        rotate_then_translate: bool,
     },
 }
 
@@ -531,6 +560,63 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
     use crate::experiment::{thesis_endpoint, thesis_table2, thesis_table4, EndpointOptions, TECHNIQUES};
     let cores = || std::thread::available_parallelism().map_or(1, |n| n.get());
     let result = match which {
+        ExperimentCommand::WhereAidingPays { seeds, held_out_seeds, layout_seed, jobs, plot, json } => {
+            let runs = 3 * seeds.clone().count() + 2 * held_out_seeds.clone().count();
+            if runs == 0 || runs > 100_000 {
+                eprintln!("error: need 1 to 20000 seeds in each set");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+            let bar = indicatif::ProgressBar::new(24);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} environments, {elapsed} ({eta} left)")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            let progress = |done: usize, total: usize| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            };
+            let jobs = jobs.unwrap_or_else(cores);
+            let result = crate::environment_map::where_aiding_pays(
+                registry,
+                seeds,
+                held_out_seeds,
+                layout_seed,
+                jobs,
+                &progress,
+            );
+            bar.finish_and_clear();
+            result.map(|map| {
+                if let Some(path) = &plot {
+                    match crate::plot::draw_environment_map(&map, path) {
+                        Ok(()) => eprintln!("wrote {}", path.display()),
+                        Err(e) => eprintln!("error: {e}"),
+                    }
+                }
+                if json {
+                    println!("{}", serde_json::to_string_pretty(&map).expect("results serialise"));
+                    return;
+                }
+                println!(
+                    "Best aided technique (chosen on seeds {}..{}) over straight driving, end-point error on seeds {}..{} in layout {}",
+                    map.development_seeds[0],
+                    map.development_seeds[1],
+                    map.held_out_seeds[0],
+                    map.held_out_seeds[1],
+                    map.held_out_layout_seed
+                );
+                println!(
+                    "{:<20} {:>9} {:>9} {:>11} {:>10} {:>7} {:>16}",
+                    "factor", "level", "best", "straight m", "aided m", "ratio", "95 % CI"
+                );
+                for c in &map.cells {
+                    let base = if c.base { " (base)" } else { "" };
+                    println!(
+                        "{:<20} {:>9} {:>9} {:>11.3} {:>10.3} {:>7.2} [{:>5.2}, {:>5.2}]{base}",
+                        c.factor, c.level, c.best, c.straight_m, c.aided_m, c.ratio, c.ratio_ci95[0], c.ratio_ci95[1]
+                    );
+                }
+            })
+        }
         ExperimentCommand::ThesisTable2 { step, trials, jobs, json } => {
             if !(step.is_finite() && step > 0.0 && step < 10.0) || trials == 0 || trials > 100_000 {
                 eprintln!("error: need 0 < --step < 10 m and 1 ≤ --trials ≤ 100000");
@@ -593,8 +679,19 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
                 println!("\n(* did not reach the goal in time)");
             })
         }
-        ExperimentCommand::ThesisEndpoint { seeds, jobs, json, rendered, layout_seed, objective } => {
-            let options = EndpointOptions { seeds, jobs: jobs.unwrap_or_else(cores), rendered, layout_seed, objective };
+        ExperimentCommand::ThesisEndpoint {
+            seeds,
+            jobs,
+            json,
+            rendered,
+            layout_seed,
+            objective,
+            rotate_then_translate,
+        } => {
+            let profile = rotate_then_translate
+                .then_some(ubf_robots::sim::MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 });
+            let options =
+                EndpointOptions { seeds, jobs: jobs.unwrap_or_else(cores), rendered, layout_seed, objective, profile };
             thesis_endpoint(registry, &options).map(|result| {
                 if json {
                     println!("{}", serde_json::to_string_pretty(&result).expect("results serialise"));

@@ -15,6 +15,7 @@ use std::ops::Range;
 use ubf_behaviors::{DecisionObjective, Technique};
 use ubf_core::{BehaviorSpec, Registry};
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
+use ubf_robots::sim::MotionProfile;
 
 /// The techniques, in the thesis's order.
 pub const TECHNIQUES: [Technique; 4] = [Technique::None, Technique::ZigZag, Technique::Scan, Technique::Tracking];
@@ -36,10 +37,18 @@ fn load(registry: &Registry, name: &'static str, text: &str) -> Result<Scenario,
     Scenario::from_ron(registry, text).map_err(|e| ExperimentError::Scenario { name, message: e.to_string() })
 }
 
+/// Route `index` of the end-point experiment, loaded, with its zig-zag
+/// offset.
+pub fn load_route(registry: &Registry, index: usize) -> Result<(Scenario, f64), ExperimentError> {
+    let (_, name, text, zigzag) = ROUTES[index];
+    Ok((load(registry, name, text)?, zigzag))
+}
+
 /// `base` with its tree driven by `technique` (with the zig-zag's largest
 /// offset `zigzag_offset`, which depends on the corridor's width, and the
-/// evaluative techniques' `objective`) and egomotion by `estimator`.
-fn variant(
+/// evaluative techniques' `objective`) and egomotion by `estimator`: the
+/// tree every experiment runs.
+pub fn variant(
     registry: &Registry,
     base: &Scenario,
     technique: Technique,
@@ -192,6 +201,8 @@ pub struct Endpoint {
     pub layout_seed: Option<u64>,
     /// What the evaluative techniques minimised.
     pub objective: DecisionObjective,
+    /// The motion profile, when it replaced the routes' own.
+    pub profile: Option<MotionProfile>,
     /// Where the landmarks came from: `geometric` (the camera model
     /// projects them) or `rendered` (the feature pipeline finds them in
     /// rendered images).
@@ -240,12 +251,16 @@ pub struct EndpointOptions {
     pub layout_seed: Option<u64>,
     /// What the evaluative techniques minimise.
     pub objective: DecisionObjective,
+    /// The robot's motion profile, when it replaces the routes' own
+    /// (continuous): the thesis's rotate-then-translate suits the
+    /// simplified estimator.
+    pub profile: Option<MotionProfile>,
 }
 
 /// End-point egomotion error of every technique on every route with both
 /// estimators.
 pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result<Endpoint, ExperimentError> {
-    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective } = options.clone();
+    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective, profile } = options.clone();
     let estimators = [
         ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
@@ -258,6 +273,9 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         }
         if let (Some(seed), Some(landmarks)) = (layout_seed, base.world.random_landmarks.as_mut()) {
             landmarks.seed = Some(seed);
+        }
+        if let Some(profile) = profile {
+            base.robot.motion = profile;
         }
         for (estimator, kind) in estimators {
             for technique in TECHNIQUES {
@@ -279,7 +297,7 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
     }
     let camera = if rendered { "rendered" } else { "geometric" };
     let mut routes =
-        Endpoint { seeds: [seeds.start, seeds.end], layout_seed, objective, camera, routes: BTreeMap::new() };
+        Endpoint { seeds: [seeds.start, seeds.end], layout_seed, objective, profile, camera, routes: BTreeMap::new() };
     for (i, reports) in by_case {
         let (route, estimator, technique, _) = &scenarios[i];
         routes.routes.entry(route).or_default().entry(estimator).or_default().insert(technique, cell(&reports));

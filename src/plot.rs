@@ -220,3 +220,67 @@ pub fn draw_error_model(
     root.present().map_err(|e| fail(&e))?;
     Ok(())
 }
+
+/// Draws the environment map: one row per factor, one cell per level,
+/// coloured by the held-out ratio of the best aided technique's end-point
+/// error to straight driving's (green where aiding pays, red where it
+/// costs), each cell labelled with the technique, the ratio and its 95 %
+/// interval; the base route's cells are outlined.
+pub fn draw_environment_map(map: &crate::environment_map::EnvironmentMap, path: &Path) -> Result<(), PlotError> {
+    let fail = |e: &dyn std::fmt::Display| PlotError { path: path.display().to_string(), message: e.to_string() };
+    register_font();
+    let mut factors: Vec<&str> = Vec::new();
+    for c in &map.cells {
+        if !factors.contains(&c.factor) {
+            factors.push(c.factor);
+        }
+    }
+    let columns = factors.iter().map(|f| map.cells.iter().filter(|c| c.factor == *f).count()).max().unwrap_or(1);
+    let (label_w, cell_w, cell_h, top, bottom) = (190i32, 190i32, 84i32, 70i32, 70i32);
+    let width = (label_w + cell_w * columns as i32 + 20) as u32;
+    let height = (top + cell_h * factors.len() as i32 + bottom) as u32;
+    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let title = format!(
+        "Where aiding pays: best aided / straight end-point error (held-out seeds {}..{}, layout {})",
+        map.held_out_seeds[0], map.held_out_seeds[1], map.held_out_layout_seed
+    );
+    root.draw(&Text::new(title, (12, 14), ("sans-serif", 18))).map_err(|e| fail(&e))?;
+    // Green below 1, red above, saturating at a factor of 2 either way.
+    let colour = |ratio: f64| {
+        let t = (ratio.max(1e-3).log2()).clamp(-1.0, 1.0);
+        let (r, g, b) = if t < 0.0 {
+            let u = -t;
+            (255.0 - 155.0 * u, 255.0 - 55.0 * u, 255.0 - 155.0 * u)
+        } else {
+            (255.0 - 15.0 * t, 255.0 - 155.0 * t, 255.0 - 155.0 * t)
+        };
+        RGBColor(r as u8, g as u8, b as u8)
+    };
+    for (row, factor) in factors.iter().enumerate() {
+        let y = top + cell_h * row as i32;
+        root.draw(&Text::new(factor.to_string(), (12, y + cell_h / 2 - 8), ("sans-serif", 16)))
+            .map_err(|e| fail(&e))?;
+        for (col, cell) in map.cells.iter().filter(|c| c.factor == *factor).enumerate() {
+            let x = label_w + cell_w * col as i32;
+            let corners = [(x + 2, y + 2), (x + cell_w - 2, y + cell_h - 2)];
+            root.draw(&Rectangle::new(corners, colour(cell.ratio).filled())).map_err(|e| fail(&e))?;
+            let edge = if cell.base { BLACK.stroke_width(3) } else { RGBColor(180, 180, 180).stroke_width(1) };
+            root.draw(&Rectangle::new(corners, edge)).map_err(|e| fail(&e))?;
+            let lines = [
+                format!("{}: {}", cell.level, cell.best),
+                format!("× {:.2}", cell.ratio),
+                format!("[{:.2}, {:.2}]", cell.ratio_ci95[0], cell.ratio_ci95[1]),
+            ];
+            for (k, line) in lines.iter().enumerate() {
+                let at = (x + 10, y + 8 + 24 * k as i32);
+                root.draw(&Text::new(line.clone(), at, ("sans-serif", 15))).map_err(|e| fail(&e))?;
+            }
+        }
+    }
+    let note = "Each cell: the level, the aided technique with the least error on the development seeds, and its error over straight driving's on held-out runs with 95 % CI. Green: aiding pays; red: it costs. Outlined: the base route.";
+    let at = (12, top + cell_h * factors.len() as i32 + 20);
+    root.draw(&Text::new(note, at, ("sans-serif", 13))).map_err(|e| fail(&e))?;
+    root.present().map_err(|e| fail(&e))?;
+    Ok(())
+}

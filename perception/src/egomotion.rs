@@ -18,7 +18,7 @@
 //!   It needs three consistent landmarks.
 
 use crate::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
-use crate::fusion::{fuse_cv, weighted_mean};
+use crate::fusion::{fuse_cv, weighted_mean, weighted_median};
 use crate::stereo::StereoCamera;
 use nalgebra::{Matrix2, Vector2};
 use rand::seq::index::sample;
@@ -26,7 +26,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{angle_difference, Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
+use ubf_core::{angle_difference, Command, Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame, Turn};
 
 /// A planar motion of the robot between two frames, in the earlier frame's
 /// robot frame.
@@ -139,10 +139,26 @@ pub struct Simple2dConfig {
     /// Translation compensation TC (eq. 61); the thesis left it at 1.
     #[serde(default = "one", deserialize_with = "positive")]
     pub tc: f64,
+    /// The fixes the estimator needs to survive a robot that turns: the
+    /// motion type taken from the commanded phase (a turn on the spot, or a
+    /// straight step) where it is known, a translation threshold scaled to
+    /// each landmark's depth noise, weighted medians instead of means (one
+    /// near-triangulated outlier cannot capture the estimate), and a
+    /// range-consistency gate around the median. `false` is the estimator
+    /// exactly as §4.4.7 describes it.
+    #[serde(default = "yes")]
+    pub robust: bool,
+    /// Pixel noise assumed when scaling the threshold and the gate, px.
+    #[serde(default = "Simple2dConfig::default_pixel_sigma", deserialize_with = "positive")]
+    pub pixel_sigma: f64,
 }
 
 fn one() -> f64 {
     1.0
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Simple2dConfig {
@@ -150,6 +166,9 @@ impl Simple2dConfig {
         0.02
     }
     fn default_rotation() -> f64 {
+        0.3
+    }
+    fn default_pixel_sigma() -> f64 {
         0.3
     }
 }
@@ -161,6 +180,8 @@ impl Default for Simple2dConfig {
             rotation_threshold_deg: Self::default_rotation(),
             rc: 1.0,
             tc: 1.0,
+            robust: true,
+            pixel_sigma: Self::default_pixel_sigma(),
         }
     }
 }
@@ -369,30 +390,54 @@ pub struct Simple2d;
 impl Simple2d {
     /// The motion the pairs vote for and how many voted for it, or `None`
     /// when no landmark gives a usable vote. `max_step` is the longest
-    /// translation possible.
-    fn estimate(config: &Simple2dConfig, pairs: &[Pair], max_step: f64) -> Option<(PlanarMotion, usize)> {
-        let mut translation: Vec<(f64, f64)> = Vec::new();
+    /// translation possible; `phase` what the robot was commanded to do
+    /// since the reference frame.
+    fn estimate(
+        config: &Simple2dConfig,
+        camera: &StereoCamera,
+        pairs: &[Pair],
+        max_step: f64,
+        phase: MotionPhase,
+    ) -> Option<(PlanarMotion, usize)> {
+        // σ of a landmark's range change between two frames.
+        let range_sigma = |r: f64| std::f64::consts::SQRT_2 * camera.depth_sigma(r, config.pixel_sigma);
+        let mut translation: Vec<(f64, f64, f64)> = Vec::new();
         let mut rotation: Vec<(f64, f64)> = Vec::new();
         let mut stationary: Vec<f64> = Vec::new();
         for p in pairs {
             let ([x0, y0, _], [x1, y1, _]) = (p.before, p.after);
-            let range_change = (x0.hypot(y0) - x1.hypot(y1)).abs();
-            if range_change > config.translation_threshold_m {
+            let range = x0.hypot(y0);
+            let range_change = (range - x1.hypot(y1)).abs();
+            let threshold = if config.robust {
+                config.translation_threshold_m.max(2.0 * range_sigma(range))
+            } else {
+                config.translation_threshold_m
+            };
+            if range_change > threshold {
                 // Eq. 51, signed: a landmark ahead comes nearer as the robot
                 // advances; negative or impossibly fast speeds are noise or
                 // moving landmarks (§4.4.6).
                 let t = y0 - y1;
                 if t >= 0.0 && t <= max_step {
-                    translation.push((t, p.cv));
+                    translation.push((t, p.cv, range_sigma(range)));
                 }
             } else {
                 // Eq. 52–54: bearings positive to the right.
                 let turned = (x0 / y0).atan() - (x1 / y1).atan();
                 if turned.abs() > config.rotation_threshold_deg.to_radians() {
                     rotation.push((turned, p.cv));
-                } else {
+                } else if range_change <= config.translation_threshold_m {
                     stationary.push(p.cv);
                 }
+                // Else the range changed, but within its noise: the landmark
+                // cannot tell a short step from standing still, so it
+                // abstains.
+            }
+        }
+        if config.robust {
+            // Votes far from the median are not the robot's motion.
+            if let Some(median) = weighted_median(translation.iter().map(|v| (v.0, v.1))) {
+                translation.retain(|v| (v.0 - median).abs() <= 3.0 * v.2);
             }
         }
         let categories = [
@@ -400,19 +445,75 @@ impl Simple2d {
             fuse_cv(rotation.iter().map(|m| m.1)),
             fuse_cv(stationary.iter().copied()),
         ];
-        let (winner, _) = categories
-            .iter()
-            .enumerate()
-            .filter_map(|(i, cv)| cv.map(|cv| (i, cv)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        // The commanded phase says which kind of motion it was; otherwise
+        // the category with the smallest fused CV wins (eq. 55–58).
+        let commanded = match (config.robust, phase) {
+            (true, MotionPhase::Turning) => Some(1),
+            (true, MotionPhase::Translating) => Some(0),
+            _ => None,
+        };
+        let winner = match commanded.filter(|&k| categories[k].is_some()) {
+            Some(k) => k,
+            None => {
+                categories
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, cv)| cv.map(|cv| (i, cv)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1))?
+                    .0
+            }
+        };
         let voters = [translation.len(), rotation.len(), stationary.len()][winner];
+        let average =
+            |votes: Vec<(f64, f64)>| if config.robust { weighted_median(votes) } else { weighted_mean(votes) };
         let motion = match winner {
-            0 => PlanarMotion { forward: config.tc * weighted_mean(translation)?, ..PlanarMotion::default() },
+            0 => PlanarMotion {
+                forward: config.tc * average(translation.iter().map(|v| (v.0, v.1)).collect())?,
+                ..PlanarMotion::default()
+            },
             // Eq. 59: the heading changes by minus the bearing change.
-            1 => PlanarMotion { yaw: -config.rc * weighted_mean(rotation)?, ..PlanarMotion::default() },
+            1 => PlanarMotion { yaw: -config.rc * average(rotation)?, ..PlanarMotion::default() },
             _ => PlanarMotion::default(),
         };
         Some((motion, voters))
+    }
+}
+
+/// What the robot was commanded to do between two frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MotionPhase {
+    /// Nothing known, or a mix of turning and driving.
+    #[default]
+    Unknown,
+    /// Only turns on the spot.
+    Turning,
+    /// Only driving straight (turn rates under a few degrees a second).
+    Translating,
+    /// Standing still.
+    Still,
+}
+
+impl MotionPhase {
+    /// The phase after also being commanded `command`.
+    fn and(self, command: &Command) -> MotionPhase {
+        // Below this, a turn rate is steering, not turning, rad/s.
+        const STEERING: f64 = 0.05;
+        let this = match *command {
+            Command::Stop => MotionPhase::Still,
+            Command::Drive { velocity, turn: Turn::Rate(rate) } => match (velocity.abs() < 1e-3, rate.abs() < STEERING)
+            {
+                (true, true) => MotionPhase::Still,
+                (true, false) => MotionPhase::Turning,
+                (false, true) => MotionPhase::Translating,
+                (false, false) => MotionPhase::Unknown,
+            },
+            Command::Drive { turn: Turn::Heading { .. }, .. } => MotionPhase::Unknown,
+        };
+        match (self, this) {
+            (MotionPhase::Still, other) | (other, MotionPhase::Still) => other,
+            (a, b) if a == b => a,
+            _ => MotionPhase::Unknown,
+        }
     }
 }
 
@@ -582,6 +683,10 @@ pub struct Tracker {
     last_match: f64,
     /// When the current outage began, if one is under way.
     outage_since: Option<f64>,
+    /// What the robot was commanded to do since the newest frame.
+    phase: MotionPhase,
+    /// The same, up to the newest frame: what the next step is told.
+    commanded: MotionPhase,
     state: EgomotionState,
     matches: Vec<(usize, usize)>,
     pairs: Vec<Pair>,
@@ -608,6 +713,8 @@ impl Tracker {
             newest: (0, Pose2::default()),
             last_match: 0.0,
             outage_since: None,
+            phase: MotionPhase::Still,
+            commanded: MotionPhase::Still,
             state: EgomotionState { pose: Some(start), ..EgomotionState::default() },
             matches: Vec::new(),
             pairs: Vec::new(),
@@ -622,6 +729,12 @@ impl Tracker {
     /// The error model's look-up table the tracker weighs landmarks with.
     pub fn table(&self) -> &CvTable {
         &self.table
+    }
+
+    /// Takes note of a command sent to the robot: the simplified estimator
+    /// reads the motion type from the commanded phase.
+    pub fn commanded(&mut self, command: &Command) {
+        self.commanded = self.commanded.and(command);
     }
 
     /// Keyframes in the bank now.
@@ -643,6 +756,8 @@ impl Tracker {
             return;
         }
         let previous_odometry = std::mem::replace(&mut self.newest, (frame.number, *odometry)).1;
+        // The commands between the last frame and this one.
+        self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
         let Some(pose) = self.state.pose else { return };
         if self.keyframes.is_empty() {
             self.last_match = frame.time;
@@ -780,7 +895,7 @@ impl Tracker {
         let dt = (frame.time - keyframe.time).max(1e-6);
         let max_step = self.config.max_speed * dt * 1.5 + 0.02;
         let (motion, landmarks) = match &self.config.estimator {
-            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.pairs, max_step),
+            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase),
             EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng),
         }?;
         // Frames that share landmarks cannot have turned further apart than
@@ -920,12 +1035,22 @@ mod tests {
             let p = *poses.last().unwrap();
             poses.push(p.compose(&Pose2::new(0.25, 0.0, 0.0)));
         }
-        let state = run(EstimatorKind::Simple2d(Simple2dConfig::default()), &poses);
-        let (end, truth) = (state.pose.unwrap(), *poses.last().unwrap());
-        // The simplified estimator reads translation off depth changes, which
-        // for a turned robot mix in the lateral offset: close, not exact.
-        assert!(end.distance_to(truth.x, truth.y) < 0.1, "{end:?} vs {truth:?}");
-        assert!((end.theta - truth.theta).abs() < 1f64.to_radians(), "{end:?} vs {truth:?}");
+        // The robot tells the tracker what it was commanded (as the robot
+        // wrapper does), so each step is read as the motion it was.
+        let camera = StereoCamera::default();
+        let estimator = EstimatorKind::Simple2d(Simple2dConfig::default());
+        let mut tracker =
+            Tracker::new(EgomotionConfig { estimator, ..EgomotionConfig::default() }, camera, poses[0], 1);
+        for (n, pose) in poses.iter().enumerate() {
+            let turning = n > 0 && (pose.theta - poses[n - 1].theta).abs() > 1e-9;
+            let rate = if turning { 0.17 } else { 0.0 };
+            let velocity = if turning || n == 0 { 0.0 } else { 0.5 };
+            tracker.commanded(&Command::Drive { velocity, turn: Turn::Rate(rate) });
+            tracker.update(&at(n as u64 + 1, n as f64 * 0.5, frame(&landmarks(), *pose, &camera)), pose);
+        }
+        let (end, truth) = (tracker.state().pose.unwrap(), *poses.last().unwrap());
+        assert!(end.distance_to(truth.x, truth.y) < 1e-6, "{end:?} vs {truth:?}");
+        assert!((end.theta - truth.theta).abs() < 1e-6, "{end:?} vs {truth:?}");
     }
 
     #[test]

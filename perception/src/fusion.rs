@@ -18,9 +18,41 @@ pub fn weighted_mean(measurements: impl IntoIterator<Item = (f64, f64)>) -> Opti
     (weight > 0.0).then(|| sum / weight)
 }
 
+/// The weighted median of `(value, CV)` measurements, weights 1/CV: half the
+/// weight lies on either side. Unlike the mean, a few wild measurements
+/// cannot move it far.
+pub fn weighted_median(measurements: impl IntoIterator<Item = (f64, f64)>) -> Option<f64> {
+    let mut votes: Vec<(f64, f64)> = measurements
+        .into_iter()
+        .filter(|(v, cv)| v.is_finite() && cv.is_finite() && *cv > 0.0)
+        .map(|(v, cv)| (v, 1.0 / cv))
+        .collect();
+    votes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = votes.iter().map(|v| v.1).sum();
+    let mut below = 0.0;
+    for (value, weight) in &votes {
+        below += weight;
+        if below >= total / 2.0 {
+            return Some(*value);
+        }
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_weighted_median_ignores_a_wild_vote() {
+        // Four votes near 0.25 m and one at 7.9 m from a near landmark whose
+        // small CV weighs more than any other (thesis Table 2's −7.90): the
+        // mean is dragged metres off, the median is not.
+        let votes = [(0.24, 1.0), (0.26, 1.0), (0.25, 1.0), (0.27, 1.0), (7.9, 0.4)];
+        assert!(weighted_mean(votes).unwrap() > 3.0);
+        assert_eq!(weighted_median(votes), Some(0.27));
+        assert_eq!(weighted_median([]), None);
+    }
 
     #[test]
     fn two_measurements_follow_equations_5_and_6() {

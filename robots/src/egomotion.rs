@@ -45,6 +45,9 @@ impl<R: Robot> Robot for EgomotionRobot<R> {
     }
 
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        if let Some(tracker) = &mut self.tracker {
+            tracker.commanded(command);
+        }
         self.inner.act(command)
     }
 

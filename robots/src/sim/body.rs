@@ -32,7 +32,7 @@ impl StartPose {
 }
 
 /// How the body executes drive commands.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum MotionProfile {
     /// Drive and turn at once, as commanded.

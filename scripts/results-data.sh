@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Runs every command docs/results.md reports, leaving their output in out/
+# for scripts/results-page.py. About 15 minutes on two cores.
+#
+#   scripts/results-data.sh && python3 scripts/results-page.py
+#
+# With ABLATION=1 it also builds the commits the "What each fix did" table
+# compares, in a scratch worktree, and runs the end-point experiment there.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+mkdir -p out
+cargo build --release --quiet
+ubf=target/release/ubf
+"$ubf" model fit > out/fit.txt
+"$ubf" experiment thesis-table2 --json > out/table2.json
+OUT=out/fit-costs scripts/fit-costs.sh --json > out/fit-costs.json
+"$ubf" experiment thesis-table4 --json > out/table4.json
+"$ubf" experiment thesis-endpoint --json > out/endpoint.json
+"$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
+for layout in 101 202 303; do
+    "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
+done
+"$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
+"$ubf" experiment where-aiding-pays --plot docs/where-aiding-pays.png --json > out/where-aiding-pays.json
+if [ "${ABLATION:-0}" = 1 ]; then
+    # The code before the keyframe bank, then after each fix in turn.
+    commits=(a7c19a4 383fdec 9bf8784 f752499)
+    scratch=$(mktemp -d)
+    trap 'git worktree remove --force "$scratch/tree" 2>/dev/null || true; rm -rf "$scratch"' EXIT
+    for k in "${!commits[@]}"; do
+        git worktree add --force --detach "$scratch/tree" "${commits[$k]}" > /dev/null
+        (cd "$scratch/tree" && CARGO_TARGET_DIR="$PWD/../target" cargo build --release --quiet \
+            && "../target/release/ubf" experiment thesis-endpoint --json) > "out/ablation-$k.json"
+        git worktree remove --force "$scratch/tree"
+    done
+fi
