@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every command docs/results.md reports, leaving their output in out/
-# for scripts/results-page.py. About 15 minutes on two cores.
+# for scripts/results-page.py. About 4 minutes on two cores.
 #
 #   scripts/results-data.sh && python3 scripts/results-page.py
 #
@@ -17,6 +17,7 @@ OUT=out/fit-costs scripts/fit-costs.sh --json > out/fit-costs.json
 "$ubf" experiment thesis-table4 --json > out/table4.json
 "$ubf" experiment thesis-endpoint --json > out/endpoint.json
 "$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
+"$ubf" experiment thesis-endpoint --rotate-then-translate --json > out/endpoint-rtt.json
 for layout in 101 202 303; do
     "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
 done

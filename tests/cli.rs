@@ -193,3 +193,44 @@ fn rendered_frames_are_recorded_identically_and_replayed() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(text(&missing.stderr).contains("frames.csv"), "{}", text(&missing.stderr));
 }
+
+#[test]
+fn thesis_table2_names_the_outlier_share_that_matches() {
+    let out = ubf(&["experiment", "thesis-table2", "--trials", "50", "--json"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["thesis"]["landmarks"], 13);
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 21);
+    // More gross mismatches, a heavier tail.
+    let tail = |k: usize| rows[k]["stats"]["beyond_2_m"].as_f64().unwrap();
+    assert!(tail(0) < tail(10) && tail(10) < tail(20), "{} {} {}", tail(0), tail(10), tail(20));
+    let best = v["best_outlier_share"].as_f64().unwrap();
+    assert!(rows.iter().any(|r| r["outlier_share"].as_f64() == Some(best)));
+    // Nonsense is refused, not run.
+    let bad = ubf(&["experiment", "thesis-table2", "--step", "-1"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", text(&bad.stderr));
+}
+
+#[test]
+fn where_aiding_pays_maps_every_environment_and_draws_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("map.png");
+    let png_arg = png.to_str().unwrap();
+    let args = ["experiment", "where-aiding-pays", "--seeds", "0..2", "--held-out-seeds", "5..7", "--plot", png_arg];
+    let out = ubf(&[&args[..], &["--json"]].concat());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cells = v["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 24);
+    for c in cells {
+        let (ratio, ci) = (c["ratio"].as_f64().unwrap(), c["ratio_ci95"].as_array().unwrap());
+        assert!(ratio > 0.0 && ci[0].as_f64().unwrap() <= ratio && ratio <= ci[1].as_f64().unwrap(), "{c}");
+        assert!(["zigzag", "scan", "tracking"].contains(&c["best"].as_str().unwrap()), "{c}");
+    }
+    // One base cell per factor, all the same environment.
+    let base: Vec<_> = cells.iter().filter(|c| c["base"] == true).collect();
+    assert_eq!(base.len(), 6);
+    assert!(base.iter().all(|c| c["ratio"] == base[0]["ratio"]));
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+}
