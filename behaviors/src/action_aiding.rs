@@ -305,6 +305,33 @@ pub struct ActionAiding {
     echoes: Vec<(f64, f64)>,
     decisions: u64,
     watch: TurnWatch,
+    /// Landmarks the last evaluated heading was predicted to keep in view,
+    /// and how many the camera delivered at the end of the step taken.
+    predicted: Option<usize>,
+    seen: Option<usize>,
+    check: PredictionCheck,
+}
+
+/// How the tracking list's predictions compare with what the camera then
+/// sees: the landmarks the chosen heading was predicted to keep in view,
+/// against the landmarks in the last frame of the step taken along it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PredictionCheck {
+    /// Steps compared.
+    pub steps: u64,
+    /// Mean landmarks predicted in view.
+    pub mean_predicted: f64,
+    /// Mean landmarks the camera delivered.
+    pub mean_seen: f64,
+}
+
+impl PredictionCheck {
+    fn add(&mut self, predicted: usize, seen: usize) {
+        let n = self.steps as f64;
+        self.mean_predicted = (self.mean_predicted * n + predicted as f64) / (n + 1.0);
+        self.mean_seen = (self.mean_seen * n + seen as f64) / (n + 1.0);
+        self.steps += 1;
+    }
 }
 
 impl ActionAiding {
@@ -326,12 +353,21 @@ impl ActionAiding {
             echoes: Vec::new(),
             decisions: 0,
             watch: TurnWatch::new(),
+            predicted: None,
+            seen: None,
+            check: PredictionCheck::default(),
         }
     }
 
     /// Decisions made so far.
     pub fn decisions(&self) -> u64 {
         self.decisions
+    }
+
+    /// How the evaluative decisions' predicted landmark counts compared
+    /// with what the camera then saw.
+    pub fn prediction_check(&self) -> PredictionCheck {
+        self.check
     }
 
     fn rules(&self, camera: &StereoCamera) -> DecisionRules {
@@ -392,8 +428,10 @@ impl ActionAiding {
             },
         };
         let candidates = self.candidates(pose, centre);
-        best_heading(table, &rules, &self.positions, (pose.x, pose.y), candidates, &objective)
-            .map_or(centre, |d| d.heading)
+        let decision = best_heading(table, &rules, &self.positions, (pose.x, pose.y), candidates, &objective);
+        self.predicted = decision.map(|d| d.landmarks);
+        self.seen = None;
+        decision.map_or(centre, |d| d.heading)
     }
 
     fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {
@@ -445,6 +483,9 @@ impl Behavior for ActionAiding {
                 if self.config.technique == Technique::Tracking || scanning {
                     self.list.observe(&frame.landmarks, calibration, &pose);
                 }
+                if matches!(self.phase, Phase::Step { .. }) {
+                    self.seen = Some(frame.landmarks.len());
+                }
             }
         }
         echo_points(state, &mut self.echoes);
@@ -456,6 +497,9 @@ impl Behavior for ActionAiding {
             match self.phase {
                 Phase::Decide => {
                     self.decisions += 1;
+                    if let (Some(predicted), Some(seen)) = (self.predicted.take(), self.seen.take()) {
+                        self.check.add(predicted, seen);
+                    }
                     if self.config.technique == Technique::Tracking {
                         self.list.prune(&pose);
                     }

@@ -19,7 +19,7 @@ mod go_to;
 mod stop;
 pub mod tracking;
 
-pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, Technique};
+pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, PredictionCheck, Technique};
 pub use avoid::{AvoidCollision, AvoidCollisionConfig};
 pub use go_to::{GoTo, GoToConfig};
 pub use stop::{Stop, StopConfig};
