@@ -59,8 +59,8 @@ enum Command {
         /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
         #[arg(long, value_parser = parse_seeds)]
         seeds: std::ops::Range<u64>,
-        /// Runs at once; by default one per core.
-        #[arg(long)]
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Where the reports and the summary go.
         #[arg(long)]
@@ -156,8 +156,8 @@ enum ExperimentCommand {
         /// The held-out landmark layout.
         #[arg(long, default_value_t = 101)]
         layout_seed: u64,
-        /// Runs at once; by default one per core.
-        #[arg(long)]
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Draw the map here (PNG).
         #[arg(long)]
@@ -176,8 +176,8 @@ enum ExperimentCommand {
         /// Frame pairs per outlier share.
         #[arg(long, default_value_t = 200)]
         trials: u64,
-        /// Runs at once; by default one per core.
-        #[arg(long)]
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Print the results as JSON.
         #[arg(long)]
@@ -193,8 +193,8 @@ enum ExperimentCommand {
         /// thesis's step CV, turns free).
         #[arg(long, default_value = "cv", value_parser = parse_objective)]
         objective: DecisionObjective,
-        /// Runs at once; by default one per core.
-        #[arg(long)]
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Print the results as JSON.
         #[arg(long)]
@@ -206,8 +206,8 @@ enum ExperimentCommand {
         /// Seeds per route, technique and estimator.
         #[arg(long, default_value = "0..30", value_parser = parse_seeds)]
         seeds: std::ops::Range<u64>,
-        /// Runs at once; by default one per core.
-        #[arg(long)]
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Print the results as JSON.
         #[arg(long)]
@@ -294,6 +294,18 @@ pub fn main_with(registry: Registry) -> ExitCode {
             return ExitCode::from(if e.use_stderr() { EXIT_BAD_INPUT } else { 0 });
         }
     };
+    // A closed pipe (`ubf run S | head -1`) ends a command quietly with the
+    // conventional status, as it does any Unix filter, instead of a panic.
+    // Not for the commands that drive a robot: they notice a closed output
+    // as a write error and stop the robot before they exit.
+    #[cfg(unix)]
+    if !matches!(cli.command, Command::Drive { .. } | Command::EmulatePowerbot { .. }) {
+        // SAFETY: restoring the default action of a signal, before any
+        // thread has started.
+        unsafe {
+            libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        }
+    }
     match cli.command {
         Command::Run { file, seed, out, json } => run_command(&registry, file, seed, out, json),
         Command::Check { files } => check_command(&registry, &files),
@@ -748,6 +760,14 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
             eprintln!("error: {e}");
             ExitCode::from(EXIT_FAILURE)
         }
+    }
+}
+
+fn parse_jobs(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("at least one job is needed".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("`{text}` is not a number of jobs")),
     }
 }
 

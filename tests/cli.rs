@@ -234,3 +234,30 @@ fn where_aiding_pays_maps_every_environment_and_draws_it() {
     assert!(base.iter().all(|c| c["ratio"] == base[0]["ratio"]));
     assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
 }
+
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_a_command_quietly() {
+    // `ubf run S --json | head -0`: the reader is gone before the report is
+    // written. The command ends as Unix filters do (killed by SIGPIPE, no
+    // message), not with a panic and exit 101.
+    use std::os::unix::process::ExitStatusExt;
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/goto-open-floor.ron");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["run", scenario.to_str().unwrap(), "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.signal(), Some(13), "{:?}: {}", out.status, text(&out.stderr));
+    assert!(out.stderr.is_empty(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn zero_jobs_are_refused() {
+    let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..2", "--out", "x", "--jobs", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("at least one job"), "{}", text(&out.stderr));
+}
