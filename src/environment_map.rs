@@ -64,95 +64,105 @@ type Change = Box<dyn Fn(&mut Scenario) + Sync>;
 /// change it makes.
 type Level = (String, bool, Change);
 
+/// The levels `values` of one factor, labelled by `label`, the one equal to
+/// `base` marked as the base route's, each applied by `apply`.
+fn levels<T: Copy + PartialEq + Sync + 'static>(
+    values: [T; 4],
+    base: T,
+    label: impl Fn(T) -> String,
+    apply: fn(&mut Scenario, T),
+) -> Vec<Level> {
+    values
+        .into_iter()
+        .map(|v| {
+            let change: Change = Box::new(move |s: &mut Scenario| apply(s, v));
+            (label(v), v == base, change)
+        })
+        .collect()
+}
+
 /// The factors and their levels.
 fn factors() -> Vec<(&'static str, Vec<Level>)> {
-    let level = |text: String, base: bool, change: Change| (text, base, change);
     vec![
         (
             "corridor width",
-            [2.4, 4.0, 6.0, 8.0]
-                .into_iter()
-                .map(|w: f64| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if let Some(c) = s.world.corridor.as_mut() {
-                            c.width = w;
-                        }
-                    });
-                    level(format!("{w} m"), w == 4.0, change)
-                })
-                .collect(),
+            levels(
+                [2.4, 4.0, 6.0, 8.0],
+                4.0,
+                |w| format!("{w} m"),
+                |s, w| {
+                    if let Some(c) = s.world.corridor.as_mut() {
+                        c.width = w;
+                    }
+                },
+            ),
         ),
         (
             "landmarks",
-            [10, 20, 40, 80]
-                .into_iter()
-                .map(|n: u32| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if let Some(r) = s.world.random_landmarks.as_mut() {
-                            r.count = n;
-                        }
-                    });
-                    level(format!("{n}"), n == 40, change)
-                })
-                .collect(),
+            levels(
+                [10, 20, 40, 80],
+                40,
+                |n| format!("{n}"),
+                |s, n| {
+                    if let Some(r) = s.world.random_landmarks.as_mut() {
+                        r.count = n;
+                    }
+                },
+            ),
         ),
         (
             "side-wall share",
-            [0.25, 0.5, 0.8, 1.0]
-                .into_iter()
-                .map(|share: f64| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if let Some(r) = s.world.random_landmarks.as_mut() {
-                            r.side_share = share;
-                        }
-                    });
-                    level(format!("{:.0} %", 100.0 * share), share == 0.8, change)
-                })
-                .collect(),
+            levels(
+                [0.25, 0.5, 0.8, 1.0],
+                0.8,
+                |share| format!("{:.0} %", 100.0 * share),
+                |s, share| {
+                    if let Some(r) = s.world.random_landmarks.as_mut() {
+                        r.side_share = share;
+                    }
+                },
+            ),
         ),
         (
             "featureless stretch",
-            [0.0, 10.0, 20.0, 30.0]
-                .into_iter()
-                .map(|length: f64| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if length > 0.0 {
-                            for side in [Side::Left, Side::Right] {
-                                s.world.featureless.push(FeaturelessConfig { side, from: 10.0, to: 10.0 + length });
-                            }
+            levels(
+                [0.0, 10.0, 20.0, 30.0],
+                0.0,
+                |length| format!("{length} m"),
+                |s, length| {
+                    if length > 0.0 {
+                        for side in [Side::Left, Side::Right] {
+                            s.world.featureless.push(FeaturelessConfig { side, from: 10.0, to: 10.0 + length });
                         }
-                    });
-                    level(format!("{length} m"), length == 0.0, change)
-                })
-                .collect(),
+                    }
+                },
+            ),
         ),
         (
             "detection range",
-            [20.0, 40.0, 60.0, 80.0]
-                .into_iter()
-                .map(|range: f64| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if let Some(c) = s.robot.camera.as_mut() {
-                            c.max_range_m = range;
-                        }
-                    });
-                    level(format!("{range} m"), range == 80.0, change)
-                })
-                .collect(),
+            levels(
+                [20.0, 40.0, 60.0, 80.0],
+                80.0,
+                |range| format!("{range} m"),
+                |s, range| {
+                    if let Some(c) = s.robot.camera.as_mut() {
+                        c.max_range_m = range;
+                    }
+                },
+            ),
         ),
         (
             "pixel noise",
-            [0.047, 0.1, 0.3, 1.0]
-                .into_iter()
-                .map(|noise: f64| {
-                    let change: Change = Box::new(move |s: &mut Scenario| {
-                        if let Some(c) = s.robot.camera.as_mut() {
-                            c.pixel_noise_px = noise;
-                        }
-                    });
-                    level(format!("{noise} px"), noise == 0.047, change)
-                })
-                .collect(),
+            levels(
+                [0.047, 0.1, 0.3, 1.0],
+                0.047,
+                |noise| format!("{noise} px"),
+                |s, noise| {
+                    if let Some(c) = s.robot.camera.as_mut() {
+                        c.pixel_noise_px = noise;
+                    }
+                },
+            ),
         ),
     ]
 }
