@@ -23,6 +23,22 @@ for layout in 101 202 303; do
 done
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
 "$ubf" experiment where-aiding-pays --plot docs/where-aiding-pays.png --json > out/where-aiding-pays.json
+# Route 1->2 with a one-frame keyframe bank (frame-to-frame matching)
+# beside the default bank, every technique, the thesis's CV objective.
+variants=$(mktemp -d)
+for technique in None ZigZag Scan Tracking; do
+    for bank in bank frame-to-frame; do
+        egomotion='egomotion: (estimator: Rigid()),'
+        [ "$bank" = frame-to-frame ] && \
+            egomotion='egomotion: (estimator: Rigid(), keyframes: 1, keyframe_spacing_m: 0.01, keyframe_spacing_deg: 0.01),'
+        sed -e "s/technique: None/technique: $technique, objective: Cv/" \
+            -e "s/        egomotion: (estimator: Rigid()),/        $egomotion/" \
+            scenarios/thesis/route-1-2.ron > "$variants/$technique-$bank.ron"
+    done
+done
+"$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes >&2
+cp out/keyframes/summary.json out/keyframes.json
+rm -rf "$variants"
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
     commits=(a7c19a4 383fdec 9bf8784 f752499)
