@@ -36,7 +36,7 @@ for technique in None ZigZag Scan Tracking; do
             scenarios/thesis/route-1-2.ron > "$variants/$technique-$bank.ron"
     done
 done
-"$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes >&2
+"$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes --overwrite >&2
 cp out/keyframes/summary.json out/keyframes.json
 rm -rf "$variants"
 if [ "${ABLATION:-0}" = 1 ]; then

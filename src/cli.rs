@@ -68,6 +68,11 @@ enum Command {
         /// Also write every run's trajectory.csv and plot.png.
         #[arg(long)]
         trajectories: bool,
+        /// Replace an earlier sweep's output in `--out` (a directory holding
+        /// its summary.json); without this a non-empty `--out` is refused,
+        /// so old runs never sit beside a new summary.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Check scenario files without running them; exit code 2 on the first
     /// bad one.
@@ -309,7 +314,11 @@ pub fn main_with(registry: Registry) -> ExitCode {
     match cli.command {
         Command::Run { file, seed, out, json } => run_command(&registry, file, seed, out, json),
         Command::Check { files } => check_command(&registry, &files),
-        Command::Sweep { files, seeds, jobs, out, trajectories } => {
+        Command::Sweep { files, seeds, jobs, out, trajectories, overwrite } => {
+            if let Err(message) = clear_sweep_output(&out, overwrite) {
+                eprintln!("error: {message}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
             sweep_command(&registry, &files, seeds, jobs, &out, trajectories)
         }
         Command::Model { action } => model_command(&registry, action),
@@ -900,6 +909,30 @@ fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
         return Err(format!("`{text}` holds no seed"));
     }
     Ok(range)
+}
+
+/// Makes `out` ready for a sweep: absent or empty, or, with `overwrite`,
+/// an earlier sweep's output (it holds a summary.json), which is removed.
+fn clear_sweep_output(out: &std::path::Path, overwrite: bool) -> Result<(), String> {
+    let shown = out.display();
+    let mut entries = match std::fs::read_dir(out) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(format!("--out {shown}: {e}")),
+    };
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    if !overwrite {
+        return Err(format!(
+            "--out {shown} is not empty: earlier runs would sit beside the new summary. \
+             Choose another directory, or pass --overwrite to replace an earlier sweep's output"
+        ));
+    }
+    if !out.join("summary.json").is_file() {
+        return Err(format!("--out {shown} holds no summary.json, so it is not a sweep's output: not deleting it"));
+    }
+    std::fs::remove_dir_all(out).map_err(|e| format!("clearing --out {shown}: {e}"))
 }
 
 fn sweep_command(

@@ -63,3 +63,42 @@ fn bad_seed_ranges_are_refused() {
     }
     assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("unused").exists());
 }
+
+#[test]
+fn a_sweep_never_leaves_old_runs_beside_a_new_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_arg = out.to_str().unwrap();
+    let first = ubf(&["sweep", "scenarios/corridor-box.ron", "--seeds", "0..2", "--out", out_arg]);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(out.join("corridor-box").is_dir());
+    // Into the same directory: refused, nothing touched.
+    let again = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..2", "--out", out_arg]);
+    assert_eq!(again.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&again.stderr).contains("--overwrite"),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert!(out.join("corridor-box").is_dir());
+    // With --overwrite the earlier sweep's output is replaced, not mixed in.
+    let replaced = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..2", "--out", out_arg, "--overwrite"]);
+    assert!(replaced.status.success(), "{}", String::from_utf8_lossy(&replaced.stderr));
+    assert!(!out.join("corridor-box").exists());
+    assert!(out.join("goto-open-floor").is_dir());
+    // A directory that is not a sweep's output is never deleted.
+    let other = dir.path().join("photos");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("holiday.jpg"), b"not a sweep").unwrap();
+    let refused = ubf(&[
+        "sweep",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..2",
+        "--out",
+        other.to_str().unwrap(),
+        "--overwrite",
+    ]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(other.join("holiday.jpg").is_file());
+}
