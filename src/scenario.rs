@@ -71,10 +71,28 @@ impl Scenario {
         registry.from_ron(text)
     }
 
-    /// Reads a scenario file.
+    /// Reads a scenario file, and refuses one whose robot starts touching a
+    /// wall, a box or a person (a run from there could not move).
     pub fn load(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
         let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
-        Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })
+        let scenario =
+            Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
+        scenario.check_start().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;
+        Ok(scenario)
+    }
+
+    /// Whether the robot can start where the scenario puts it.
+    pub fn check_start(&self) -> Result<(), String> {
+        let robot = ubf_robots::sim::SimRobot::new(&self.robot, &self.world, self.period_s, self.seed);
+        if robot.starts_in_contact() {
+            let start = self.robot.start;
+            return Err(format!(
+                "robot.start: at ({}, {}) the robot's outline overlaps a wall, a box or a person; \
+                 a corridor runs from x = 0, so start it at least a metre in",
+                start.x, start.y
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -88,6 +106,14 @@ pub enum LoadError {
         path: PathBuf,
         /// Why.
         source: std::io::Error,
+    },
+    /// The file parses but describes a run that cannot work.
+    #[error("{}: {message}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the field.
+        message: String,
     },
     /// The file is not a valid scenario: `FILE:LINE:COL: message`.
     #[error("{}:{error}", path.display())]

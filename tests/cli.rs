@@ -243,14 +243,16 @@ fn a_closed_pipe_ends_a_command_quietly() {
     // message), not with a panic and exit 101.
     use std::os::unix::process::ExitStatusExt;
     let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/goto-open-floor.ron");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ubf"))
+    // The reading end is closed before the command starts, so its first
+    // write finds no reader, however fast it runs.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ubf"))
         .args(["run", scenario.to_str().unwrap(), "--json"])
-        .stdout(std::process::Stdio::piped())
+        .stdout(writer)
         .stderr(std::process::Stdio::piped())
-        .spawn()
+        .output()
         .unwrap();
-    drop(child.stdout.take());
-    let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.signal(), Some(13), "{:?}: {}", out.status, text(&out.stderr));
     assert!(out.stderr.is_empty(), "{}", text(&out.stderr));
 }
@@ -260,4 +262,24 @@ fn zero_jobs_are_refused() {
     let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..2", "--out", "x", "--jobs", "0"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("at least one job"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_start_inside_a_wall_is_refused_by_check_and_run() {
+    // A corridor runs from x = 0: the default start (0, 0) puts the robot in
+    // its end wall, where a run once went 0.36 m with 129 collisions.
+    let dir = tempfile::tempdir().unwrap();
+    let body = r#"Scenario(name: "wall", max_time_s: 10.0,
+        world: (corridor: (width: 4.0, length: 20.0)),
+        goal: (x: 10.0, y: 0.0, tolerance: 0.3),
+        root: GoTo())"#;
+    let path = scenario_file(&dir, body);
+    for command in ["check", "run"] {
+        let out = ubf(&[command, path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{command}: {}", text(&out.stderr));
+        assert!(text(&out.stderr).contains("robot.start"), "{command}: {}", text(&out.stderr));
+    }
+    let moved =
+        scenario_file(&dir, &body.replace("max_time_s: 10.0,", "max_time_s: 10.0, robot: (start: (x: 1.0, y: 0.0)),"));
+    assert!(ubf(&["check", moved.to_str().unwrap()]).status.success());
 }

@@ -249,6 +249,12 @@ impl SimRobot {
         self.camera.as_ref().map(SimCamera::config)
     }
 
+    /// Whether the robot's outline at its start overlaps a wall, a box or a
+    /// person: a run from there could not move.
+    pub fn starts_in_contact(&self) -> bool {
+        self.touches(&self.body.true_pose)
+    }
+
     fn touches(&self, pose: &Pose2) -> bool {
         let quad = self.body.footprint_at(pose);
         self.world.segments.iter().any(|s| quad.touches_segment(s))
