@@ -19,7 +19,7 @@
 
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use ubf_behaviors::decision::DecisionCosts;
+use ubf_behaviors::decision::{drove_straight, turned_on_the_spot, DecisionCosts};
 use ubf_core::{angle_difference, Pose2};
 
 /// Why logs could not be fitted.
@@ -112,11 +112,6 @@ struct RunSummary {
     /// The squared end-point error, m².
     error2: f64,
 }
-
-/// A turn on the spot: the true heading changed by more than this between
-/// frames while the robot moved less than `STILL_M`.
-const TURNING_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
-const STILL_M: f64 = 0.05;
 
 /// Every `trajectory.csv` under `dirs` (searched recursively), or the files
 /// themselves.
@@ -240,13 +235,11 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
         while k + 1 < frames.len() {
             let (a, b) = (frames[k], frames[k + 1]);
             let true_step = b.truth.relative_to(&a.truth);
-            let turning = true_step.theta.abs() > TURNING_RAD && true_step.x.hypot(true_step.y) < STILL_M;
-            if turning {
+            if turned_on_the_spot(&true_step) {
                 // The whole turn: until the robot stops turning on the spot.
                 let mut end = k + 1;
                 while end + 1 < frames.len() {
-                    let s = frames[end + 1].truth.relative_to(&frames[end].truth);
-                    if !(s.theta.abs() > TURNING_RAD && s.x.hypot(s.y) < STILL_M) {
+                    if !turned_on_the_spot(&frames[end + 1].truth.relative_to(&frames[end].truth)) {
                         break;
                     }
                     end += 1;
@@ -262,7 +255,7 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                 continue;
             }
             let driven = true_step.x.hypot(true_step.y);
-            if a.matched && b.matched && driven >= STILL_M && true_step.theta.abs() <= TURNING_RAD {
+            if a.matched && b.matched && drove_straight(&true_step) {
                 if let Some(cv) = b.step_cv {
                     let ego_step = b.ego.relative_to(&a.ego);
                     let error = (ego_step.x - true_step.x).hypot(ego_step.y - true_step.y);

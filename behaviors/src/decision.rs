@@ -65,9 +65,13 @@ impl DecisionCosts {
     /// carried over the remaining distance.
     pub fn end_point_variance(&self, cv: f64, step_m: f64, turns: [f64; 2], remaining_m: f64) -> f64 {
         let step = (self.step_sigma_per_cv * cv * step_m).powi(2);
-        let heading: f64 =
-            turns.iter().filter(|t| **t > 0.0).map(|t| self.heading_var_per_turn + self.heading_var_per_rad * t).sum();
+        let heading: f64 = turns.iter().filter(|t| **t > 0.0).map(|t| self.turn_variance(*t)).sum();
         step + heading * remaining_m * remaining_m
+    }
+
+    /// The heading variance a turn on the spot of `turned` rad leaves, rad².
+    pub fn turn_variance(&self, turned: f64) -> f64 {
+        self.heading_var_per_turn + self.heading_var_per_rad * turned
     }
 }
 
@@ -116,6 +120,18 @@ const TURNING_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// As above, m.
 const STILL_M: f64 = 0.05;
 
+/// Whether `step`, the motion between two frames, is a turn on the spot as
+/// the end-point model counts turns.
+pub fn turned_on_the_spot(step: &Pose2) -> bool {
+    step.theta.abs() > TURNING_RAD && step.x.hypot(step.y) < STILL_M
+}
+
+/// Whether `step` is a stretch of straight driving: a move with no more
+/// turn than steering.
+pub fn drove_straight(step: &Pose2) -> bool {
+    step.theta.abs() <= TURNING_RAD && step.x.hypot(step.y) >= STILL_M
+}
+
 impl EndPointPredictor {
     /// A predictor with these coefficients.
     pub fn new(costs: DecisionCosts) -> Self {
@@ -127,16 +143,15 @@ impl EndPointPredictor {
     pub fn frame(&mut self, odometry: &Pose2, step_cv: Option<f64>) {
         let Some(last) = self.last.replace(*odometry) else { return };
         let step = odometry.relative_to(&last);
-        let driven = step.x.hypot(step.y);
-        if step.theta.abs() > TURNING_RAD && driven < STILL_M {
+        if turned_on_the_spot(&step) {
             self.turning_from.get_or_insert(last);
             return;
         }
         if let Some(from) = self.turning_from.take() {
             let turned = angle_difference(last.theta, from.theta).abs();
-            let variance = self.costs.heading_var_per_turn + self.costs.heading_var_per_rad * turned;
-            self.turns.push(((last.x, last.y), variance));
+            self.turns.push(((last.x, last.y), self.costs.turn_variance(turned)));
         }
+        let driven = step.x.hypot(step.y);
         if let Some(cv) = step_cv {
             self.step_variance += (self.costs.step_sigma_per_cv * cv * driven).powi(2);
         }
