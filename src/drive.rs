@@ -172,7 +172,7 @@ impl DriveConfig {
 
     /// How to open a session, motors on or not.
     fn connect_options(&self, enable_motors: bool) -> ConnectOptions {
-        ConnectOptions { enable_motors, accelerations: self.accelerations }
+        ConnectOptions { enable_motors, accelerations: self.accelerations, ..ConnectOptions::default() }
     }
 
     /// Reads a configuration file. Paths in it (a model file, a camera's

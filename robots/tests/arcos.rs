@@ -39,8 +39,13 @@ impl Emulator {
 
     /// A Powerbot client connected to this emulator, motors on.
     fn connect(&self) -> ArcosRobot {
+        self.connect_with(&ConnectOptions::default())
+    }
+
+    /// A Powerbot client connected with `options`.
+    fn connect_with(&self, options: &ConnectOptions) -> ArcosRobot {
         let link = link::open(&self.address, 9600).unwrap();
-        ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap()
+        ArcosRobot::connect(link, RobotModel::powerbot(), options).unwrap()
     }
 
     fn finish(mut self) -> EmulatorReport {
@@ -97,10 +102,11 @@ fn the_watchdog_stops_a_silent_client() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let mut robot = emulator.connect();
     let mut state = State::default();
-    drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.5, &mut state);
-    assert!(state.velocity > 0.25);
-    // Silence: no command, no pulse, for longer than the 2 s watchdog.
-    std::thread::sleep(Duration::from_millis(2600));
+    drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 1.0, &mut state);
+    assert!(state.velocity > 0.25, "{}", state.velocity);
+    // Silence: no command, no pulse, for longer than the 2 s watchdog and
+    // the 0.6 s the default deceleration takes to stop.
+    std::thread::sleep(Duration::from_millis(3200));
     robot.sense(&mut state).unwrap();
     assert_eq!(state.velocity, 0.0);
     robot.shutdown().unwrap();
@@ -156,13 +162,16 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
     let mut config = EmulatorConfig::new(RobotModel::powerbot());
     config.start_mm = (32768.0 * 0.5813 - 200.0, 0.0);
     let emulator = Emulator::tcp_with(config);
-    let mut robot = emulator.connect();
+    let brisk = Accelerations { translation: 2.0, rotation_deg: 300.0 };
+    let mut robot = emulator.connect_with(&ConnectOptions { accelerations: Some(brisk), ..ConnectOptions::default() });
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 1.0, turn: Turn::Rate(0.0) }, 1.0, &mut state);
-    // Relative to the first SIP: about +1 m, not −18 m.
-    assert!(state.pose.x > 0.6 && state.pose.x < 1.4, "{:?}", state.pose);
-    drive(&mut robot, Command::Drive { velocity: -1.0, turn: Turn::Rate(0.0) }, 2.0, &mut state);
-    assert!(state.pose.x < -0.4 && state.pose.x > -1.4, "{:?}", state.pose);
+    // Relative to the first SIP: about +0.75 m (after a 0.5 s ramp), not
+    // −18 m.
+    assert!(state.pose.x > 0.4 && state.pose.x < 1.4, "{:?}", state.pose);
+    // Back past the start: about −1.25 m.
+    drive(&mut robot, Command::Drive { velocity: -1.0, turn: Turn::Rate(0.0) }, 3.0, &mut state);
+    assert!(state.pose.x < -0.4 && state.pose.x > -2.4, "{:?}", state.pose);
     robot.shutdown().unwrap();
     emulator.finish();
 }
@@ -311,4 +320,89 @@ fn the_baud_switch_over_a_pseudo_terminal() {
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     assert_eq!(emulator.join().unwrap().host_baud, Some(115200));
+}
+
+/// Senses for `seconds` with no command but a PULSE (the watchdog stays
+/// quiet while a position or heading setpoint runs).
+fn watch(robot: &mut ArcosRobot, seconds: f64, state: &mut State) {
+    let ticks = (seconds / 0.1).round() as usize;
+    for _ in 0..ticks {
+        robot.keep_alive().unwrap();
+        robot.sense(state).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    robot.sense(state).unwrap();
+}
+
+#[test]
+fn the_emulator_obeys_position_heading_and_wheel_commands() {
+    use ubf_robots::arcos::codec::ClientCommand::*;
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let link = link::open(&emulator.address, 9600).unwrap();
+    let mut raw = link.try_clone_link().unwrap();
+    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
+    let config = robot.config().unwrap().clone();
+    assert!(config.body().len() >= 123, "a CONFIG as long as a controller's: {}", config.body().len());
+    assert_eq!(config.settings.trans_vel_max, 2000, "SETV is reported back");
+    assert_eq!(config.settings.watchdog_ms, 2000);
+    let mut send = |c: ubf_robots::arcos::codec::ClientCommand| raw.write_all(&c.packet()).unwrap();
+    let mut state = State::default();
+
+    send(Head(90));
+    watch(&mut robot, 2.5, &mut state);
+    assert!((state.pose.theta.to_degrees() - 90.0).abs() < 1.0, "HEAD 90: {:?}", state.pose);
+    send(Move(500));
+    watch(&mut robot, 3.0, &mut state);
+    assert!((state.pose.y - 0.5).abs() < 0.01 && state.pose.x.abs() < 0.02, "MOVE 500: {:?}", state.pose);
+    send(DHead(-90));
+    watch(&mut robot, 2.5, &mut state);
+    assert!(state.pose.theta.to_degrees().abs() < 1.0, "DHEAD −90: {:?}", state.pose);
+
+    send(SetV(200));
+    send(Vel(1000));
+    watch(&mut robot, 1.5, &mut state);
+    assert!((state.velocity - 0.2).abs() < 0.01, "VEL within SETV: {}", state.velocity);
+    send(SetV(2000));
+    send(Vel2(-5, 5)); // ±100 mm/s wheels: a turn on the spot
+    watch(&mut robot, 1.0, &mut state);
+    assert!(state.velocity.abs() < 0.01 && state.rot_velocity > 0.3, "VEL2: {} {}", state.velocity, state.rot_velocity);
+    send(Vel(600));
+    send(Rotate(0));
+    watch(&mut robot, 1.5, &mut state);
+    assert!(state.velocity > 0.55, "{}", state.velocity);
+    send(EStop);
+    watch(&mut robot, 0.3, &mut state);
+    assert_eq!(state.velocity, 0.0, "ESTOP stops at once");
+    robot.shutdown().unwrap();
+    assert!(emulator.finish().closed);
+}
+
+#[test]
+fn heading_commands_carry_their_rate_and_the_world_frame_is_the_callers() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let origin = ubf_core::Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+    let options = ConnectOptions { origin, max_velocity: Some(0.5), ..ConnectOptions::default() };
+    let mut robot = emulator.connect_with(&options);
+    assert!((robot.limits().max_velocity - 0.5).abs() < 1e-9, "the cap bounds the limits");
+    let mut state = State::default();
+    watch(&mut robot, 0.3, &mut state);
+    assert!(state.pose.x == 1.0 && state.pose.y == 2.0, "the first SIP is the origin: {:?}", state.pose);
+    // Drive forward: in the caller's frame that is +y.
+    drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 1.5, &mut state);
+    assert!(state.pose.y > 2.2 && (state.pose.x - 1.0).abs() < 0.02, "{:?}", state.pose);
+    // Turn to the world's heading 0 at no more than 20°/s.
+    let turn = Turn::Heading { heading: 0.0, max_rate: 20f64.to_radians() };
+    let mut fastest = 0.0f64;
+    for _ in 0..60 {
+        robot.sense(&mut state).unwrap();
+        fastest = fastest.max(state.rot_velocity.abs());
+        robot.act(&Command::Drive { velocity: 0.0, turn }).unwrap();
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    robot.sense(&mut state).unwrap();
+    assert!(state.pose.theta.abs() < 2f64.to_radians(), "{:?}", state.pose);
+    assert!(fastest.to_degrees() < 20.5, "HEAD turned at {:.1}°/s", fastest.to_degrees());
+    robot.shutdown().unwrap();
+    let report = emulator.finish();
+    assert_eq!(report.speed_limits, Some((500, 20)), "{report:?}");
 }

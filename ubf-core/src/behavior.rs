@@ -41,6 +41,37 @@ impl<B: Behavior + ?Sized> Behavior for Box<B> {
     }
 }
 
+/// A behaviour panicked: where in the tree, and what it said. Composites
+/// catch a child's panic, silence that child for the rest of the run and
+/// pass this up with the child's name prefixed, so the controller learns the
+/// full path (`root/avoid/sonar`) and can stop the robot.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("behaviour {path} panicked: {message}")]
+pub struct BehaviorPanic {
+    /// Slash-separated names from the root, as in a tree layout.
+    pub path: String,
+    /// The panic's message.
+    pub message: String,
+}
+
+impl BehaviorPanic {
+    /// The panic that unwound out of the behaviour named `name`, with its
+    /// path extended by that name.
+    pub fn caught(name: &str, payload: Box<dyn std::any::Any + Send>) -> BehaviorPanic {
+        match payload.downcast::<BehaviorPanic>() {
+            Ok(inner) => BehaviorPanic { path: format!("{name}/{}", inner.path), message: inner.message },
+            Err(payload) => {
+                let message = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| (*s).to_owned())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "(no message)".into());
+                BehaviorPanic { path: name.to_owned(), message }
+            }
+        }
+    }
+}
+
 /// `a::b::Wander<c::D>` → `Wander<c::D>`: the path adds noise to records.
 fn short_type_name(full: &str) -> &str {
     let generic_start = full.find('<').unwrap_or(full.len());

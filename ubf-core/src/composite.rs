@@ -1,11 +1,13 @@
 //! Composite behaviours: children plus an arbiter, itself a behaviour.
 
-use crate::{Action, Arbiter, Behavior, Bid, State};
+use crate::{Action, Arbiter, Behavior, BehaviorPanic, Bid, State};
 
 struct Child {
     name: String,
     behavior: Box<dyn Behavior>,
     raw_weight: f64,
+    /// The child panicked once; it stays silent from then on.
+    faulted: bool,
 }
 
 /// Children and an arbiter, behaving as one behaviour, so trees nest to any
@@ -20,6 +22,10 @@ struct Child {
 /// With [`Composite::vote`] set, the composite bids that vote to its parent
 /// whenever it has an opinion at all (a composite whose children are silent
 /// stays silent, so it cannot win its parent's arbitration with nothing).
+///
+/// A child that panics is caught here: it is silenced for good and the
+/// panic goes on up as a [`BehaviorPanic`] naming its path, for the
+/// controller to stop the robot.
 ///
 /// ```
 /// use ubf_core::{arbiter::CommandFusion, from_fn, Action, Behavior, Composite, State};
@@ -72,7 +78,7 @@ impl Composite {
     /// Adds a child; the weights of all children are normalised again.
     pub fn push_child(&mut self, name: String, behavior: Box<dyn Behavior>, weight: f64) {
         let raw_weight = if weight.is_finite() && weight > 0.0 { weight } else { 0.0 };
-        self.children.push(Child { name, behavior, raw_weight });
+        self.children.push(Child { name, behavior, raw_weight, faulted: false });
         self.bids.push(Bid::default());
         let total: f64 = self.children.iter().map(|c| c.raw_weight).sum();
         let n = self.children.len() as f64;
@@ -124,7 +130,19 @@ fn apply_safety(action: &mut Action, winner: &mut Option<usize>, bids: &[Bid]) {
 impl Behavior for Composite {
     fn gen_action(&mut self, state: &State) -> Action {
         for (child, bid) in self.children.iter_mut().zip(&mut self.bids) {
-            bid.action = child.behavior.gen_action(state);
+            if child.faulted {
+                bid.action = Action::none();
+                continue;
+            }
+            let behavior = &mut child.behavior;
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| behavior.gen_action(state))) {
+                Ok(action) => bid.action = action,
+                Err(payload) => {
+                    child.faulted = true;
+                    bid.action = Action::none();
+                    std::panic::resume_unwind(Box::new(BehaviorPanic::caught(&child.name, payload)));
+                }
+            }
         }
         let decision = self.arbiter.arbitrate(state, &self.bids);
         let (mut action, mut winner) = (decision.action, decision.winner);

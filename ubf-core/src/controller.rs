@@ -1,6 +1,6 @@
 //! The control loop: sense → state → root behaviour → action → command → act.
 
-use crate::{Action, Behavior, Clock, Command, Goal, Pose2, Robot, RobotError, State};
+use crate::{Action, Behavior, BehaviorPanic, Clock, Command, Goal, Pose2, Robot, RobotError, State};
 
 /// One node of the behaviour tree, as laid out once when the controller
 /// starts. Nodes are numbered in pre-order; node 0 is the root.
@@ -141,12 +141,27 @@ impl TickSink for TracingSink {
     }
 }
 
+/// What the controller does when a behaviour panics. Either way the tick
+/// that caught it sends STOP.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+pub enum OnBehaviorPanic {
+    /// End: the tick returns [`ControllerError::BehaviorPanicked`].
+    #[default]
+    Stop,
+    /// Log it and carry on without the behaviour (its composite keeps it
+    /// silent from then on).
+    SkipBehavior,
+}
+
 /// Why the controller stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ControllerError {
     /// The robot failed to sense, act or shut down.
     #[error(transparent)]
     Robot(#[from] RobotError),
+    /// A behaviour panicked; the robot was sent STOP.
+    #[error(transparent)]
+    BehaviorPanicked(#[from] BehaviorPanic),
     /// A tick sink failed to write.
     #[error("recording ticks: {0}")]
     Sink(#[from] std::io::Error),
@@ -167,6 +182,10 @@ pub struct Controller<R: Robot> {
     state: State,
     record: TickRecord,
     ticks: u64,
+    on_panic: OnBehaviorPanic,
+    /// The root itself panicked: with [`OnBehaviorPanic::SkipBehavior`]
+    /// nothing is left to ask, so every tick stops.
+    root_faulted: bool,
 }
 
 impl<R: Robot> Controller<R> {
@@ -174,7 +193,23 @@ impl<R: Robot> Controller<R> {
     pub fn new(robot: R, root: Box<dyn Behavior>, clock: Box<dyn Clock>) -> Self {
         let layout = TreeLayout::of(root.as_ref());
         let record = TickRecord { nodes: vec![NodeOutcome::default(); layout.nodes.len()], ..TickRecord::default() };
-        Controller { robot, root, clock, sinks: Vec::new(), layout, state: State::default(), record, ticks: 0 }
+        Controller {
+            robot,
+            root,
+            clock,
+            sinks: Vec::new(),
+            layout,
+            state: State::default(),
+            record,
+            ticks: 0,
+            on_panic: OnBehaviorPanic::default(),
+            root_faulted: false,
+        }
+    }
+
+    /// Chooses what a behaviour's panic does (by default it ends the run).
+    pub fn set_on_behavior_panic(&mut self, policy: OnBehaviorPanic) {
+        self.on_panic = policy;
     }
 
     /// Adds a sink that receives every tick's record.
@@ -226,7 +261,17 @@ impl<R: Robot> Controller<R> {
         }
         self.state.time = self.clock.now();
         self.robot.sense(&mut self.state)?;
-        let action = self.root.gen_action(&self.state);
+        let action = match self.ask_root() {
+            Ok(action) => action,
+            Err(panic) => {
+                self.robot.act(&Command::Stop)?;
+                tracing::error!("{panic}; the robot was sent STOP");
+                if self.on_panic == OnBehaviorPanic::Stop {
+                    return Err(panic.into());
+                }
+                Action::stop(1.0)
+            }
+        };
         let command = Command::from_action(&action, &self.robot.limits());
         self.robot.act(&command)?;
         self.fill_record(action, command);
@@ -236,6 +281,21 @@ impl<R: Robot> Controller<R> {
         self.ticks += 1;
         self.clock.wait_for_next_tick();
         Ok(&self.record)
+    }
+
+    /// The root's action, with a panic anywhere in the tree caught and
+    /// named by its path.
+    fn ask_root(&mut self) -> Result<Action, BehaviorPanic> {
+        if self.root_faulted {
+            return Ok(Action::stop(1.0));
+        }
+        let (root, state) = (&mut self.root, &self.state);
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| root.gen_action(state))).map_err(|payload| {
+            let panic = BehaviorPanic::caught(root.name(), payload);
+            // A leaf root has no composite to silence it.
+            self.root_faulted = root.as_composite().is_none();
+            panic
+        })
     }
 
     fn fill_record(&mut self, action: Action, command: Command) {

@@ -55,20 +55,23 @@ mod geometry;
 mod landmark;
 mod registry;
 mod robot;
+mod safety;
 mod state;
 
 pub use action::{Action, Channel, Motion};
 pub use arbiter::{Arbiter, ArbiterSpec, Arbitration, Bid};
-pub use behavior::{from_fn, Behavior, FnBehavior};
+pub use behavior::{from_fn, Behavior, BehaviorPanic, FnBehavior};
 pub use clock::{Clock, SimClock, Stopwatch, WallClock};
 pub use command::{Command, Limits, Turn};
 pub use composite::Composite;
 pub use condition::Condition;
 pub use controller::{
-    Controller, ControllerError, NodeInfo, NodeOutcome, StateSummary, TickRecord, TickSink, TracingSink, TreeLayout,
+    Controller, ControllerError, NodeInfo, NodeOutcome, OnBehaviorPanic, StateSummary, TickRecord, TickSink,
+    TracingSink, TreeLayout,
 };
 pub use geometry::{angle_difference, wrap_angle, Pose2};
 pub use landmark::{Descriptor, LandmarkObservation, StereoCalibration, StereoFrame, StereoPixels};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
 pub use robot::{NullRobot, Robot, RobotError, VelocityLimiter};
+pub use safety::{Hold, SafetyGuard, SafetyPolicy};
 pub use state::{Bumpers, EgomotionState, Goal, RangeReading, State};

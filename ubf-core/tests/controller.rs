@@ -98,3 +98,45 @@ fn shutdown_stops_the_robot_and_flushes_sinks_even_when_a_sink_fails() {
     assert_eq!(controller.robot().last_command, Command::Stop);
     assert!(log.lock().unwrap().finished, "the healthy sink was still flushed");
 }
+
+/// A tree whose `flaky` leaf, deep inside, panics from 0.2 s on.
+fn tree_with_a_panic() -> Composite {
+    let inner = Composite::new("drive", CommandFusion).child(
+        from_fn("flaky", |s: &State| if s.time >= 0.2 { panic!("index out of range") } else { Action::none() }),
+        1.0,
+    );
+    Composite::new("root", HighestPriority)
+        .child(inner, 2.0)
+        .child(from_fn("cruise", |_: &State| Action::with_vote(1.0).velocity(0.5)), 1.0)
+}
+
+#[test]
+fn a_panicking_behaviour_is_caught_named_and_the_robot_stopped() {
+    let mut controller =
+        Controller::new(NullRobot::default(), Box::new(tree_with_a_panic()), Box::new(SimClock::new(0.1)));
+    controller.tick().unwrap();
+    controller.tick().unwrap();
+    assert!(matches!(controller.robot().last_command, Command::Drive { .. }));
+    let err = controller.tick().unwrap_err();
+    assert!(
+        matches!(&err, ubf_core::ControllerError::BehaviorPanicked(p)
+        if p.path == "root/drive/flaky" && p.message == "index out of range"),
+        "{err}"
+    );
+    assert_eq!(controller.robot().last_command, Command::Stop, "the robot was stopped");
+}
+
+#[test]
+fn a_panicking_behaviour_can_be_skipped_for_the_rest_of_the_run() {
+    let mut controller =
+        Controller::new(NullRobot::default(), Box::new(tree_with_a_panic()), Box::new(SimClock::new(0.1)));
+    controller.set_on_behavior_panic(ubf_core::OnBehaviorPanic::SkipBehavior);
+    for _ in 0..3 {
+        controller.tick().unwrap();
+    }
+    assert_eq!(controller.last_record().command, Command::Stop, "the tick that caught it stops");
+    for _ in 0..3 {
+        controller.tick().unwrap();
+        assert!(matches!(controller.last_record().command, Command::Drive { velocity, .. } if velocity == 0.5));
+    }
+}

@@ -4,10 +4,9 @@
 use super::codec::{baud_code, ClientCommand, ConfigPacket, Identity, Sip, StreamDecoder, Unwrapper, CONFIG_TYPE};
 use super::link::{is_timeout, Link};
 use crate::model::RobotModel;
-use crossbeam_channel::{Receiver, Sender};
 use std::io::{self, Read};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use ubf_core::{Bumpers, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
@@ -41,14 +40,68 @@ pub struct Accelerations {
 pub struct ConnectOptions {
     /// Whether to switch the motors on (off for a dry run).
     pub enable_motors: bool,
+    /// Caps on translational and rotational speed, m/s and °/s, below the
+    /// model's and the controller's tops; sent as SETV and SETRV.
+    pub max_velocity: Option<f64>,
+    /// See `max_velocity`.
+    pub max_rot_velocity_deg: Option<f64>,
     /// Accelerations to set; the controller's own otherwise.
     pub accelerations: Option<Accelerations>,
+    /// The pose, in the caller's world frame, that the robot's first SIP
+    /// stands for: the origin for a first session, the last known pose when
+    /// a lost session is reopened, so that goals keep their meaning.
+    pub origin: Pose2,
+    /// Longest wait, after STOP, for the robot to report standstill before
+    /// its motors are switched off.
+    pub standstill_wait: Duration,
 }
 
 impl Default for ConnectOptions {
-    /// Motors on, the controller's accelerations.
+    /// Motors on, the controller's limits and accelerations, the world
+    /// frame at the robot, a 1 s standstill wait.
     fn default() -> Self {
-        ConnectOptions { enable_motors: true, accelerations: None }
+        ConnectOptions {
+            enable_motors: true,
+            max_velocity: None,
+            max_rot_velocity_deg: None,
+            accelerations: None,
+            origin: Pose2::default(),
+            standstill_wait: Duration::from_secs(1),
+        }
+    }
+}
+
+/// What the reader thread leaves for the control loop: the latest SIP
+/// (its sonar moved into `ranges_mm`), the odometry unwrapped over every
+/// SIP, and when it came. The reader only ever overwrites it, so it never
+/// waits for the control loop, however fast SIPs come.
+#[derive(Debug, Default)]
+struct Latest {
+    sip: Option<Sip>,
+    /// Unwrapped position, position units since the first SIP.
+    position: (i64, i64),
+    arrived: Option<Instant>,
+    /// Latest range per sonar slot of the model, range units.
+    ranges_mm: Vec<Option<u16>>,
+    /// The link failed or closed.
+    ended: bool,
+}
+
+/// What a second Ctrl-C needs to stop the robot while the control loop is
+/// stuck: its own handle on the link.
+pub struct EmergencyStop {
+    link: Mutex<Box<dyn Link>>,
+}
+
+impl EmergencyStop {
+    /// Sends STOP, ENABLE 0 and CLOSE at once, without waiting for
+    /// standstill: for when the orderly stop has not happened in time.
+    pub fn stop_now(&self) -> Result<(), RobotError> {
+        let mut link = self.link.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for command in [ClientCommand::Stop, ClientCommand::Enable(false), ClientCommand::Close] {
+            send(link.as_mut(), command)?;
+        }
+        Ok(())
     }
 }
 
@@ -59,19 +112,23 @@ pub struct ArcosRobot {
     identity: Identity,
     /// The controller's CONFIG reply, if it sent one.
     config: Option<ConfigPacket>,
-    /// The model's limits, lowered to the controller's top speeds.
+    /// The model's limits, lowered to the controller's tops and the caps.
     limits: Limits,
-    /// SIPs with the moment they arrived.
-    sips: Receiver<(Instant, Sip)>,
+    latest: Arc<Mutex<Latest>>,
     stop_reader: Arc<AtomicBool>,
     reader: Option<JoinHandle<()>>,
-    unwrapper: Unwrapper,
-    latest: Option<Sip>,
+    /// The latest SIP as copied by `sense`.
+    sip: Option<Sip>,
     last_sip_at: Option<Instant>,
     last_sent: Instant,
     ranges: Vec<RangeReading>,
-    /// Sonar channel number → position in `ranges`, built once.
-    sonar_slot: [Option<usize>; 256],
+    /// Maps the controller's odometry (relative to its first SIP's
+    /// position, with its own heading) into the caller's world frame.
+    to_world: Option<Pose2>,
+    origin: Pose2,
+    /// The rotational speed limit last sent (SETRV), °/s.
+    rot_limit_sent: u16,
+    standstill_wait: Duration,
     closed: bool,
 }
 
@@ -199,6 +256,12 @@ impl ArcosRobot {
             e => e,
         })?;
         let mut limits = Limits::new(model.max_velocity, model.max_rot_velocity_deg.to_radians());
+        if let Some(cap) = options.max_velocity {
+            limits.max_velocity = limits.max_velocity.min(cap);
+        }
+        if let Some(cap) = options.max_rot_velocity_deg {
+            limits.max_rot_velocity = limits.max_rot_velocity.min(cap.to_radians());
+        }
         if let Some(c) = &config {
             // The controller's tops bound whatever the model file says.
             if c.trans_vel_top > 0 {
@@ -211,7 +274,8 @@ impl ArcosRobot {
             tracing::warn!("{}: no CONFIG reply; using the model's limits", identity.name);
         }
         send(link.as_mut(), ClientCommand::SetV((limits.max_velocity * 1000.0).round() as u16))?;
-        send(link.as_mut(), ClientCommand::SetRv(limits.max_rot_velocity.to_degrees().round() as u16))?;
+        let rot_limit_sent = limits.max_rot_velocity.to_degrees().round() as u16;
+        send(link.as_mut(), ClientCommand::SetRv(rot_limit_sent))?;
         if let Some(a) = options.accelerations {
             let top = |top: Option<i16>| top.filter(|&t| t > 0).map_or(f64::from(i16::MAX), f64::from);
             let mm_s2 = (a.translation * 1000.0).min(top(config.as_ref().map(|c| c.trans_acc_top))).round() as i16;
@@ -226,38 +290,40 @@ impl ArcosRobot {
             }
         }
         send(link.as_mut(), ClientCommand::Enable(options.enable_motors))?;
-        let (sender, sips) = crossbeam_channel::bounded(256);
+        let mut sonar_slot = [None; 256];
+        for (slot, unit) in model.sonar.iter().enumerate() {
+            sonar_slot[usize::from(unit.index)] = Some(slot);
+        }
+        let latest = Arc::new(Mutex::new(Latest { ranges_mm: vec![None; model.sonar.len()], ..Latest::default() }));
         let stop_reader = Arc::new(AtomicBool::new(false));
         let reader_link = link.try_clone_link()?;
-        let stop = Arc::clone(&stop_reader);
+        let (stop, shared) = (Arc::clone(&stop_reader), Arc::clone(&latest));
         let reader = std::thread::Builder::new()
             .name("arcos-reader".into())
-            .spawn(move || read_sips(reader_link, sender, stop))
+            .spawn(move || read_sips(reader_link, &shared, &sonar_slot, &stop))
             .map_err(RobotError::Io)?;
         let ranges = model
             .sonar
             .iter()
             .map(|s| RangeReading { pose_robot_sensor: s.pose(), range: None, max_range: 5.0 })
             .collect();
-        let mut sonar_slot = [None; 256];
-        for (slot, unit) in model.sonar.iter().enumerate() {
-            sonar_slot[usize::from(unit.index)] = Some(slot);
-        }
         Ok(ArcosRobot {
-            sonar_slot,
             link,
             model,
             identity,
             config,
             limits,
-            sips,
+            latest,
             stop_reader,
             reader: Some(reader),
-            unwrapper: Unwrapper::default(),
-            latest: None,
+            sip: None,
             last_sip_at: None,
             last_sent: Instant::now(),
             ranges,
+            to_world: None,
+            origin: options.origin,
+            rot_limit_sent,
+            standstill_wait: options.standstill_wait,
             closed: false,
         })
     }
@@ -272,9 +338,10 @@ impl ArcosRobot {
         self.config.as_ref()
     }
 
-    /// The latest SIP, in robot units.
-    pub fn latest_sip(&self) -> Option<&Sip> {
-        self.latest.as_ref()
+    /// A handle that can stop the robot from another thread (a second
+    /// Ctrl-C) even while this one is busy.
+    pub fn emergency_stop(&self) -> Result<EmergencyStop, RobotError> {
+        Ok(EmergencyStop { link: Mutex::new(self.link.try_clone_link()?) })
     }
 
     fn send(&mut self, command: ClientCommand) -> Result<(), RobotError> {
@@ -291,22 +358,65 @@ impl ArcosRobot {
     }
 }
 
-/// The reader thread: packets into SIPs on a channel, until told to stop or
-/// the link fails (then the channel closes and the robot sees a
-/// disconnection).
-fn read_sips(mut link: Box<dyn Link>, sender: Sender<(Instant, Sip)>, stop: Arc<AtomicBool>) {
+/// The reader thread: packets into the shared latest reading, until told
+/// to stop or the link fails (then the reading is marked ended and the
+/// robot sees a disconnection). Every SIP goes through the unwrapper here,
+/// or a wrap between two ticks would be missed.
+fn read_sips(mut link: Box<dyn Link>, latest: &Mutex<Latest>, sonar_slot: &[Option<usize>; 256], stop: &AtomicBool) {
     let mut decoder = StreamDecoder::new();
+    let mut unwrapper = Unwrapper::default();
     let mut buffer = [0u8; 512];
+    let end = |latest: &Mutex<Latest>| latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner).ended = true;
     while !stop.load(Ordering::Relaxed) {
         match link.read(&mut buffer) {
-            Ok(0) => return,
+            Ok(0) => return end(latest),
             Ok(n) => decoder.push(&buffer[..n]),
             Err(e) if is_timeout(&e) => continue,
-            Err(_) => return,
+            Err(_) => return end(latest),
         }
         while let Some(body) = decoder.next_body() {
-            if let Ok(sip) = Sip::parse(&body) {
-                if sender.send((Instant::now(), sip)).is_err() {
+            let Ok(mut sip) = Sip::parse(&body) else { continue };
+            let position = unwrapper.update(sip.xpos, sip.ypos);
+            let mut shared = latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            for (channel, range) in std::mem::take(&mut sip.sonar) {
+                if let Some(slot) = sonar_slot[usize::from(channel)] {
+                    shared.ranges_mm[slot] = Some(range);
+                }
+            }
+            shared.sip = Some(sip);
+            shared.position = position;
+            shared.arrived = Some(Instant::now());
+        }
+    }
+}
+
+impl ArcosRobot {
+    /// Reads the robot's speeds from the latest SIP, mm/s and °/s.
+    fn speeds(&self, sip: &Sip) -> (f64, f64) {
+        let a = self.model.arcos;
+        let (l, r) = (f64::from(sip.l_vel) * a.vel_conv_factor, f64::from(sip.r_vel) * a.vel_conv_factor);
+        let rot = match sip.tail.rot_vel {
+            Some(tenths_deg) => f64::from(tenths_deg) / 10.0,
+            None => ((r - l) / 2.0 * a.diff_conv_factor).to_degrees(),
+        };
+        ((l + r) / 2.0, rot)
+    }
+
+    /// Waits, up to the configured bound, until a fresh SIP says the robot
+    /// stands still: STOP decelerates under power, while motors switched off
+    /// at speed let a 100 kg robot coast.
+    fn wait_for_standstill(&self) {
+        let asked = Instant::now();
+        while asked.elapsed() < self.standstill_wait {
+            std::thread::sleep(Duration::from_millis(10));
+            let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            if latest.ended {
+                return;
+            }
+            let fresh = latest.arrived.is_some_and(|t| t > asked);
+            if let (true, Some(sip)) = (fresh, &latest.sip) {
+                let (v, w) = self.speeds(sip);
+                if v.abs() < 5.0 && w.abs() < 1.0 {
                     return;
                 }
             }
@@ -317,44 +427,35 @@ fn read_sips(mut link: Box<dyn Link>, sender: Sender<(Instant, Sip)>, stop: Arc<
 impl Robot for ArcosRobot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let a = self.model.arcos;
-        let mut disconnected = false;
-        loop {
-            match self.sips.try_recv() {
-                Ok((arrived, sip)) => {
-                    // Every SIP goes through the unwrapper, or a wrap between
-                    // two ticks would be missed.
-                    let (x, y) = self.unwrapper.update(sip.xpos, sip.ypos);
-                    state.pose = Pose2::new(
-                        x as f64 * a.dist_conv_factor / 1000.0,
-                        y as f64 * a.dist_conv_factor / 1000.0,
-                        f64::from(sip.thpos) * a.angle_conv_factor,
-                    );
-                    for &(channel, range) in &sip.sonar {
-                        if let Some(i) = self.sonar_slot[usize::from(channel)] {
-                            let metres = f64::from(range) * a.range_conv_factor / 1000.0;
-                            self.ranges[i].range = (metres < self.ranges[i].max_range).then_some(metres);
-                        }
-                    }
-                    self.latest = Some(sip);
-                    self.last_sip_at = Some(arrived);
-                }
-                Err(crossbeam_channel::TryRecvError::Empty) => break,
-                Err(crossbeam_channel::TryRecvError::Disconnected) => {
-                    disconnected = true;
-                    break;
-                }
+        let (position, ended) = {
+            let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            self.sip.clone_from(&latest.sip);
+            self.last_sip_at = latest.arrived;
+            for (reading, range) in self.ranges.iter_mut().zip(&latest.ranges_mm) {
+                let metres = range.map(|r| f64::from(r) * a.range_conv_factor / 1000.0);
+                reading.range = metres.filter(|&m| m < reading.max_range);
             }
-        }
-        let Some(sip) = &self.latest else {
+            (latest.position, latest.ended)
+        };
+        let Some(sip) = &self.sip else {
             state.sensor_age = f64::INFINITY;
-            return if disconnected { Err(RobotError::Disconnected("no SIP ever arrived".into())) } else { Ok(()) };
+            return if ended { Err(RobotError::Disconnected("no SIP ever arrived".into())) } else { Ok(()) };
         };
-        let (l, r) = (f64::from(sip.l_vel) * a.vel_conv_factor, f64::from(sip.r_vel) * a.vel_conv_factor);
-        state.velocity = (l + r) / 2000.0;
-        state.rot_velocity = match sip.tail.rot_vel {
-            Some(tenths_deg) => (f64::from(tenths_deg) / 10.0).to_radians(),
-            None => (r - l) / 2.0 * a.diff_conv_factor,
-        };
+        let odometry = Pose2::new(
+            position.0 as f64 * a.dist_conv_factor / 1000.0,
+            position.1 as f64 * a.dist_conv_factor / 1000.0,
+            f64::from(sip.thpos) * a.angle_conv_factor,
+        );
+        // The first SIP is where the session's world frame is anchored.
+        let origin = self.origin;
+        let to_world = *self.to_world.get_or_insert_with(|| {
+            let first = Pose2::new(0.0, 0.0, odometry.theta);
+            origin.compose(&Pose2::default().relative_to(&first))
+        });
+        state.pose = to_world.compose(&odometry);
+        let (v, w) = self.speeds(sip);
+        state.velocity = v / 1000.0;
+        state.rot_velocity = w.to_radians();
         state.ranges.clone_from(&self.ranges);
         state.bumpers = Bumpers { front: sip.front_bumped(), rear: sip.rear_bumped() };
         state.stalled = sip.stalled();
@@ -362,7 +463,7 @@ impl Robot for ArcosRobot {
         state.estop = sip.estop();
         state.battery_volts = Some(sip.tail.battery_x10.map_or(f64::from(sip.battery) / 10.0, |b| f64::from(b) / 10.0));
         state.sensor_age = self.last_sip_at.map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64());
-        if disconnected {
+        if ended {
             return Err(RobotError::Disconnected("the reader stopped: link lost".into()));
         }
         Ok(())
@@ -380,8 +481,19 @@ impl Robot for ArcosRobot {
                         let deg_s = rate.clamp(-limits.max_rot_velocity, limits.max_rot_velocity).to_degrees();
                         self.send(ClientCommand::RVel(deg_s.round() as i16))
                     }
-                    Turn::Heading { heading, .. } => {
-                        self.send(ClientCommand::Head(heading.to_degrees().round() as i16))
+                    Turn::Heading { heading, max_rate } => {
+                        // HEAD turns at the SETRV limit: send the rate the
+                        // command allows whenever it changes.
+                        let deg_s = max_rate.clamp(0.0, limits.max_rot_velocity).to_degrees().round() as u16;
+                        if deg_s != self.rot_limit_sent {
+                            self.send(ClientCommand::SetRv(deg_s))?;
+                            self.rot_limit_sent = deg_s;
+                        }
+                        // The controller's heading is its own; the command's
+                        // is in the world frame.
+                        let offset = self.to_world.map_or(0.0, |t| t.theta);
+                        let controller = ubf_core::wrap_angle(heading - offset);
+                        self.send(ClientCommand::Head(controller.to_degrees().round() as i16))
                     }
                 }
             }
@@ -393,13 +505,22 @@ impl Robot for ArcosRobot {
             return Ok(());
         }
         self.closed = true;
-        let result = self
-            .send(ClientCommand::Stop)
-            .and_then(|_| self.send(ClientCommand::Enable(false)))
-            .and_then(|_| self.send(ClientCommand::Close));
+        let result = self.send(ClientCommand::Stop).and_then(|_| {
+            self.wait_for_standstill();
+            self.send(ClientCommand::Enable(false))?;
+            self.send(ClientCommand::Close)
+        });
         self.stop_reader.store(true, Ordering::Relaxed);
+        // The reader wakes at least every read timeout; a link that blocks
+        // longer than this is left to the process's exit.
         if let Some(reader) = self.reader.take() {
-            let _ = reader.join();
+            let deadline = Instant::now() + Duration::from_millis(200);
+            while !reader.is_finished() && Instant::now() < deadline {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            if reader.is_finished() {
+                let _ = reader.join();
+            }
         }
         result
     }

@@ -75,6 +75,9 @@ pub enum ClientCommand {
     Config,
     /// Rotational velocity, ± °/s.
     RVel(i16),
+    /// Left and right wheel velocities, each in units of the model's
+    /// `Vel2Divisor` mm/s.
+    Vel2(i8, i8),
     /// Rotational acceleration (+) or deceleration (−), °/s².
     SetRa(i16),
     /// Sonar on or off.
@@ -124,6 +127,9 @@ impl ClientCommand {
             DHead(v) => with_int(13, i32::from(v)),
             Config => vec![18],
             RVel(v) => with_int(21, i32::from(v)),
+            // Left in the high byte, right in the low byte, sent as one
+            // signed integer the way the manual describes.
+            Vel2(l, r) => with_int(32, i32::from(i16::from_be_bytes([l as u8, r as u8]))),
             SetRa(v) => with_int(23, i32::from(v)),
             Sonar(on) => with_int(28, i32::from(on)),
             Stop => vec![29],
@@ -176,6 +182,10 @@ impl ClientCommand {
             13 => DHead(narrow(int()?)),
             18 => Config,
             21 => RVel(narrow(int()?)),
+            32 => {
+                let [l, r] = narrow(int()?).to_be_bytes();
+                Vel2(l as i8, r as i8)
+            }
             23 => SetRa(narrow(int()?)),
             28 => Sonar(int()? != 0),
             29 => Stop,
@@ -482,13 +492,11 @@ impl Identity {
 pub const CONFIG_TYPE: u8 = 0x20;
 
 /// The reply to CONFIG (packet type 0x20): the controller's identity, its
-/// top speeds and accelerations, its SIP cycle and its serial settings.
+/// top speeds and accelerations, its SIP cycle and its serial settings
+/// (every controller generation sends these), then its current settings
+/// ([`ConfigSettings`]).
 ///
-/// The fields here are the ones every controller generation sends, in the
-/// order of the operations manuals' CONFIGpac tables (AROS, ARCOS and the
-/// Pioneer LX list the same head). What follows them (gripper, sonar
-/// arrays, PID gains, working limits, …) grew field by field across
-/// firmware versions; it is kept as raw bytes rather than guessed at.
+/// Field order follows the operations manuals' CONFIGpac tables.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ConfigPacket {
     /// The robot type, e.g. `Pioneer`.
@@ -517,8 +525,217 @@ pub struct ConfigPacket {
     pub host_baud: u8,
     /// The first auxiliary serial port's baud code.
     pub aux_baud: u8,
-    /// The firmware-specific fields that follow, unparsed.
+    /// The current settings that follow; fields an older firmware does not
+    /// send read as zero (or empty).
+    pub settings: ConfigSettings,
+    /// Bytes after the last field this codec knows, unparsed.
     pub rest: Vec<u8>,
+}
+
+/// One CONFIG field's wire format.
+trait ConfigField: Sized {
+    /// Reads the field, or `None` if the body has ended.
+    fn read(r: &mut Reader) -> Option<Self>;
+    fn write(&self, b: &mut Vec<u8>);
+}
+
+impl ConfigField for u8 {
+    fn read(r: &mut Reader) -> Option<Self> {
+        r.maybe(1, |r| r.u8(""))
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.push(*self);
+    }
+}
+
+impl ConfigField for u16 {
+    fn read(r: &mut Reader) -> Option<Self> {
+        r.maybe(2, |r| r.u16(""))
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.extend(self.to_le_bytes());
+    }
+}
+
+impl ConfigField for i16 {
+    fn read(r: &mut Reader) -> Option<Self> {
+        r.maybe(2, |r| r.i16(""))
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.extend(self.to_le_bytes());
+    }
+}
+
+impl ConfigField for i8 {
+    fn read(r: &mut Reader) -> Option<Self> {
+        r.maybe(1, |r| r.u8("")).map(|v| v as i8)
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.push(*self as u8);
+    }
+}
+
+impl ConfigField for u32 {
+    fn read(r: &mut Reader) -> Option<Self> {
+        let lo = u16::read(r)?;
+        let hi = u16::read(r)?;
+        Some(u32::from(lo) | u32::from(hi) << 16)
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.extend(self.to_le_bytes());
+    }
+}
+
+impl ConfigField for String {
+    fn read(r: &mut Reader) -> Option<Self> {
+        r.string("").ok()
+    }
+    fn write(&self, b: &mut Vec<u8>) {
+        b.extend(self.bytes().filter(|&c| c != 0));
+        b.push(0);
+    }
+}
+
+/// Declares [`ConfigSettings`] once: its fields in wire order, and the
+/// reader and writer that follow that order.
+macro_rules! config_settings {
+    ($($(#[doc = $doc:literal])* $field:ident: $ty:ty,)*) => {
+        /// The CONFIG fields after the head: accessories, current speed
+        /// limits and accelerations, PID gains and firmware details, in
+        /// the manuals' order. Later firmware appended fields; a body that
+        /// ends early leaves the rest at zero.
+        #[derive(Clone, Debug, Default, PartialEq, Eq)]
+        pub struct ConfigSettings {
+            $($(#[doc = $doc])* pub $field: $ty,)*
+        }
+
+        impl ConfigSettings {
+            /// Reads as many fields as the body holds.
+            fn read(r: &mut Reader) -> ConfigSettings {
+                let mut s = ConfigSettings::default();
+                $(match <$ty as ConfigField>::read(r) {
+                    Some(v) => s.$field = v,
+                    None => return s,
+                })*
+                s
+            }
+
+            fn write(&self, b: &mut Vec<u8>) {
+                $(ConfigField::write(&self.$field, b);)*
+            }
+        }
+    };
+}
+
+config_settings! {
+    /// Has a gripper.
+    has_gripper: u16,
+    /// Has front sonar.
+    front_sonar: u16,
+    /// Has rear sonar (a single byte, as the manual says).
+    rear_sonar: u8,
+    /// Low-battery alarm, tenths of a volt.
+    low_battery_dv: u16,
+    /// Encoder counts per wheel revolution.
+    rev_count: u16,
+    /// Watchdog time, ms.
+    watchdog_ms: u16,
+    /// Whether standard motor packets are sent (P2MPACS).
+    normal_mpacs: u8,
+    /// Stall PWM limit.
+    stall_val: u16,
+    /// Idle time after a stall, ms.
+    stall_count: u16,
+    /// Joystick translational speed, mm/s.
+    joy_vel: u16,
+    /// Joystick rotational speed, °/s.
+    joy_rot_vel: u16,
+    /// Current rotational speed limit (SETRV), °/s.
+    rot_vel_max: u16,
+    /// Current translational speed limit (SETV), mm/s.
+    trans_vel_max: u16,
+    /// Current rotational acceleration, °/s².
+    rot_accel: u16,
+    /// Current rotational deceleration, °/s².
+    rot_decel: u16,
+    /// Rotational PID: proportional.
+    rot_kp: u16,
+    /// Rotational PID: derivative.
+    rot_kv: u16,
+    /// Rotational PID: integral.
+    rot_ki: u16,
+    /// Current translational acceleration, mm/s².
+    trans_accel: u16,
+    /// Current translational deceleration, mm/s².
+    trans_decel: u16,
+    /// Translational PID: proportional.
+    trans_kp: u16,
+    /// Translational PID: derivative.
+    trans_kv: u16,
+    /// Translational PID: integral.
+    trans_ki: u16,
+    /// Front bumper segments.
+    front_bumps: u8,
+    /// Rear bumper segments.
+    rear_bumps: u8,
+    /// Charger type.
+    charger: u8,
+    /// Sonar cycle, ms.
+    sonar_cycle_ms: u8,
+    /// 2 if the controller returns to 9600 baud when a session ends.
+    autobaud: u8,
+    /// Gyro type (1: has a gyro).
+    gyro_type: u8,
+    /// Odometry drift correction.
+    drift_factor: i16,
+    /// Second auxiliary port's baud code.
+    aux2_baud: u8,
+    /// Third auxiliary port's baud code.
+    aux3_baud: u8,
+    /// Encoder ticks per mm.
+    ticks_mm: u16,
+    /// Voltage below which the controller shuts down, tenths of a volt.
+    shutdown_voltage_dv: u16,
+    /// Firmware version.
+    firmware_version: String,
+    /// Gyro clockwise correction.
+    gyro_cw: u16,
+    /// Gyro counter-clockwise correction.
+    gyro_ccw: u16,
+    /// Kinematics delay, ms.
+    kinematics_delay_ms: u8,
+    /// Top lateral speed, mm/s.
+    lat_vel_top: u16,
+    /// Top lateral acceleration, mm/s².
+    lat_accel_top: u16,
+    /// Current lateral speed limit, mm/s.
+    lat_vel_max: u16,
+    /// Current lateral acceleration, mm/s².
+    lat_accel: u16,
+    /// Current lateral deceleration, mm/s².
+    lat_decel: u16,
+    /// Powerbot charge threshold.
+    charge_threshold: u16,
+    /// Power distribution board port.
+    pdb_port: u8,
+    /// Gyro rate limit, °/s.
+    gyro_rate_limit: u16,
+    /// High-temperature shutdown, °C.
+    high_temperature_shutdown: i8,
+    /// Power bits.
+    power_bits: u16,
+    /// Battery type.
+    battery_type: u8,
+    /// Warning state of charge, %.
+    state_of_charge_low: u16,
+    /// Shutdown state of charge, %.
+    state_of_charge_shutdown: u16,
+    /// Boot loader version.
+    bootloader_version: String,
+    /// Configuration flags.
+    config_flags: u32,
+    /// Gyro firmware version.
+    gyro_fw_version: i16,
 }
 
 impl ConfigPacket {
@@ -543,6 +760,7 @@ impl ConfigPacket {
             sip_cycle_ms: r.u8("SIP cycle")?,
             host_baud: r.u8("host baud")?,
             aux_baud: r.u8("aux baud")?,
+            settings: ConfigSettings::read(&mut r),
             rest: r.take(r.remaining(), "rest")?.to_vec(),
         })
     }
@@ -563,6 +781,7 @@ impl ConfigPacket {
         }
         string(&mut b, &self.name);
         b.extend([self.sip_cycle_ms, self.host_baud, self.aux_baud]);
+        self.settings.write(&mut b);
         b.extend(&self.rest);
         b
     }
@@ -726,6 +945,9 @@ mod tests {
             DHead(-30),
             Config,
             RVel(20),
+            Vel2(-5, 12),
+            Vel2(-128, -1),
+            Vel2(127, 0),
             SetRa(100),
             Sonar(true),
             Stop,
@@ -797,15 +1019,33 @@ mod tests {
             sip_cycle_ms: 100,
             host_baud: 2,
             aux_baud: 0,
+            settings: ConfigSettings {
+                watchdog_ms: 2000,
+                trans_vel_max: 1500,
+                rot_decel: 100,
+                firmware_version: "1.9".into(),
+                high_temperature_shutdown: -5,
+                config_flags: 0x1234_5678,
+                gyro_fw_version: -2,
+                ..ConfigSettings::default()
+            },
             rest: vec![1, 2, 3],
         };
         let body = config.body();
-        assert_eq!(ConfigPacket::parse(&body), Ok(config));
-        // Every cut short of the fixed fields is a clean error naming the
-        // field it ran out in.
-        for end in 0..body.len() - 3 {
+        assert_eq!(ConfigPacket::parse(&body), Ok(config.clone()));
+        let mut settings = Vec::new();
+        config.settings.write(&mut settings);
+        let head = body.len() - settings.len() - config.rest.len();
+        // Every cut short of the head is a clean error naming the field it
+        // ran out in; a cut in the settings (an older firmware) keeps what
+        // arrived and zeroes the rest.
+        for end in 0..head {
             assert!(ConfigPacket::parse(&body[..end]).is_err(), "{end}");
         }
+        let older = ConfigPacket::parse(&body[..head + 20]).unwrap();
+        assert_eq!(older.settings.watchdog_ms, 2000);
+        assert_eq!(older.settings.trans_vel_max, 0);
+        assert!(older.rest.is_empty());
         let err = ConfigPacket::parse(&body[..30]).unwrap_err();
         assert!(err.to_string().contains("top"), "{err}");
         assert!(matches!(ConfigPacket::parse(&[0x32]), Err(DecodeError::UnexpectedPacket { .. })));

@@ -1,0 +1,202 @@
+//! The controller's safety policy as a robot wrapper: whatever the tree
+//! asks, no motion command goes out on stale data, a lost link is declared
+//! at a stated time, and a stall or a bumper latches a stop.
+//!
+//! It is timed by the controller's clock (the state's `time` and
+//! `sensor_age`), not by the wall, so the same policy runs, and is tested,
+//! on the simulator's clock and on a real robot's.
+
+use crate::{Command, Limits, Robot, RobotError, State};
+use serde::Deserialize;
+
+/// When to hold the robot still, whatever the behaviours want.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SafetyPolicy {
+    /// Sensor data older than this, s, sends STOP instead of any motion
+    /// command (ARCOS sends a SIP every 0.1 s: the default allows two
+    /// missed cycles and a little jitter).
+    #[serde(deserialize_with = "crate::config::positive")]
+    pub stale_after_s: f64,
+    /// Sensor data older than this, s, is a lost link: the robot reports
+    /// a disconnection. Counted from the first tick until data first comes.
+    #[serde(deserialize_with = "crate::config::positive")]
+    pub link_lost_after_s: f64,
+    /// After a stall or a bumper, hold still until the condition has been
+    /// clear this long, s; `None` holds until the operator restarts.
+    pub resume_after_s: Option<f64>,
+}
+
+impl Default for SafetyPolicy {
+    /// Stop after 0.25 s without data, declare the link lost after 1.3 s,
+    /// resume 2 s after a stall or bump clears.
+    fn default() -> Self {
+        SafetyPolicy { stale_after_s: 0.25, link_lost_after_s: 1.3, resume_after_s: Some(2.0) }
+    }
+}
+
+/// Why the guard is holding the robot still.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hold {
+    /// The sensor data is older than the policy allows.
+    StaleData,
+    /// A wheel stalled or a bumper was pressed, and motion is not allowed
+    /// again yet.
+    Contact,
+}
+
+/// A robot behind a [`SafetyPolicy`].
+#[derive(Clone, Debug)]
+pub struct SafetyGuard<R: Robot> {
+    inner: R,
+    policy: SafetyPolicy,
+    /// When the first tick sensed, s.
+    started: Option<f64>,
+    /// Why motion is held this tick, if it is.
+    hold: Option<Hold>,
+    /// A stall or bump latched: when the condition was last seen clear
+    /// (`None` while it persists).
+    contact: Option<Option<f64>>,
+}
+
+impl<R: Robot> SafetyGuard<R> {
+    /// `inner` under `policy`.
+    pub fn new(inner: R, policy: SafetyPolicy) -> Self {
+        SafetyGuard { inner, policy, started: None, hold: None, contact: None }
+    }
+
+    /// Why motion is held, as of the latest tick.
+    pub fn hold(&self) -> Option<Hold> {
+        self.hold
+    }
+
+    /// The wrapped robot.
+    pub fn inner(&self) -> &R {
+        &self.inner
+    }
+
+    /// The wrapped robot, mutably.
+    pub fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+
+    /// Updates the contact latch from this tick's state.
+    fn latch_contact(&mut self, state: &State) {
+        let touching = state.stalled || state.bumpers.any();
+        match (&mut self.contact, touching) {
+            (latch, true) => {
+                if latch.is_none() {
+                    tracing::warn!(stalled = state.stalled, bumpers = ?state.bumpers, "contact: holding the robot still");
+                }
+                *latch = Some(None);
+            }
+            (Some(clear_since), false) => {
+                let since = *clear_since.get_or_insert(state.time);
+                if self.policy.resume_after_s.is_some_and(|hold| state.time - since >= hold) {
+                    tracing::info!("contact clear for {:.1} s: motion allowed again", state.time - since);
+                    self.contact = None;
+                }
+            }
+            (None, false) => {}
+        }
+    }
+}
+
+impl<R: Robot> Robot for SafetyGuard<R> {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        let started = *self.started.get_or_insert(state.time);
+        self.inner.sense(state)?;
+        let age = state.sensor_age.min(state.time - started);
+        if age > self.policy.link_lost_after_s {
+            self.hold = Some(Hold::StaleData);
+            return Err(RobotError::Disconnected(if state.sensor_age.is_finite() {
+                format!("no sensor data for {:.2} s", state.sensor_age)
+            } else {
+                format!("no sensor data in the first {:.2} s", state.time - started)
+            }));
+        }
+        self.latch_contact(state);
+        self.hold = if state.sensor_age > self.policy.stale_after_s {
+            Some(Hold::StaleData)
+        } else if self.contact.is_some() {
+            Some(Hold::Contact)
+        } else {
+            None
+        };
+        Ok(())
+    }
+
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        match self.hold {
+            Some(_) => self.inner.act(&Command::Stop),
+            None => self.inner.act(command),
+        }
+    }
+
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        self.inner.shutdown()
+    }
+
+    fn limits(&self) -> Limits {
+        self.inner.limits()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{NullRobot, Turn};
+
+    const GO: Command = Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) };
+
+    /// One tick at `time` with data `age` seconds old; the command sent.
+    fn tick(guard: &mut SafetyGuard<NullRobot>, time: f64, age: f64) -> Result<Command, RobotError> {
+        guard.inner_mut().reported.sensor_age = age;
+        let mut state = State { time, ..State::default() };
+        guard.sense(&mut state)?;
+        guard.act(&GO)?;
+        Ok(guard.inner().last_command)
+    }
+
+    #[test]
+    fn no_motion_before_the_first_data_nor_on_stale_data() {
+        let mut guard = SafetyGuard::new(NullRobot::default(), SafetyPolicy::default());
+        assert_eq!(tick(&mut guard, 0.0, f64::INFINITY).unwrap(), Command::Stop, "before the first data");
+        assert_eq!(tick(&mut guard, 0.5, 0.0).unwrap(), GO);
+        assert_eq!(tick(&mut guard, 0.6, 0.2).unwrap(), GO, "within the allowance");
+        assert_eq!(tick(&mut guard, 0.7, 0.3).unwrap(), Command::Stop, "stale");
+        assert_eq!(guard.hold(), Some(Hold::StaleData));
+        assert_eq!(tick(&mut guard, 0.8, 0.0).unwrap(), GO, "fresh again");
+        let lost = tick(&mut guard, 2.2, 1.31).unwrap_err();
+        assert!(matches!(lost, RobotError::Disconnected(_)), "{lost}");
+    }
+
+    #[test]
+    fn a_robot_that_never_answers_is_lost_at_the_stated_time() {
+        let mut guard = SafetyGuard::new(NullRobot::default(), SafetyPolicy::default());
+        assert!(tick(&mut guard, 10.0, f64::INFINITY).is_ok());
+        assert!(tick(&mut guard, 11.29, f64::INFINITY).is_ok());
+        assert!(tick(&mut guard, 11.31, f64::INFINITY).is_err());
+    }
+
+    #[test]
+    fn a_stall_latches_a_stop_until_clear_for_the_hold_time() {
+        let mut guard = SafetyGuard::new(NullRobot::default(), SafetyPolicy::default());
+        assert_eq!(tick(&mut guard, 0.0, 0.0).unwrap(), GO);
+        guard.inner_mut().reported.stalled = true;
+        assert_eq!(tick(&mut guard, 0.1, 0.0).unwrap(), Command::Stop);
+        // The stall is gone as soon as the wheels stop pushing: still held.
+        guard.inner_mut().reported.stalled = false;
+        assert_eq!(tick(&mut guard, 0.2, 0.0).unwrap(), Command::Stop);
+        assert_eq!(tick(&mut guard, 2.1, 0.0).unwrap(), Command::Stop);
+        assert_eq!(guard.hold(), Some(Hold::Contact));
+        assert_eq!(tick(&mut guard, 2.2, 0.0).unwrap(), GO, "clear for 2 s");
+        // A bumper, with no hold time: held for good.
+        let forever = SafetyPolicy { resume_after_s: None, ..SafetyPolicy::default() };
+        let mut guard = SafetyGuard::new(NullRobot::default(), forever);
+        guard.inner_mut().reported.bumpers.front = true;
+        assert_eq!(tick(&mut guard, 0.0, 0.0).unwrap(), Command::Stop);
+        guard.inner_mut().reported.bumpers.front = false;
+        assert_eq!(tick(&mut guard, 1000.0, 0.0).unwrap(), Command::Stop);
+    }
+}
