@@ -131,6 +131,15 @@ enum Command {
         /// along it, for the sonar to see (default: open space, no echoes).
         #[arg(long, value_name = "LENGTHxWIDTH", value_parser = parse_room)]
         room: Option<(f64, f64)>,
+        /// Milliseconds between SIPs (ARCOS: 100); down to 0.1 to flood a
+        /// client with 10 000 a second.
+        #[arg(long, value_name = "MS", default_value_t = 100.0, value_parser = parse_sip_period)]
+        sip_period_ms: f64,
+        /// Freeze AFTER seconds into each session, for FOR seconds: no SIPs
+        /// and no motion while commands are still read, as a paused
+        /// simulator does; for rehearsing what the client does.
+        #[arg(long, value_name = "AFTER:FOR", value_parser = parse_silence)]
+        silence: Option<(f64, f64)>,
     },
     /// Reproduce one of the thesis's experiments.
     Experiment {
@@ -324,12 +333,16 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
         Command::Drive { file, dry_run } => drive_command(&registry, &file, dry_run),
-        Command::EmulatePowerbot { listen, pty, room } => {
+        Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
             let mut config =
                 ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
             if let Some((length, width)) = room {
                 config = config.in_room(length, width);
             }
+            config.sip_period = std::time::Duration::from_secs_f64(sip_period_ms / 1000.0);
+            config.silence = silence.map(|(after, span)| {
+                (std::time::Duration::from_secs_f64(after), std::time::Duration::from_secs_f64(span))
+            });
             if pty {
                 emulate_on_pty(&config)
             } else {
@@ -367,11 +380,19 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
         }
     };
     let seed = seed.unwrap_or(scenario.seed);
+    // A run a behaviour ended still reports, but does not pass.
+    let status = |summary: &RunReport| {
+        if summary.end == EndReason::BehaviorFailed {
+            ExitCode::from(EXIT_FAILURE)
+        } else {
+            ExitCode::SUCCESS
+        }
+    };
     match run(&scenario, seed, out.as_deref()) {
         Ok(summary) if json => match serde_json::to_string_pretty(&summary) {
             Ok(text) => {
                 println!("{text}");
-                ExitCode::SUCCESS
+                status(&summary)
             }
             Err(e) => {
                 eprintln!("error: writing the summary: {e}");
@@ -383,7 +404,7 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
             if let Some(dir) = &out {
                 println!("outputs         {}/{{report.json, trajectory.csv, plot.png}}", dir.display());
             }
-            ExitCode::SUCCESS
+            status(&summary)
         }
         Err(e) => {
             eprintln!("error: {}: {e}", file.display());
@@ -402,15 +423,27 @@ fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> 
         }
     };
     let stop = crate::drive::install_stop_flag();
-    let result = if dry_run {
-        crate::drive::dry_run(&config, &model, &stop).map(|_| DriveEnd::Stopped)
-    } else {
-        drive(&config, &model, &stop)
-    };
-    match result {
-        Ok(DriveEnd::Stopped) if dry_run => ExitCode::SUCCESS,
+    if dry_run {
+        return match crate::drive::dry_run(&config, &model, &stop) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(EXIT_FAILURE)
+            }
+        };
+    }
+    let outcome = drive(&config, &model, &stop);
+    match outcome.logs.as_slice() {
+        [] => eprintln!("no session opened; no log written"),
+        [one] => eprintln!("log in {}", one.display()),
+        many => {
+            let names: Vec<String> = many.iter().map(|p| p.display().to_string()).collect();
+            eprintln!("logs, one per session: {}", names.join(", "));
+        }
+    }
+    match outcome.end {
         Ok(DriveEnd::Stopped) => {
-            eprintln!("stopped; log in {}", config.log.display());
+            eprintln!("stopped");
             ExitCode::SUCCESS
         }
         Ok(DriveEnd::LinkLost) => ExitCode::from(EXIT_FAILURE),
@@ -481,17 +514,44 @@ fn parse_room(text: &str) -> Result<(f64, f64), String> {
     }
 }
 
-/// Prints what the emulator saw of a client. Nobody reading the output is
+fn parse_sip_period(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(ms) if (0.1..=1000.0).contains(&ms) => Ok(ms),
+        _ => Err(format!("expected milliseconds from 0.1 to 1000; got {text:?}")),
+    }
+}
+
+fn parse_silence(text: &str) -> Result<(f64, f64), String> {
+    let parse = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite() && (0.0..=86_400.0).contains(v));
+    match text.split_once(':').map(|(a, f)| (parse(a), parse(f))) {
+        Some((Some(after), Some(span))) => Ok((after, span)),
+        _ => Err(format!("expected AFTER:FOR in seconds, e.g. 3:2; got {text:?}")),
+    }
+}
+
+/// Prints what the emulator saw of a client, one line, the timings as
+/// `name=value` (`-` when it did not happen). Nobody reading the output is
 /// no reason to stop emulating: a closed pipe is ignored.
 fn print_emulator_report(report: &ubf_robots::arcos::emulator::EmulatorReport) {
     use std::io::Write;
+    let show = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.3}"));
+    let limits = report.speed_limits.map_or("-".to_owned(), |(v, w)| format!("{v},{w}"));
     let _ = writeln!(
         std::io::stdout(),
-        "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m",
+        "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m; sips={} motion_before_first_sip={} \
+         last_motion_after_silence_s={} stop_after_silence_s={} stop_to_disable_s={} speed_at_disable_mm_s={} \
+         speed_limits={limits} stalled_cycles={}",
         report.commands,
         report.closed,
         report.pose.0 / 1000.0,
-        report.pose.1 / 1000.0
+        report.pose.1 / 1000.0,
+        report.sips,
+        report.motion_before_first_sip,
+        show(report.last_motion_after_silence_s),
+        show(report.stop_after_silence_s),
+        show(report.stop_to_disable_s),
+        show(report.speed_at_disable),
+        report.stalled_cycles,
     );
 }
 
@@ -996,8 +1056,25 @@ fn sweep_command(
 fn check_command(registry: &Registry, files: &[PathBuf]) -> ExitCode {
     let mut code = ExitCode::SUCCESS;
     for file in files {
-        match Scenario::load(registry, file) {
-            Ok(scenario) => println!("{}: ok ({})", file.display(), scenario.name),
+        let checked = if is_robot_file(file) {
+            crate::drive::DriveConfig::load(registry, file).map(|(config, model)| {
+                format!(
+                    "robot file \"{}\": a {} at {}, {} behaviour nodes",
+                    config.name,
+                    model.name,
+                    config.connection,
+                    {
+                        ubf_core::TreeLayout::of(config.root.build(&ubf_core::BuildContext::new(0)).as_ref())
+                            .nodes
+                            .len()
+                    }
+                )
+            })
+        } else {
+            Scenario::load(registry, file).map(|s| format!("scenario \"{}\"", s.name)).map_err(|e| e.to_string())
+        };
+        match checked {
+            Ok(what) => println!("{}: ok, {what}", file.display()),
             Err(e) => {
                 eprintln!("error: {e}");
                 code = ExitCode::from(EXIT_BAD_INPUT);
@@ -1005,6 +1082,15 @@ fn check_command(registry: &Registry, files: &[PathBuf]) -> ExitCode {
         }
     }
     code
+}
+
+/// Whether `file` is a robot file for `ubf drive` rather than a scenario:
+/// it names itself `RobotConfig(…)`, or has a `connection`.
+fn is_robot_file(file: &std::path::Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(file) else { return false };
+    let body: String = text.lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n");
+    let body = body.trim_start();
+    body.starts_with("RobotConfig") || (body.starts_with('(') && body.contains("connection:"))
 }
 
 fn pose_text(p: &Pose2) -> String {
@@ -1015,9 +1101,13 @@ fn print_summary(s: &RunReport) {
     let ending = match s.end {
         EndReason::GoalReached => "robot believes it reached the goal",
         EndReason::TimeLimit => "time limit",
+        EndReason::BehaviorFailed => "a behaviour failed; the robot was stopped",
     };
     println!("scenario        {} (seed {})", s.scenario, s.seed);
     println!("ended           {ending} after {:.1} s simulated, {} ticks", s.sim_time_s, s.ticks);
+    if let Some(failure) = &s.failure {
+        println!("failure         {failure}");
+    }
     println!("goal reached    {}", if s.reached_goal { "yes" } else { "no" });
     println!("distance        {:.2} m", s.distance_m);
     println!("collisions      {}", s.collisions);

@@ -1,19 +1,22 @@
 //! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
 //! speaking its protocol), stopped safely.
 
-use crate::trajectory::TrajectoryWriter;
+use crate::trajectory::{Columns, Row, TrajectoryWriter};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
-use ubf_core::{BehaviorSpec, BuildContext, Controller, Goal, Registry, Robot, State, WallClock};
+use ubf_core::{
+    BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2, Registry, Robot, RobotError,
+    SafetyGuard, SafetyPolicy, State, WallClock,
+};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
 use ubf_perception::source::{CameraSource, ImageDirectory};
 use ubf_perception::StereoCamera;
-use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
+use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions, EmergencyStop};
 use ubf_robots::arcos::link;
 use ubf_robots::camera::CameraRobot;
 use ubf_robots::egomotion::EgomotionRobot;
@@ -99,7 +102,7 @@ pub struct DriveCamera {
     pub source: CameraSourceChoice,
     /// The pair's calibration: focal length, image size (the principal
     /// point is its centre), baseline and mounting.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub stereo: StereoCamera,
     /// The feature pipeline's settings.
     #[serde(default)]
@@ -140,6 +143,26 @@ pub struct DriveConfig {
     /// Accelerations to set on the controller (unset: its own).
     #[serde(default)]
     pub accelerations: Option<Accelerations>,
+    /// A cap on translational speed, m/s, below the model's (sent as SETV
+    /// on connect and applied to every command).
+    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    pub max_velocity: Option<f64>,
+    /// A cap on rotational speed, °/s, below the model's (sent as SETRV).
+    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    pub max_rot_velocity_deg: Option<f64>,
+    /// When to hold the robot still whatever the tree wants: stale data,
+    /// a lost link, a stall or a bumper.
+    #[serde(default)]
+    pub safety: SafetyPolicy,
+    /// What a panicking behaviour does: `Stop` ends the drive (the robot
+    /// is stopped and the session closed), `SkipBehavior` carries on
+    /// without it.
+    #[serde(default)]
+    pub on_behavior_panic: OnBehaviorPanic,
+    /// Longest wait on the way out for the robot to report standstill after
+    /// STOP, before its motors are switched off, s.
+    #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "positive")]
+    pub stop_wait_s: f64,
     /// Stop by itself after this long, s (unset: run until stopped).
     #[serde(default)]
     pub max_time_s: Option<f64>,
@@ -157,22 +180,57 @@ impl DriveConfig {
     fn default_log() -> PathBuf {
         PathBuf::from("drive-log.csv")
     }
+    fn default_stop_wait() -> f64 {
+        1.0
+    }
 
-    /// `robot` with the configured camera and egomotion around it.
-    fn equip(&self, robot: ArcosRobot) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, String> {
-        let Some(camera) = &self.camera else {
+    /// Opens the camera, if there is one: before connecting, so that a
+    /// camera that fails never leaves the motors on.
+    fn open_camera(&self) -> Result<Option<OpenCamera>, String> {
+        let Some(camera) = &self.camera else { return Ok(None) };
+        let (source, paced) = open_source(&camera.source, &camera.stereo).map_err(|e| format!("camera: {e}"))?;
+        Ok(Some(OpenCamera { source, paced }))
+    }
+
+    /// `robot` with the opened camera and the egomotion tracker (starting
+    /// at `origin`) around it.
+    fn equip(
+        &self,
+        robot: ArcosRobot,
+        camera: Option<OpenCamera>,
+        origin: Pose2,
+    ) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, String> {
+        let (Some(open), Some(camera)) = (camera, &self.camera) else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };
-        let (source, paced) = open_source(&camera.source, &camera.stereo)?;
-        let robot =
-            CameraRobot::new(robot, source, camera.stereo, camera.features, paced).map_err(|e| e.to_string())?;
-        let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, ubf_core::Pose2::default(), 0));
+        let robot = CameraRobot::new(robot, open.source, camera.stereo, camera.features, open.paced)
+            .map_err(|e| format!("camera: {e}"))?;
+        let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, origin, 0));
         Ok(EgomotionRobot::new(robot, tracker))
     }
 
-    /// How to open a session, motors on or not.
-    fn connect_options(&self, enable_motors: bool) -> ConnectOptions {
-        ConnectOptions { enable_motors, accelerations: self.accelerations, ..ConnectOptions::default() }
+    /// How to open a session, motors on or not, with the world frame's
+    /// origin at `origin`.
+    fn connect_options(&self, enable_motors: bool, origin: Pose2) -> ConnectOptions {
+        ConnectOptions {
+            enable_motors,
+            max_velocity: self.max_velocity,
+            max_rot_velocity_deg: self.max_rot_velocity_deg,
+            accelerations: self.accelerations,
+            origin,
+            standstill_wait: Duration::from_secs_f64(self.stop_wait_s.min(10.0)),
+        }
+    }
+
+    /// Everything that can be checked without the robot: the tree builds,
+    /// the egomotion tables fit the camera. Run before connecting, so that
+    /// nothing after ENABLE can fail on the file.
+    pub fn validate(&self) -> Result<(), String> {
+        if let (Some(config), Some(camera)) = (self.egomotion, &self.camera) {
+            let _ = Tracker::new(config, camera.stereo, Pose2::default(), 0);
+        }
+        let _ = self.root.build(&BuildContext::new(0));
+        Ok(())
     }
 
     /// Reads a configuration file. Paths in it (a model file, a camera's
@@ -197,17 +255,46 @@ impl DriveConfig {
                 RobotModel::from_ron(&text).map_err(|e| format!("{}:{e}", model_path.display()))?
             }
         };
+        config.validate().map_err(|e| format!("{}: {e}", path.display()))?;
         Ok((config, model))
     }
 }
 
-/// Set by Ctrl-C or SIGTERM.
+/// What a second Ctrl-C or SIGTERM runs before the process exits: the
+/// robot's emergency stop, while a session is open.
+static ON_SECOND_INTERRUPT: Mutex<Option<EmergencyStop>> = Mutex::new(None);
+
+/// Set by Ctrl-C or SIGTERM. A second one does not wait for the orderly
+/// stop: it sends STOP, ENABLE 0 and CLOSE on the open session, if any, and
+/// exits with status 130.
 pub fn install_stop_flag() -> Arc<AtomicBool> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     // A second handler cannot be installed; then only the time limit stops.
-    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst));
+    let _ = ctrlc::set_handler(move || {
+        if !flag.swap(true, Ordering::SeqCst) {
+            return;
+        }
+        if let Ok(guard) = ON_SECOND_INTERRUPT.try_lock() {
+            if let Some(emergency) = guard.as_ref() {
+                let _ = emergency.stop_now();
+            }
+        }
+        eprintln!("interrupted twice: robot sent STOP, ENABLE 0, CLOSE; exiting now");
+        std::process::exit(130);
+    });
     stop
+}
+
+/// Registers (or clears) what a second interrupt stops.
+fn arm_second_interrupt(emergency: Option<EmergencyStop>) {
+    *ON_SECOND_INTERRUPT.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = emergency;
+}
+
+/// A camera opened before its session.
+struct OpenCamera {
+    source: Box<dyn CameraSource + Send>,
+    paced: bool,
 }
 
 /// How a drive ended.
@@ -219,21 +306,66 @@ pub enum DriveEnd {
     LinkLost,
 }
 
+/// What a drive leaves: how it ended and the logs it wrote, one per
+/// session, in order.
+#[derive(Debug)]
+pub struct DriveOutcome {
+    /// How it ended, or why it failed.
+    pub end: Result<DriveEnd, String>,
+    /// The sessions' logs.
+    pub logs: Vec<PathBuf>,
+}
+
+/// The first of `base`, `stem.2.ext`, `stem.3.ext`, … that does not exist,
+/// created: a new session (or a new drive) never overwrites a log.
+fn create_fresh_log(base: &Path) -> std::io::Result<(std::fs::File, PathBuf)> {
+    let stem = base.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
+    let ext = base.extension().map_or_else(|| "csv".into(), |s| s.to_string_lossy().into_owned());
+    for n in 1..10_000u32 {
+        let path = if n == 1 { base.to_owned() } else { base.with_file_name(format!("{stem}.{n}.{ext}")) };
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(file) => return Ok((file, path)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Err(std::io::Error::other(format!("{}: 10 000 logs already; move some away", base.display())))
+}
+
+/// How a session ended.
+enum SessionEnd {
+    Stopped,
+    LinkLost(String),
+    Failed(String),
+}
+
 /// Runs the tree against the robot until `stop` is set (or the time limit),
-/// reconnecting after a lost link if configured. Every tick goes to the log;
-/// on the way out the robot gets STOP, ENABLE 0 and CLOSE and the log is
-/// flushed.
-pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<DriveEnd, String> {
+/// reconnecting after a lost link if configured, with the world frame (and
+/// so the goal) carried over from the last pose. Every tick goes to the
+/// session's log; on the way out the robot gets STOP, ENABLE 0 and CLOSE and
+/// the log is flushed, whatever ended the session (a panic included).
+pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> DriveOutcome {
+    let mut logs = Vec::new();
+    let end = drive_sessions(config, model, stop, &mut logs);
+    DriveOutcome { end, logs }
+}
+
+fn drive_sessions(
+    config: &DriveConfig,
+    model: &RobotModel,
+    stop: &AtomicBool,
+    logs: &mut Vec<PathBuf>,
+) -> Result<DriveEnd, String> {
     let started = Instant::now();
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
-    let mut log_path = config.log.clone();
-    let mut session = 0;
+    let mut pose = Pose2::default();
     loop {
         if stop.load(Ordering::SeqCst) || out_of_time() {
             return Ok(DriveEnd::Stopped);
         }
+        let camera = config.open_camera()?;
         let robot = match link::open(&config.connection, config.baud).map_err(|e| e.to_string()).and_then(|l| {
-            ArcosRobot::connect(l, model.clone(), &config.connect_options(true)).map_err(|e| e.to_string())
+            ArcosRobot::connect(l, model.clone(), &config.connect_options(true, pose)).map_err(|e| e.to_string())
         }) {
             Ok(robot) => robot,
             Err(e) => {
@@ -246,29 +378,44 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Res
             }
         };
         eprintln!("connected to {} ({} {})", robot.identity().name, robot.identity().class, robot.identity().subclass);
-        session += 1;
-        if session > 1 {
-            log_path = config.log.with_extension(format!("{session}.csv"));
-        }
-        let robot = match config.equip(robot) {
-            Ok(robot) => robot,
-            // The session closes as the robot is dropped.
-            Err(e) => return Err(format!("camera: {e}")),
-        };
+        arm_second_interrupt(robot.emergency_stop().ok());
+        // From here the motors are on: every path out goes through shutdown.
+        let robot = SafetyGuard::new(config.equip(robot, camera, pose)?, config.safety);
         let root = config.root.build(&BuildContext::new(0));
         let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
         controller.set_goal(config.goal);
-        let mut log = TrajectoryWriter::create(&log_path, controller.layout())
-            .map_err(|e| format!("{}: {e}", log_path.display()))?;
-        let lost = run_session(&mut controller, &mut log, config, stop, &out_of_time);
-        // Whatever happened: stop the robot, close the session, keep the log.
+        controller.set_on_behavior_panic(config.on_behavior_panic);
+        let opened = create_fresh_log(&config.log).and_then(|(file, path)| {
+            let columns = Columns { truth: false, hold: true };
+            Ok((TrajectoryWriter::new(file, controller.layout(), columns)?, path))
+        });
+        let ended = match opened {
+            Ok((mut log, path)) => {
+                eprintln!("logging to {}", path.display());
+                logs.push(path.clone());
+                let ended = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    run_session(&mut controller, &mut log, stop, &out_of_time)
+                }))
+                .unwrap_or_else(|panic| {
+                    SessionEnd::Failed(format!("internal error: {}", ubf_core::BehaviorPanic::caught("drive", panic)))
+                });
+                if let Err(e) = log.finish() {
+                    tracing::warn!("{}: {e}", path.display());
+                }
+                ended
+            }
+            Err(e) => SessionEnd::Failed(format!("{}: {e}", config.log.display())),
+        };
+        pose = controller.state().pose;
+        // Whatever happened: stop the robot and close the session.
         if let Err(e) = controller.shutdown() {
             tracing::warn!("shutting down: {e}");
         }
-        log.finish().map_err(|e| format!("{}: {e}", log_path.display()))?;
-        match lost {
-            None => return Ok(DriveEnd::Stopped),
-            Some(why) => {
+        arm_second_interrupt(None);
+        match ended {
+            SessionEnd::Stopped => return Ok(DriveEnd::Stopped),
+            SessionEnd::Failed(why) => return Err(why),
+            SessionEnd::LinkLost(why) => {
                 eprintln!("link lost: {why}");
                 if config.on_link_loss == OnLinkLoss::Exit {
                     return Ok(DriveEnd::LinkLost);
@@ -279,36 +426,34 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Res
     }
 }
 
-/// Ticks until stopped (returns `None`) or the link is lost (returns why).
+/// Ticks until stopped, the link is lost, or something fails. The safety
+/// guard around the robot holds it on stale data and declares a lost link.
 fn run_session<R: Robot>(
-    controller: &mut Controller<R>,
+    controller: &mut Controller<SafetyGuard<R>>,
     log: &mut TrajectoryWriter,
-    config: &DriveConfig,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
-) -> Option<String> {
-    let stale_after = 3.0 * config.period_s;
-    // The first SIP follows OPEN within a cycle or two; meanwhile the state
-    // is stale and a Stop behaviour holds the robot.
-    let grace = Instant::now() + Duration::from_secs(2);
+) -> SessionEnd {
     while !stop.load(Ordering::SeqCst) && !out_of_time() {
-        if let Err(e) = controller.tick() {
-            return Some(e.to_string());
+        match controller.tick() {
+            Ok(_) => {}
+            Err(ControllerError::Robot(RobotError::Disconnected(why))) => return SessionEnd::LinkLost(why),
+            Err(ControllerError::Robot(e)) => return SessionEnd::LinkLost(e.to_string()),
+            Err(e) => return SessionEnd::Failed(e.to_string()),
         }
         let state: &State = controller.state();
-        let (pose, age, egomotion, frame) = (state.pose, state.sensor_age, state.egomotion, state.stereo.number);
-        if let Err(e) = log.write(controller.last_record(), controller.layout(), &pose, &pose, &egomotion, frame) {
+        let row = Row {
+            truth: None,
+            odometry: &state.pose,
+            egomotion: &state.egomotion,
+            frame: state.stereo.number,
+            hold: controller.robot().hold(),
+        };
+        if let Err(e) = log.write(controller.last_record(), controller.layout(), &row) {
             tracing::warn!("writing the log: {e}");
         }
-        if age > stale_after {
-            // No SIP for three cycles: never keep commanding motion blind.
-            let _ = controller.robot_mut().act(&ubf_core::Command::Stop);
-            if age > 10.0 * stale_after && Instant::now() > grace {
-                return Some(if age.is_finite() { format!("no SIP for {age:.1} s") } else { "no SIP arrived".into() });
-            }
-        }
     }
-    None
+    SessionEnd::Stopped
 }
 
 /// `--dry-run`: connect without enabling the motors, print who the robot is
@@ -316,9 +461,11 @@ fn run_session<R: Robot>(
 /// second until stopped. Output that cannot be written (a closed pipe) ends
 /// the run like Ctrl-C: the session is closed either way.
 pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), String> {
+    let camera = config.open_camera()?;
     let link = link::open(&config.connection, config.baud).map_err(|e| format!("{}: {e}", config.connection))?;
-    let robot = ArcosRobot::connect(link, model.clone(), &config.connect_options(false)).map_err(|e| e.to_string())?;
-    let mut robot = config.equip(robot)?;
+    let robot = ArcosRobot::connect(link, model.clone(), &config.connect_options(false, Pose2::default()))
+        .map_err(|e| e.to_string())?;
+    let mut robot = config.equip(robot, camera, Pose2::default())?;
     let result = show_robot(&mut robot, config, model, stop, &mut std::io::stdout().lock());
     let closed = robot.shutdown().map_err(|e| e.to_string());
     match result {

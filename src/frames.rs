@@ -88,7 +88,11 @@ fn median(values: &mut [f64]) -> f64 {
 pub fn replay(dir: &Path, features: &FeatureConfig) -> Result<PipelineReport, String> {
     let camera_path = dir.join(CAMERA_FILE);
     let camera: StereoCamera = match std::fs::read_to_string(&camera_path) {
-        Ok(text) => ron::from_str(&text).map_err(|e| format!("{}:{e}", camera_path.display()))?,
+        Ok(text) => {
+            ubf_core::config::from_ron::<ubf_core::config::Checked<StereoCamera>>(&text)
+                .map_err(|e| format!("{}:{e}", camera_path.display()))?
+                .0
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => StereoCamera::default(),
         Err(e) => return Err(format!("{}: {e}", camera_path.display())),
     };

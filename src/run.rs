@@ -3,7 +3,7 @@
 
 use crate::plot::{self, PlotError, RunPlot};
 use crate::scenario::Scenario;
-use crate::trajectory::TrajectoryWriter;
+use crate::trajectory::{Row, TrajectoryWriter};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
@@ -20,6 +20,9 @@ pub enum EndReason {
     GoalReached,
     /// `max_time_s` ran out first.
     TimeLimit,
+    /// A behaviour panicked (the report's `failure` names it); the robot
+    /// was stopped.
+    BehaviorFailed,
 }
 
 /// What a run did: `report.json`.
@@ -41,6 +44,9 @@ pub struct RunReport {
     pub collisions: u32,
     /// Why the run ended.
     pub end: EndReason,
+    /// What failed, when a behaviour did: its path in the tree and its
+    /// message.
+    pub failure: Option<String>,
     /// Where the robot really ended.
     pub final_true_pose: Pose2,
     /// Where the robot believed it ended.
@@ -117,6 +123,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let root = scenario.root.build(&BuildContext::new(seed));
     let mut controller = Controller::new(robot, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
+    controller.set_on_behavior_panic(scenario.on_behavior_panic);
 
     let mut trajectory = match out {
         Some(dir) => {
@@ -140,10 +147,20 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let max_ticks = scenario.max_ticks();
     let mut end = EndReason::TimeLimit;
     let mut failure = None;
+    let mut behavior_failure = None;
     for _ in 0..max_ticks {
-        if let Err(e) = controller.tick() {
-            failure = Some(RunError::from(e));
-            break;
+        match controller.tick() {
+            Ok(_) => {}
+            // The run still ends with its report, saying what failed.
+            Err(ControllerError::BehaviorPanicked(panic)) => {
+                end = EndReason::BehaviorFailed;
+                behavior_failure = Some(panic.to_string());
+                break;
+            }
+            Err(e) => {
+                failure = Some(RunError::from(e));
+                break;
+            }
         }
         // The truth and odometry the tick's state was sensed at, which the
         // egomotion estimate from its frame describes.
@@ -155,14 +172,14 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
             predictor.frame(&odometry, controller.state().egomotion.last_step_cv);
         }
         if let Some((writer, path)) = &mut trajectory {
-            if let Err(e) = writer.write(
-                controller.last_record(),
-                controller.layout(),
-                &truth,
-                &odometry,
-                &controller.state().egomotion,
-                controller.state().stereo.number,
-            ) {
+            let row = Row {
+                truth: Some(&truth),
+                odometry: &odometry,
+                egomotion: &controller.state().egomotion,
+                frame: controller.state().stereo.number,
+                hold: None,
+            };
+            if let Err(e) = writer.write(controller.last_record(), controller.layout(), &row) {
                 failure = Some(output_error(path)(e));
                 break;
             }
@@ -208,6 +225,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
         reached_goal: scenario.goal.is_some_and(|g| g.reached_by(&truth)),
         collisions: robot.collisions(),
         end,
+        failure: behavior_failure,
         final_true_pose: truth,
         final_estimated_pose: estimate,
         estimate_error_m: truth.distance_to(estimate.x, estimate.y),

@@ -20,7 +20,7 @@
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use ubf_core::config::{checked, positive, RonError};
-use ubf_core::{BehaviorSpec, Goal, Registry};
+use ubf_core::{BehaviorSpec, Goal, OnBehaviorPanic, Registry};
 use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 
 /// A headless run: a simulated robot, a goal and the behaviour tree.
@@ -51,6 +51,10 @@ pub struct Scenario {
     /// Where the robot should go; without one the run lasts `max_time_s`.
     #[serde(default)]
     pub goal: Option<Goal>,
+    /// What a panicking behaviour does: `Stop` (the default) ends the run
+    /// with its report; `SkipBehavior` carries on without it.
+    #[serde(default)]
+    pub on_behavior_panic: OnBehaviorPanic,
     /// The behaviour tree.
     pub root: BehaviorSpec,
 }

@@ -283,3 +283,38 @@ fn a_start_inside_a_wall_is_refused_by_check_and_run() {
         scenario_file(&dir, &body.replace("max_time_s: 10.0,", "max_time_s: 10.0, robot: (start: (x: 1.0, y: 0.0)),"));
     assert!(ubf(&["check", moved.to_str().unwrap()]).status.success());
 }
+
+#[test]
+fn a_panicking_behaviour_ends_the_run_with_its_report_or_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = |policy: &str| {
+        format!(
+            r#"Scenario(name: "fault", max_time_s: 10.0, goal: (x: 3.0, y: 0.0), {policy}
+            root: Composite(arbiter: CommandFusion, children: [
+                (behavior: Stop()), (behavior: InjectFault(after_s: 1.0, message: "sensor table empty")),
+                (behavior: GoTo(cruise_speed: 0.5))]))"#
+        )
+    };
+    let file = scenario_file(&dir, &body(""));
+    let out_dir = dir.path().join("out");
+    let out = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["run", file.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("failure         behaviour root/InjectFault panicked: sensor table empty"));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["end"], "behavior_failed");
+    assert!((report["sim_time_s"].as_f64().unwrap() - 1.0).abs() < 1e-9, "{report}");
+    // Skipped, the run carries on without it and reaches the goal.
+    let file = scenario_file(&dir, &body("on_behavior_panic: SkipBehavior,"));
+    let out = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["run", file.to_str().unwrap(), "--json"])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((report["end"].as_str(), report["reached_goal"].as_bool()), (Some("goal_reached"), Some(true)));
+}

@@ -6,12 +6,36 @@ use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-fn emulator() -> (Child, String, BufReader<std::process::ChildStdout>) {
+/// A child process killed when dropped, so a failed assertion never leaves
+/// an emulator running (holding the test's output open).
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+impl std::ops::Deref for Killed {
+    type Target = Child;
+    fn deref(&self) -> &Child {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Killed {
+    fn deref_mut(&mut self) -> &mut Child {
+        &mut self.0
+    }
+}
+
+fn emulator() -> (Killed, String, BufReader<std::process::ChildStdout>) {
     emulator_with(&["--listen", "127.0.0.1:0"])
 }
 
 /// `ubf emulate-powerbot ARGS`, with the address it serves on.
-fn emulator_with(args: &[&str]) -> (Child, String, BufReader<std::process::ChildStdout>) {
+fn emulator_with(args: &[&str]) -> (Killed, String, BufReader<std::process::ChildStdout>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
         .arg("emulate-powerbot")
         .args(args)
@@ -23,7 +47,7 @@ fn emulator_with(args: &[&str]) -> (Child, String, BufReader<std::process::Child
     out.read_line(&mut line).unwrap();
     assert!(line.starts_with("emulating a Powerbot on "), "{line}");
     let address = line.trim().rsplit(' ').next().unwrap().to_owned();
-    (child, address, out)
+    (Killed(child), address, out)
 }
 
 /// Waits up to `seconds` for `child` to exit.
@@ -229,4 +253,208 @@ fn a_dry_run_with_a_camera_shows_live_landmark_counts() {
         Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("egomotion needs a camera"));
+}
+
+/// A robot file with `root` as its tree and `extra` fields.
+fn robot_file(address: &str, log: &std::path::Path, extra: &str, root: &str) -> String {
+    format!(
+        r#"RobotConfig(name: "test", connection: "{address}", model: Powerbot, log: "{}", {extra} root: {root})"#,
+        log.display()
+    )
+}
+
+/// `name=value` from the emulator's report line, `None` for `-`.
+fn field(line: &str, name: &str) -> Option<f64> {
+    let value = line.split(&format!("{name}=")).nth(1)?.split([' ', ',']).next()?;
+    value.trim().parse().ok()
+}
+
+/// The emulator's next report line.
+fn report_line(out: &mut BufReader<std::process::ChildStdout>) -> String {
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    line
+}
+
+const GO_ONLY: &str = "Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: 0.3))])";
+
+#[test]
+fn stale_data_stops_motion_and_the_link_is_declared_lost_on_time() {
+    // SIPs stop 3 s into the session while commands still reach the robot:
+    // a tree with nothing but GoTo would command motion blind.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--silence", "3:5"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = "on_link_loss: Exit, goal: (x: 20.0, y: 0.0),";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(1), "{stderr}");
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    assert!(line.contains("closed true"), "{line}");
+    assert_eq!(field(&line, "motion_before_first_sip"), Some(0.0), "{line}");
+    // Documented: no motion command once data is 0.25 s old, so the last
+    // one leaves within that and a tick; STOP follows on the next tick.
+    let last_motion = field(&line, "last_motion_after_silence_s").unwrap_or(0.0);
+    let stop = field(&line, "stop_after_silence_s").expect("a STOP during the silence");
+    assert!(last_motion <= 0.6 && stop <= 0.7, "{line}");
+    // Documented: the link is lost after 1.3 s without data.
+    let lost: f64 = stderr.split("no sensor data for ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!((1.3..2.0).contains(&lost), "{stderr}");
+    let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
+    assert!(log.lines().next().unwrap().contains(",winner,hold,") && !log.contains("true_x"), "{log}");
+    assert!(log.contains(",stale_data"), "the log says why the robot was held");
+}
+
+#[test]
+fn the_goal_keeps_its_place_across_a_reconnect() {
+    // Every session freezes after 3 s; the driver reconnects and the
+    // emulated controller starts its odometry from zero again, as a
+    // restarted simulator does. The goal 3 m ahead must still be 3 m from
+    // where the drive began.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--silence", "3:60"]);
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    let file = dir.path().join("robot.ron");
+    let root = "Composite(arbiter: CommandFusion, children: [
+        (behavior: Stop(), weight: 1.0), (behavior: GoTo(cruise_speed: 0.6))])";
+    let extra = "on_link_loss: Reconnect, max_time_s: 14.0, goal: (x: 3.0, y: 0.0, tolerance: 0.1),";
+    std::fs::write(&file, robot_file(&address, &log, extra, root)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert!(drive.status.success(), "{stderr}");
+    let sessions = stderr.matches("connected to").count();
+    let mut travelled = 0.0;
+    for _ in 0..sessions {
+        let line = report_line(&mut out);
+        travelled += line.split('(').nth(1).unwrap().split(',').next().unwrap().parse::<f64>().unwrap();
+    }
+    emulator.kill().unwrap();
+    assert!(sessions >= 2, "{stderr}");
+    assert!((travelled - 3.0).abs() < 0.25, "drove {travelled:.3} m in {sessions} sessions toward a 3 m goal");
+    // One log per session, each named once, none overwritten.
+    assert!(stderr.contains(&format!("logs, one per session: {}, ", log.display())), "{stderr}");
+    assert!(log.with_extension("2.csv").exists());
+}
+
+#[test]
+fn sigterm_ends_a_flooded_and_suspended_drive_promptly() {
+    // 10 000 SIPs a second, and the driver suspended for 3 s meanwhile.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--sip-period-ms", "0.1"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = "goal: (x: 20.0, y: 0.0),";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    let pid = drive.id().to_string();
+    Command::new("kill").args(["-STOP", &pid]).status().unwrap();
+    std::thread::sleep(Duration::from_secs(3));
+    Command::new("kill").args(["-CONT", &pid]).status().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    Command::new("kill").args(["-TERM", &pid]).status().unwrap();
+    // The documented bound is 1.5 s; a hang is what this catches.
+    let status = wait_for(&mut drive, 5.0).expect("ubf drive exits on SIGTERM");
+    assert!(status.success());
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    assert!(line.contains("closed true") && field(&line, "sips").unwrap() > 10_000.0, "{line}");
+    assert!(std::fs::read_to_string(dir.path().join("log.csv")).unwrap().lines().count() > 10);
+}
+
+#[test]
+fn a_second_interrupt_forces_the_exit_after_stop() {
+    let (mut emulator, address, mut out) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", GO_ONLY))
+        .unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    let pid = drive.id().to_string();
+    Command::new("kill").args(["-INT", &pid]).status().unwrap();
+    Command::new("kill").args(["-INT", &pid]).status().unwrap();
+    let status = wait_for(&mut drive, 5.0).expect("ubf drive exits");
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out either way: {line}");
+    assert!(matches!(status.code(), Some(0 | 130)), "{status:?}");
+}
+
+#[test]
+fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
+    // Driven into the wall of a 4 m room with nothing to avoid it: the
+    // robot stalls once and then stays stopped.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--room", "4x4"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 8.0, safety: (resume_after_s: None),";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    assert!(drive.status.success(), "{}", String::from_utf8_lossy(&drive.stderr));
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    let stalled = field(&line, "stalled_cycles").unwrap();
+    assert!((1.0..=3.0).contains(&stalled), "stalled for {stalled} SIP cycles: {line}");
+    let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
+    assert!(log.lines().last().unwrap().contains(",contact,"), "{log}");
+}
+
+#[test]
+fn a_panicking_behaviour_stops_the_robot_and_is_named() {
+    let (mut emulator, address, mut out) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let root = "Composite(arbiter: CommandFusion, children: [
+        (behavior: InjectFault(after_s: 1.5, message: \"lost my mind\")), (behavior: GoTo(cruise_speed: 0.3))])";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", root)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("error: behaviour root/InjectFault panicked: lost my mind"), "{stderr}");
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    assert!(line.contains("closed true"), "{line}");
+    assert!(std::fs::read_to_string(dir.path().join("log.csv")).unwrap().lines().count() > 10);
+}
+
+#[test]
+fn a_killed_drive_keeps_its_log_up_to_the_last_second() {
+    let (mut emulator, address, _) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("log.csv");
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, robot_file(&address, &log, "goal: (x: 20.0, y: 0.0),", GO_ONLY)).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    std::thread::sleep(Duration::from_secs(4));
+    drive.kill().unwrap();
+    drive.wait().unwrap();
+    emulator.kill().unwrap();
+    // 40 ticks ran; at most a second's worth (10) may be lost.
+    let rows = std::fs::read_to_string(&log).unwrap().lines().count() - 1;
+    assert!(rows >= 25, "{rows} rows");
+}
+
+#[test]
+fn a_camera_no_pair_could_have_is_refused_before_connecting() {
+    let (mut emulator, address, _) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = r#"camera: (source: Directory("frames"), stereo: (focal_px: 1e-9)), egomotion: (),"#;
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    for args in [vec!["drive"], vec!["check"]] {
+        let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(&args).arg(&file).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("robot.ron:1:") && stderr.contains("focal_px"), "{stderr}");
+    }
+    emulator.kill().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_ubf")).arg("check").arg("robots/config/emulator.ron").output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && stdout.contains("ok, robot file \"powerbot-emulator\""), "{stdout}");
 }

@@ -6,6 +6,7 @@
 //! | `Stop` | [`Stop`]: stop while a condition holds |
 //! | `AvoidCollision` | [`AvoidCollision`]: keep clear of what the sonar sees |
 //! | `ActionAiding` | [`ActionAiding`]: steer for the least uncertain egomotion (thesis ch. 3) |
+//! | `InjectFault` | [`InjectFault`]: panic on purpose, to rehearse a failing behaviour |
 //!
 //! [`register`] adds them all to a [`Registry`].
 
@@ -15,12 +16,14 @@ mod action_aiding;
 mod avoid;
 pub mod clearance;
 pub mod decision;
+mod fault;
 mod go_to;
 mod stop;
 pub mod tracking;
 
 pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, PredictionCheck, Technique};
 pub use avoid::{AvoidCollision, AvoidCollisionConfig};
+pub use fault::{InjectFault, InjectFaultConfig};
 pub use go_to::{GoTo, GoToConfig};
 pub use stop::{Stop, StopConfig};
 
@@ -34,4 +37,5 @@ pub fn register(registry: &mut Registry) -> &mut Registry {
         .register("Stop", |c: &StopConfig, _| Stop::new(c.clone()))
         .register("AvoidCollision", |c: &Checked<AvoidCollisionConfig>, _| AvoidCollision::new(c.0.clone()))
         .register("ActionAiding", |c: &ActionAidingConfig, ctx| ActionAiding::new(c.clone(), ctx))
+        .register("InjectFault", |c: &InjectFaultConfig, _| InjectFault::new(c.clone()))
 }

@@ -84,6 +84,39 @@ impl Default for StereoCamera {
     }
 }
 
+/// The largest image side a calibration may give, pixels.
+pub const MAX_IMAGE_SIDE_PX: u32 = 16_384;
+/// The widest field of view a calibration may give (a rectified pinhole
+/// pair cannot see 180°), degrees.
+pub const MAX_FIELD_OF_VIEW_DEG: f64 = 170.0;
+
+impl ubf_core::config::Check for StereoCamera {
+    /// Image sides within 8 to 16 384 pixels, a field of view up to 170°
+    /// and a focal length up to 10⁶ pixels: beyond these no real pair
+    /// exists, and the error model's tables would not fit in memory.
+    fn check(&self) -> Result<(), String> {
+        for (name, side) in [("width_px", self.width_px), ("height_px", self.height_px)] {
+            if !(8..=MAX_IMAGE_SIDE_PX).contains(&side) {
+                return Err(format!("{name}: {side} pixels; a camera's image side is 8 to {MAX_IMAGE_SIDE_PX}"));
+            }
+        }
+        let half_side = f64::from(self.width_px.max(self.height_px)) / 2.0;
+        let fov = 2.0 * (half_side / self.focal_px).atan().to_degrees();
+        if fov > MAX_FIELD_OF_VIEW_DEG {
+            return Err(format!(
+                "focal_px: {} gives a {fov:.1}° field of view over {half_side:.0} pixels; at most \
+                 {MAX_FIELD_OF_VIEW_DEG}° (focal_px at least {:.1})",
+                self.focal_px,
+                half_side / (MAX_FIELD_OF_VIEW_DEG / 2.0).to_radians().tan()
+            ));
+        }
+        if self.focal_px > 1e6 {
+            return Err(format!("focal_px: {}; at most 1e6 pixels", self.focal_px));
+        }
+        Ok(())
+    }
+}
+
 impl StereoCamera {
     fn default_width() -> u32 {
         640

@@ -113,6 +113,14 @@ impl<'de, T: Deserialize<'de> + Check> Deserialize<'de> for Checked<T> {
     }
 }
 
+/// An optional finite number > 0.
+pub fn optional_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    match Option::<f64>::deserialize(d)? {
+        Some(v) if !(v.is_finite() && v > 0.0) => Err(D::Error::custom(format!("{v} is out of range: must be > 0"))),
+        v => Ok(v),
+    }
+}
+
 /// An optional finite number ≥ 0.
 pub fn optional_non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     match Option::<f64>::deserialize(d)? {

@@ -24,6 +24,7 @@ pub struct SafetyPolicy {
     pub link_lost_after_s: f64,
     /// After a stall or a bumper, hold still until the condition has been
     /// clear this long, s; `None` holds until the operator restarts.
+    #[serde(deserialize_with = "crate::config::optional_non_negative")]
     pub resume_after_s: Option<f64>,
 }
 

@@ -43,9 +43,9 @@ pub struct EmulatorConfig {
     /// Where the robot's internal position starts, mm: set it near the
     /// position accumulators' wrap to exercise a client's unwrapping.
     pub start_mm: (f64, f64),
-    /// Falls silent (sends no SIPs, keeps reading and obeying commands)
-    /// this long after OPEN, for the second duration: a frozen controller
-    /// as the client sees it.
+    /// Freezes this long after OPEN, for the second duration: sends no
+    /// SIPs and does not move, while still reading commands (and obeying
+    /// them once it thaws), as a simulator paused mid-run does.
     pub silence: Option<(Duration, Duration)>,
 }
 
@@ -478,6 +478,9 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
             motors.stop();
             report.watchdog_stops += 1;
         }
+        if silent(opened_at) {
+            continue;
+        }
         let before = motors.clone();
         let next = motors.run(Pose2::new(x, y, th), enabled, dt);
         let mut stall_and_bumpers = 0u16;
@@ -489,9 +492,6 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
             report.stalled_cycles += 1;
         } else {
             (x, y, th) = (next.x, next.y, next.theta);
-        }
-        if silent(opened_at) {
-            continue;
         }
         let (vv, ww) = (motors.v, motors.w);
         let wheel = ww / arcos.diff_conv_factor; // (r − l)/2 in mm/s

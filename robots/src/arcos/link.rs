@@ -9,6 +9,9 @@ use std::time::Duration;
 /// work (a watchdog, a stop flag).
 pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
 
+/// Longest a write may wait for a peer that has stopped reading.
+pub const WRITE_TIMEOUT: Duration = Duration::from_millis(500);
+
 /// A two-way byte link. Reads time out after [`READ_TIMEOUT`] with
 /// `TimedOut` or `WouldBlock`, which callers treat as "nothing yet".
 pub trait Link: Read + Write + Send {
@@ -77,6 +80,8 @@ pub fn open(address: &str, baud: u32) -> io::Result<Box<dyn Link>> {
         let stream = TcpStream::connect(host)?;
         stream.set_nodelay(true)?;
         stream.set_read_timeout(Some(READ_TIMEOUT))?;
+        // A peer that stops reading must not hang a STOP on its way out.
+        stream.set_write_timeout(Some(WRITE_TIMEOUT))?;
         return Ok(Box::new(stream));
     }
     open_serial(address, baud)

@@ -21,7 +21,7 @@ use ubf_perception::StereoCamera;
 #[serde(deny_unknown_fields)]
 pub struct SimCameraConfig {
     /// The calibrated pair and its mounting.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub stereo: StereoCamera,
     /// Frames per second. The thesis's cameras ran at 2 Hz (§3.3.2).
     #[serde(default = "SimCameraConfig::default_rate", deserialize_with = "positive")]
