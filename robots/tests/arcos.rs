@@ -13,6 +13,9 @@ use ubf_robots::arcos::emulator::{serve, EmulatorConfig, EmulatorReport};
 use ubf_robots::arcos::link::{self, Link};
 use ubf_robots::model::RobotModel;
 
+mod common;
+use common::{drive, watch};
+
 struct Emulator {
     address: String,
     stop: Arc<AtomicBool>,
@@ -53,17 +56,6 @@ impl Emulator {
         self.stop.store(true, Ordering::Relaxed);
         self.thread.take().unwrap().join().unwrap()
     }
-}
-
-/// Drives `robot` at `command` for `seconds`, sensing every 100 ms.
-fn drive(robot: &mut ArcosRobot, command: Command, seconds: f64, state: &mut State) {
-    let ticks = (seconds / 0.1).round() as usize;
-    for _ in 0..ticks {
-        robot.sense(state).unwrap();
-        robot.act(&command).unwrap();
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    robot.sense(state).unwrap();
 }
 
 #[test]
@@ -269,27 +261,9 @@ fn drives_a_square_on_its_own_odometry() {
     // the square must close.
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let mut robot = emulator.connect();
-    let mut state = State::default();
-    drive(&mut robot, Command::Stop, 0.3, &mut state);
-    let wrap = |a: f64| a.sin().atan2(a.cos());
-    for leg in 0..4 {
-        let (start, heading) = (state.pose, f64::from(leg) * std::f64::consts::FRAC_PI_2);
-        while (state.pose.x - start.x).hypot(state.pose.y - start.y) < 0.97 {
-            // Hold the leg's heading while driving.
-            let correction = (2.0 * wrap(heading - state.pose.theta)).clamp(-0.3, 0.3);
-            drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(correction) }, 0.1, &mut state);
-        }
-        let next = heading + std::f64::consts::FRAC_PI_2;
-        while wrap(next - state.pose.theta).abs() > 0.02 {
-            let rate = (2.0 * wrap(next - state.pose.theta)).clamp(-0.6, 0.6);
-            drive(&mut robot, Command::Drive { velocity: 0.0, turn: Turn::Rate(rate) }, 0.1, &mut state);
-        }
-    }
-    drive(&mut robot, Command::Stop, 0.3, &mut state);
+    let state = common::drive_square(&mut robot);
     robot.shutdown().unwrap();
     let truth = emulator.finish().pose;
-    assert!(state.pose.x.hypot(state.pose.y) < 0.15, "the square closes: {:?}", state.pose);
-    assert!(wrap(state.pose.theta).abs() < 0.05, "{:?}", state.pose);
     let (tx, ty) = (truth.0 / 1000.0, truth.1 / 1000.0);
     assert!((tx - state.pose.x).hypot(ty - state.pose.y) < 0.01, "odometry {:?} vs truth ({tx}, {ty})", state.pose);
 }
@@ -320,18 +294,6 @@ fn the_baud_switch_over_a_pseudo_terminal() {
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     assert_eq!(emulator.join().unwrap().host_baud, Some(115200));
-}
-
-/// Senses for `seconds` with no command but a PULSE (the watchdog stays
-/// quiet while a position or heading setpoint runs).
-fn watch(robot: &mut ArcosRobot, seconds: f64, state: &mut State) {
-    let ticks = (seconds / 0.1).round() as usize;
-    for _ in 0..ticks {
-        robot.keep_alive().unwrap();
-        robot.sense(state).unwrap();
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    robot.sense(state).unwrap();
 }
 
 #[test]
@@ -405,4 +367,15 @@ fn heading_commands_carry_their_rate_and_the_world_frame_is_the_callers() {
     robot.shutdown().unwrap();
     let report = emulator.finish();
     assert_eq!(report.speed_limits, Some((500, 20)), "{report:?}");
+}
+
+#[test]
+fn drives_to_a_goal_on_heading_commands() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let mut robot = emulator.connect();
+    let state = common::go_to_goal(&mut robot, (1.5, 1.0));
+    robot.shutdown().unwrap();
+    let truth = emulator.finish().pose;
+    let (tx, ty) = (truth.0 / 1000.0, truth.1 / 1000.0);
+    assert!((tx - state.pose.x).hypot(ty - state.pose.y) < 0.01, "odometry {:?} vs truth ({tx}, {ty})", state.pose);
 }

@@ -1,0 +1,42 @@
+//! The client against the robot maker's own simulator, AMRISim, when one is
+//! running: the same square and goal as against the emulator.
+//!
+//! ```sh
+//! Xvfb :99 & DISPLAY=:99 ./AMRISim --no-gui -r powerbot:pb1 --nomap &
+//! UBF_AMRISIM=tcp://127.0.0.1:8101 cargo test -p ubf-robots --test amrisim -- --ignored
+//! ```
+//!
+//! `docs/deploy.md` says how to build AMRISim headless.
+
+mod common;
+
+use ubf_core::Robot;
+use ubf_robots::arcos::client::{ArcosRobot, ConnectOptions};
+use ubf_robots::arcos::link;
+use ubf_robots::model::RobotModel;
+
+/// A session with the simulator `UBF_AMRISIM` names.
+fn connect() -> ArcosRobot {
+    let address = std::env::var("UBF_AMRISIM").expect("set UBF_AMRISIM=tcp://host:8101 to a running AMRISim");
+    let link = link::open(&address, 9600).expect("AMRISim answers");
+    ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).expect("a Powerbot session")
+}
+
+#[test]
+#[ignore = "needs a running AMRISim: set UBF_AMRISIM"]
+fn amrisim_reads_the_config_and_drives_a_square() {
+    let mut robot = connect();
+    let config = robot.config().expect("AMRISim answers CONFIG").clone();
+    assert_eq!(config.subtype, "powerbot");
+    assert!(config.settings.trans_vel_max > 0, "{config:?}");
+    common::drive_square(&mut robot);
+    robot.shutdown().unwrap();
+}
+
+#[test]
+#[ignore = "needs a running AMRISim: set UBF_AMRISIM"]
+fn amrisim_drives_to_a_goal_on_heading_commands() {
+    let mut robot = connect();
+    common::go_to_goal(&mut robot, (1.5, 1.0));
+    robot.shutdown().unwrap();
+}
