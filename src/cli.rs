@@ -540,7 +540,7 @@ fn print_emulator_report(report: &ubf_robots::arcos::emulator::EmulatorReport) {
         std::io::stdout(),
         "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m; sips={} motion_before_first_sip={} \
          last_motion_after_silence_s={} stop_after_silence_s={} stop_to_disable_s={} speed_at_disable_mm_s={} \
-         speed_limits={limits} stalled_cycles={}",
+         speed_limits={limits} stalled_cycles={} host_baud={}",
         report.commands,
         report.closed,
         report.pose.0 / 1000.0,
@@ -552,6 +552,7 @@ fn print_emulator_report(report: &ubf_robots::arcos::emulator::EmulatorReport) {
         show(report.stop_to_disable_s),
         show(report.speed_at_disable),
         report.stalled_cycles,
+        report.host_baud.map_or("-".to_owned(), |b| b.to_string()),
     );
 }
 
