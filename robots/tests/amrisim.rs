@@ -2,8 +2,8 @@
 //! running: the same square and goal as against the emulator.
 //!
 //! ```sh
-//! Xvfb :99 & DISPLAY=:99 ./AMRISim --no-gui -r powerbot:pb1 --nomap &
-//! UBF_AMRISIM=tcp://127.0.0.1:8101 cargo test -p ubf-robots --test amrisim -- --ignored
+//! Xvfb :99 & DISPLAY=:99 ./AMRISim --no-gui -R powerbot --nomap &
+//! UBF_AMRISIM=tcp://127.0.0.1:8101 cargo test -p ubf-robots --test amrisim -- --ignored --test-threads 1
 //! ```
 //!
 //! `docs/deploy.md` says how to build AMRISim headless.
