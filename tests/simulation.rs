@@ -205,3 +205,34 @@ fn the_tracking_list_predicts_the_landmarks_the_camera_then_sees() {
     println!("{steps} steps: {predicted:.1} landmarks predicted in view, {seen:.1} seen");
     assert!((predicted - seen).abs() <= 0.35 * seen, "{predicted:.1} predicted, {seen:.1} seen");
 }
+
+#[test]
+fn the_safety_guard_latches_a_stop_on_the_simulators_contact_too() {
+    // The same guard `ubf drive` puts round a real robot, on the simulator's
+    // clock: GoTo alone drives into the box, and after the first contact
+    // the robot is held still for good.
+    use ubf_core::{BuildContext, Controller, Hold, SafetyGuard, SafetyPolicy, SimClock};
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/corridor-box.ron")).unwrap();
+    let text = text.replace("(behavior: AvoidCollision(), weight: 2.0),", "");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let sim = ubf_robots::sim::SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, 0);
+    let policy = SafetyPolicy { resume_after_s: None, ..SafetyPolicy::default() };
+    let mut controller = Controller::new(
+        SafetyGuard::new(sim, policy),
+        scenario.root.build(&BuildContext::new(0)),
+        Box::new(SimClock::new(scenario.period_s)),
+    );
+    controller.set_goal(scenario.goal);
+    let mut first_contact = None;
+    for tick in 0..600 {
+        controller.tick().unwrap();
+        if controller.robot().hold() == Some(Hold::Contact) && first_contact.is_none() {
+            first_contact = Some((tick, controller.robot().inner().true_pose()));
+        }
+    }
+    let (tick, at) = first_contact.expect("the box is hit");
+    let end = controller.robot().inner().true_pose();
+    assert!(tick < 500 && at.distance_to(end.x, end.y) < 0.05, "held from tick {tick} at {at:?}, ended at {end:?}");
+    assert_eq!(controller.robot().inner().collisions(), 1);
+}
