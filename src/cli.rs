@@ -33,6 +33,13 @@ pub const EXIT_FAILURE: u8 = 1;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// More log on stderr: -v info, -vv debug, -vvv every tick (trace).
+    /// RUST_LOG, when set, decides instead.
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    /// Errors only on stderr.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -298,7 +305,6 @@ struct CameraArgs {
 
 /// Runs the command line with `registry` resolving behaviour names.
 pub fn main_with(registry: Registry) -> ExitCode {
-    init_tracing();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -308,6 +314,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             return ExitCode::from(if e.use_stderr() { EXIT_BAD_INPUT } else { 0 });
         }
     };
+    init_tracing(cli.verbose, cli.quiet);
     // A closed pipe (`ubf run S | head -1`) ends a command quietly with the
     // conventional status, as it does any Unix filter, instead of a panic.
     // Not for the commands that drive a robot: they notice a closed output
@@ -360,9 +367,18 @@ pub fn main_with(registry: Registry) -> ExitCode {
     }
 }
 
-fn init_tracing() {
+/// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by
+/// default).
+fn init_tracing(verbose: u8, quiet: bool) {
     use tracing_subscriber::EnvFilter;
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn"));
+    let level = match (quiet, verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, 2) => "debug",
+        (false, _) => "trace",
+    };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
     use std::io::IsTerminal;
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)

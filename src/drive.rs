@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{
     BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2, Registry, Robot, RobotError,
-    SafetyGuard, SafetyPolicy, State, WallClock,
+    SafetyGuard, SafetyPolicy, State, TracingSink, WallClock,
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
@@ -385,6 +385,7 @@ fn drive_sessions(
         let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
+        controller.add_sink(Box::new(TracingSink));
         let opened = create_fresh_log(&config.log).and_then(|(file, path)| {
             let columns = Columns { truth: false, hold: true };
             Ok((TrajectoryWriter::new(file, controller.layout(), columns)?, path))

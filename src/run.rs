@@ -7,7 +7,7 @@ use crate::trajectory::{Row, TrajectoryWriter};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
-use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch};
+use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch, TracingSink};
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
@@ -124,6 +124,7 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let mut controller = Controller::new(robot, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
+    controller.add_sink(Box::new(TracingSink));
 
     let mut trajectory = match out {
         Some(dir) => {

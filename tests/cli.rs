@@ -318,3 +318,24 @@ fn a_panicking_behaviour_ends_the_run_with_its_report_or_is_skipped() {
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!((report["end"].as_str(), report["reached_goal"].as_bool()), (Some("goal_reached"), Some(true)));
 }
+
+#[test]
+fn logging_follows_rust_log_and_the_verbosity_flags() {
+    let run = |args: &[&str], rust_log: Option<&str>| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_ubf"));
+        command.args(args).current_dir(env!("CARGO_MANIFEST_DIR")).env_remove("RUST_LOG");
+        if let Some(filter) = rust_log {
+            command.env("RUST_LOG", filter);
+        }
+        let out = command.output().unwrap();
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        text(&out.stderr).lines().filter(|l| l.contains(" tick tick=")).count()
+    };
+    let scenario = "scenarios/goto-open-floor.ron";
+    let ticks = run(&["run", scenario, "-vvv"], None);
+    assert!(ticks > 50, "-vvv prints every tick: {ticks}");
+    assert_eq!(run(&["run", scenario, "--json"], Some("ubf_core=trace")), ticks, "as the docs say");
+    assert_eq!(run(&["run", scenario, "-v"], None), 0);
+    assert_eq!(run(&["-q", "run", scenario], None), 0);
+    assert_eq!(run(&["run", scenario], None), 0);
+}
