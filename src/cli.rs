@@ -11,7 +11,7 @@
 //! }
 //! ```
 
-use crate::run::{run, EndReason, RunReport};
+use crate::run::{run_until, EndReason, RunReport};
 use crate::scenario::Scenario;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -23,6 +23,9 @@ use ubf_core::{Pose2, Registry};
 pub const EXIT_BAD_INPUT: u8 = 2;
 /// Exit code for a run that failed after its input was accepted.
 pub const EXIT_FAILURE: u8 = 1;
+/// Exit code for a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as
+/// shells report it).
+pub const EXIT_INTERRUPTED: u8 = 130;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -396,15 +399,14 @@ fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Optio
         }
     };
     let seed = seed.unwrap_or(scenario.seed);
-    // A run a behaviour ended still reports, but does not pass.
-    let status = |summary: &RunReport| {
-        if summary.end == EndReason::BehaviorFailed {
-            ExitCode::from(EXIT_FAILURE)
-        } else {
-            ExitCode::SUCCESS
-        }
+    // A run a behaviour ended, or Ctrl-C, still reports, but does not pass.
+    let status = |summary: &RunReport| match summary.end {
+        EndReason::BehaviorFailed => ExitCode::from(EXIT_FAILURE),
+        EndReason::Interrupted => ExitCode::from(EXIT_INTERRUPTED),
+        EndReason::GoalReached | EndReason::TimeLimit => ExitCode::SUCCESS,
     };
-    match run(&scenario, seed, out.as_deref()) {
+    let stop = crate::drive::install_stop_flag();
+    match run_until(&scenario, seed, out.as_deref(), &stop) {
         Ok(summary) if json => match serde_json::to_string_pretty(&summary) {
             Ok(text) => {
                 println!("{text}");
@@ -1119,6 +1121,7 @@ fn print_summary(s: &RunReport) {
         EndReason::GoalReached => "robot believes it reached the goal",
         EndReason::TimeLimit => "time limit",
         EndReason::BehaviorFailed => "a behaviour failed; the robot was stopped",
+        EndReason::Interrupted => "interrupted",
     };
     println!("scenario        {} (seed {})", s.scenario, s.seed);
     println!("ended           {ending} after {:.1} s simulated, {} ticks", s.sim_time_s, s.ticks);

@@ -379,8 +379,15 @@ fn drive_sessions(
         };
         eprintln!("connected to {} ({} {})", robot.identity().name, robot.identity().class, robot.identity().subclass);
         arm_second_interrupt(robot.emergency_stop().ok());
-        // From here the motors are on: every path out goes through shutdown.
-        let robot = SafetyGuard::new(config.equip(robot, camera, pose)?, config.safety);
+        // From here the motors are on: every path out goes through shutdown
+        // (a robot dropped on the way out shuts itself down).
+        let robot = match config.equip(robot, camera, pose) {
+            Ok(robot) => SafetyGuard::new(robot, config.safety),
+            Err(e) => {
+                arm_second_interrupt(None);
+                return Err(e);
+            }
+        };
         let root = config.root.build(&BuildContext::new(0));
         let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
         controller.set_goal(config.goal);

@@ -6,6 +6,7 @@ use crate::scenario::Scenario;
 use crate::trajectory::{Row, TrajectoryWriter};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch, TracingSink};
 use ubf_perception::egomotion::Tracker;
@@ -23,6 +24,8 @@ pub enum EndReason {
     /// A behaviour panicked (the report's `failure` names it); the robot
     /// was stopped.
     BehaviorFailed,
+    /// Ctrl-C or SIGTERM stopped the run; the report covers what ran.
+    Interrupted,
 }
 
 /// What a run did: `report.json`.
@@ -113,6 +116,12 @@ fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 /// is at the goal or time runs out. With `out`, writes `report.json`,
 /// `trajectory.csv` and `plot.png` there (creating the directory).
 pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunReport, RunError> {
+    run_until(scenario, seed, out, &AtomicBool::new(false))
+}
+
+/// [`run`], ended early (with its outputs, `end: interrupted`) once `stop`
+/// is set.
+pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &AtomicBool) -> Result<RunReport, RunError> {
     let stopwatch = Stopwatch::start();
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
     let tracker = match (&scenario.robot.egomotion, &scenario.robot.camera) {
@@ -150,6 +159,10 @@ pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunRepo
     let mut failure = None;
     let mut behavior_failure = None;
     for _ in 0..max_ticks {
+        if stop.load(Ordering::Relaxed) {
+            end = EndReason::Interrupted;
+            break;
+        }
         match controller.tick() {
             Ok(_) => {}
             // The run still ends with its report, saying what failed.

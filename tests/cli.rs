@@ -339,3 +339,23 @@ fn logging_follows_rust_log_and_the_verbosity_flags() {
     assert_eq!(run(&["-q", "run", scenario], None), 0);
     assert_eq!(run(&["run", scenario], None), 0);
 }
+
+#[test]
+fn an_interrupted_run_still_writes_its_report_marked_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["run", "scenarios/rendered-corridor.ron", "--out", out_dir.to_str().unwrap()])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stdout));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["end"], "interrupted");
+    assert!(out_dir.join("trajectory.csv").exists() && out_dir.join("plot.png").exists());
+}
