@@ -344,7 +344,7 @@ fn logging_follows_rust_log_and_the_verbosity_flags() {
 fn an_interrupted_run_still_writes_its_report_marked_as_such() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
+    let child = Command::new(env!("CARGO_BIN_EXE_ubf"))
         .args(["run", "scenarios/rendered-corridor.ron", "--out", out_dir.to_str().unwrap()])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stdout(std::process::Stdio::piped())
