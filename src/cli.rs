@@ -23,6 +23,9 @@ use ubf_core::{Pose2, Registry};
 pub const EXIT_BAD_INPUT: u8 = 2;
 /// Exit code for a run that failed after its input was accepted.
 pub const EXIT_FAILURE: u8 = 1;
+/// The most runs a sweep starts without `--huge`.
+const MOST_SWEEP_RUNS: u64 = 100_000;
+
 /// Exit code for a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as
 /// shells report it).
 pub const EXIT_INTERRUPTED: u8 = 130;
@@ -60,6 +63,9 @@ enum Command {
         /// Print the report as JSON on stdout.
         #[arg(long)]
         json: bool,
+        /// Run it even beyond the bound on ticks (a deliberately huge run).
+        #[arg(long)]
+        huge: bool,
     },
     /// Run every scenario with every seed in parallel and summarise.
     Sweep {
@@ -83,6 +89,9 @@ enum Command {
         /// so old runs never sit beside a new summary.
         #[arg(long)]
         overwrite: bool,
+        /// Run it even beyond the bounds on runs and on ticks per run.
+        #[arg(long)]
+        huge: bool,
     },
     /// Check scenario files without running them; exit code 2 on the first
     /// bad one.
@@ -331,14 +340,24 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     match cli.command {
-        Command::Run { file, seed, out, json } => run_command(&registry, file, seed, out, json),
+        Command::Run { file, seed, out, json, huge } => run_command(&registry, file, seed, out, json, huge),
         Command::Check { files } => check_command(&registry, &files),
-        Command::Sweep { files, seeds, jobs, out, trajectories, overwrite } => {
+        Command::Sweep { files, seeds, jobs, out, trajectories, overwrite, huge } => {
+            let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64);
+            if runs > MOST_SWEEP_RUNS && !huge {
+                eprintln!(
+                    "error: {runs} runs ({} seeds × {} files), more than {MOST_SWEEP_RUNS}: each leaves a \
+                     directory and a report; narrow --seeds, or pass --huge to run them anyway",
+                    seeds.end - seeds.start,
+                    files.len()
+                );
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
             if let Err(message) = clear_sweep_output(&out, overwrite) {
                 eprintln!("error: {message}");
                 return ExitCode::from(EXIT_BAD_INPUT);
             }
-            sweep_command(&registry, &files, seeds, jobs, &out, trajectories)
+            sweep_command(&registry, &files, seeds, jobs, &out, trajectories, huge)
         }
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
@@ -390,8 +409,16 @@ fn init_tracing(verbose: u8, quiet: bool) {
         .try_init();
 }
 
-fn run_command(registry: &Registry, file: PathBuf, seed: Option<u64>, out: Option<PathBuf>, json: bool) -> ExitCode {
-    let scenario = match Scenario::load(registry, &file) {
+fn run_command(
+    registry: &Registry,
+    file: PathBuf,
+    seed: Option<u64>,
+    out: Option<PathBuf>,
+    json: bool,
+    huge: bool,
+) -> ExitCode {
+    let loaded = if huge { Scenario::load_unbounded(registry, &file) } else { Scenario::load(registry, &file) };
+    let scenario = match loaded {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -871,8 +898,8 @@ fn parse_depths(text: &str) -> Result<[f64; 2], String> {
     let (a, b) = text.split_once("..").ok_or("expected NEAR..FAR, in metres")?;
     let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a depth in metres"));
     let (near, far) = (number(a)?, number(b)?);
-    if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far) {
-        return Err(format!("`{text}`: need 0 < NEAR < FAR"));
+    if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far && far <= 1000.0) {
+        return Err(format!("`{text}`: need 0 < NEAR < FAR ≤ 1000 m"));
     }
     Ok([near, far])
 }
@@ -923,6 +950,13 @@ fn model_command(registry: &Registry, action: ModelCommand) -> ExitCode {
     };
     let geometric = GeometricModel::new(&camera, args.step);
     let depths = [args.depths[0].max(geometric.min_depth()), args.depths[1]];
+    if depths[1] <= depths[0] {
+        eprintln!(
+            "error: --depths: FAR must exceed the camera's nearest stereo depth, {:.2} m (with this camera)",
+            depths[0]
+        );
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
     let fit = fit_exponential(|x, y| geometric.cv(x, y), &camera, depths, 0.25);
     match action {
         ModelCommand::Fit { json: true, .. } => {
@@ -987,6 +1021,9 @@ fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
     if range.is_empty() {
         return Err(format!("`{text}` holds no seed"));
     }
+    if range.end - range.start > 10_000_000 {
+        return Err(format!("`{text}` holds {} seeds; at most 10 000 000", range.end - range.start));
+    }
     Ok(range)
 }
 
@@ -1021,10 +1058,12 @@ fn sweep_command(
     jobs: Option<usize>,
     out: &std::path::Path,
     trajectories: bool,
+    huge: bool,
 ) -> ExitCode {
     let mut items: Vec<crate::sweep::SweepItem> = Vec::new();
     for file in files {
-        let scenario = match Scenario::load(registry, file) {
+        let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
+        let scenario = match loaded {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("error: {e}");

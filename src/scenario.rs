@@ -19,7 +19,7 @@
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use ubf_core::config::{checked, positive, RonError};
+use ubf_core::config::{checked, RonError};
 use ubf_core::{BehaviorSpec, Goal, OnBehaviorPanic, Registry};
 use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 
@@ -36,11 +36,11 @@ pub struct Scenario {
     #[serde(default)]
     pub seed: u64,
     /// Seconds between control ticks.
-    #[serde(default = "Scenario::default_period_s", deserialize_with = "positive")]
+    #[serde(default = "Scenario::default_period_s", deserialize_with = "ubf_core::config::period_s")]
     pub period_s: f64,
     /// The run ends after this many simulated seconds if the goal is not
     /// reached first.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::duration_s")]
     pub max_time_s: f64,
     /// The simulated robot.
     #[serde(default, deserialize_with = "checked")]
@@ -78,11 +78,43 @@ impl Scenario {
     /// Reads a scenario file, and refuses one whose robot starts touching a
     /// wall, a box or a person (a run from there could not move).
     pub fn load(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
+        let scenario = Scenario::load_unbounded(registry, path)?;
+        scenario.check_work().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;
+        Ok(scenario)
+    }
+
+    /// [`Scenario::load`] without the bound on the work a run may do: for a
+    /// deliberately huge run (`--huge`).
+    pub fn load_unbounded(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
         let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
         let scenario =
             Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
         scenario.check_start().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;
         Ok(scenario)
+    }
+
+    /// What a run of this scenario costs at most: ticks, and the bytes of
+    /// `trajectory.csv` (about 24 bytes a column a row).
+    pub fn work(&self) -> Work {
+        let ticks = self.max_ticks();
+        let nodes = ubf_core::TreeLayout::of(self.root.build(&ubf_core::BuildContext::new(0)).as_ref()).nodes.len();
+        Work { ticks, trajectory_bytes: ticks.saturating_mul(24 * (16 + nodes as u64)) }
+    }
+
+    /// Refuses a run beyond [`Work::MOST_TICKS`] ticks, saying how to
+    /// proceed.
+    pub fn check_work(&self) -> Result<(), String> {
+        let work = self.work();
+        if work.ticks > Work::MOST_TICKS {
+            return Err(format!(
+                "max_time_s / period_s: {} ticks, more than {} (a trajectory of about {}); \
+                 shorten max_time_s, lengthen period_s, or pass --huge to run it anyway",
+                work.ticks,
+                Work::MOST_TICKS,
+                Work::bytes_text(work.trajectory_bytes)
+            ));
+        }
+        Ok(())
     }
 
     /// Whether the robot can start where the scenario puts it.
@@ -97,6 +129,31 @@ impl Scenario {
             ));
         }
         Ok(())
+    }
+}
+
+/// The most a run can cost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Work {
+    /// Control ticks, at most.
+    pub ticks: u64,
+    /// Bytes of `trajectory.csv`, about.
+    pub trajectory_bytes: u64,
+}
+
+impl Work {
+    /// The most ticks a run may take without `--huge`: a week of simulated
+    /// time at 0.1 s, a few hundred megabytes of trajectory.
+    pub const MOST_TICKS: u64 = 6_000_000;
+
+    /// `1.2 GB`, `350 kB`.
+    pub fn bytes_text(bytes: u64) -> String {
+        let b = bytes as f64;
+        match b {
+            _ if b >= 1e9 => format!("{:.1} GB", b / 1e9),
+            _ if b >= 1e6 => format!("{:.0} MB", b / 1e6),
+            _ => format!("{:.0} kB", (b / 1e3).max(1.0)),
+        }
     }
 }
 

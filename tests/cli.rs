@@ -359,3 +359,42 @@ fn an_interrupted_run_still_writes_its_report_marked_as_such() {
     assert_eq!(report["end"], "interrupted");
     assert!(out_dir.join("trajectory.csv").exists() && out_dir.join("plot.png").exists());
 }
+
+#[test]
+fn work_beyond_the_bounds_is_refused_before_it_starts() {
+    // Each of these passed `check` once and then hung, filled the disk,
+    // aborted or panicked.
+    for (body, says) in [
+        (r#"Scenario(name: "t", period_s: 1e-300, max_time_s: 10.0, root: Stop())"#, "1:31: 1e-300 is out of range"),
+        (r#"Scenario(name: "t", max_time_s: 1e300, root: Stop())"#, "1e300 is out of range"),
+        (r#"Scenario(name: "t", period_s: 0.001, max_time_s: 1e7, root: Stop())"#, "pass --huge"),
+        (
+            r#"Scenario(name: "t", max_time_s: 10.0, world: (corridor: (width: 5e-324, length: 9.0)), root: Stop())"#,
+            "5e-324 is out of range",
+        ),
+        (
+            r#"Scenario(name: "t", max_time_s: 10.0, world: (corridor: (width: 4.0, length: 9.0),
+                random_landmarks: (count: 4000000000)), root: Stop())"#,
+            "at most 1000000",
+        ),
+        (
+            r#"Scenario(name: "t", max_time_s: 10.0, robot: (camera: (stereo: (focal_px: 1e-300))), root: Stop())"#,
+            "focal_px",
+        ),
+    ] {
+        let (code, stderr) = check(body);
+        assert_eq!(code, 2, "{body}: {stderr}");
+        assert!(stderr.contains(says), "{body}: {stderr}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let file = scenario_file(&dir, GOOD);
+    let out = dir.path().join("sweep");
+    for (seeds, says) in [("0..4000000000", "at most 10 000 000"), ("0..400000", "pass --huge")] {
+        let result = ubf(&["sweep", file.to_str().unwrap(), "--seeds", seeds, "--out", out.to_str().unwrap()]);
+        assert_eq!(result.status.code(), Some(2));
+        assert!(text(&result.stderr).contains(says), "{}", text(&result.stderr));
+        assert!(!out.exists(), "nothing was written");
+    }
+    let result = ubf(&["model", "fit", "--depths", "1e-300..1e-299"]);
+    assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
+}

@@ -309,17 +309,19 @@ fn stale_data_stops_motion_and_the_link_is_declared_lost_on_time() {
 
 #[test]
 fn the_goal_keeps_its_place_across_a_reconnect() {
-    // Every session freezes after 3 s; the driver reconnects and the
+    // Every session freezes after 4 s (about 2 m in); the driver reconnects and the
     // emulated controller starts its odometry from zero again, as a
     // restarted simulator does. The goal 3 m ahead must still be 3 m from
     // where the drive began.
-    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--silence", "3:60"]);
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--silence", "4:60"]);
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("log.csv");
     let file = dir.path().join("robot.ron");
     let root = "Composite(arbiter: CommandFusion, children: [
         (behavior: Stop(), weight: 1.0), (behavior: GoTo(cruise_speed: 0.6))])";
-    let extra = "on_link_loss: Reconnect, max_time_s: 14.0, goal: (x: 3.0, y: 0.0, tolerance: 0.1),";
+    // The second session reaches the goal about 10 s in, however loaded
+    // the machine: 6 s to spare.
+    let extra = "on_link_loss: Reconnect, max_time_s: 16.0, goal: (x: 3.0, y: 0.0, tolerance: 0.1),";
     std::fs::write(&file, robot_file(&address, &log, extra, root)).unwrap();
     let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
     let stderr = String::from_utf8_lossy(&drive.stderr);
@@ -332,7 +334,10 @@ fn the_goal_keeps_its_place_across_a_reconnect() {
     }
     emulator.kill().unwrap();
     assert!(sessions >= 2, "{stderr}");
-    assert!((travelled - 3.0).abs() < 0.25, "drove {travelled:.3} m in {sessions} sessions toward a 3 m goal");
+    assert!(
+        (travelled - 3.0).abs() < 0.25,
+        "drove {travelled:.3} m in {sessions} sessions toward a 3 m goal: {stderr}"
+    );
     // One log per session, each named once, none overwritten.
     assert!(stderr.contains(&format!("logs, one per session: {}, ", log.display())), "{stderr}");
     assert!(log.with_extension("2.csv").exists());
@@ -396,7 +401,9 @@ fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
     let line = report_line(&mut out);
     emulator.kill().unwrap();
     let stalled = field(&line, "stalled_cycles").unwrap();
-    assert!((1.0..=3.0).contains(&stalled), "stalled for {stalled} SIP cycles: {line}");
+    // Held on the first stall report: a few cycles, against one every
+    // 0.2 s for the whole run when nothing latched.
+    assert!((1.0..=5.0).contains(&stalled), "stalled for {stalled} SIP cycles: {line}");
     let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
     assert!(log.lines().last().unwrap().contains(",contact,"), "{log}");
 }
@@ -431,13 +438,21 @@ fn a_killed_drive_keeps_its_log_up_to_the_last_second() {
     let file = dir.path().join("robot.ron");
     std::fs::write(&file, robot_file(&address, &log, "goal: (x: 20.0, y: 0.0),", GO_ONLY)).unwrap();
     let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    let rows = || std::fs::read_to_string(&log).map_or(0, |t| t.lines().count().saturating_sub(1));
+    // From the first rows on disk, 4 s of ticking: 40 rows.
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while rows() == 0 && std::time::Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let before = rows();
     std::thread::sleep(Duration::from_secs(4));
     drive.kill().unwrap();
     drive.wait().unwrap();
     emulator.kill().unwrap();
-    // 40 ticks ran; at most a second's worth (10) may be lost.
-    let rows = std::fs::read_to_string(&log).unwrap().lines().count() - 1;
-    assert!(rows >= 25, "{rows} rows");
+    // At most a second's worth (10 rows) may be lost, and a little for a
+    // loaded machine's late ticks.
+    let after = rows();
+    assert!(after >= before + 25, "{before} rows, then {after} after 4 s");
 }
 
 #[test]

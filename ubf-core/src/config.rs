@@ -62,13 +62,37 @@ fn number_where<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule:
     if ok(v) {
         Ok(v)
     } else {
-        Err(D::Error::custom(format!("{v} is out of range: must be {rule}")))
+        Err(D::Error::custom(format!("{} is out of range: must be {rule}", shown(v))))
+    }
+}
+
+/// A number as a person would write it: `1e-300`, not three hundred zeros.
+fn shown(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
 /// A finite number > 0.
 pub fn positive<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     number_where(d, |v| v.is_finite() && v > 0.0, "> 0")
+}
+
+/// A control period, s: 1 ms to 10 s.
+pub fn period_s<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| (1e-3..=10.0).contains(&v), "from 0.001 to 10 s")
+}
+
+/// A duration, s: > 0 and at most 10⁷ s (about four months).
+pub fn duration_s<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| v > 0.0 && v <= 1e7, "> 0 and at most 1e7 s")
+}
+
+/// A length in the world, m: 1 cm to 10 km.
+pub fn extent_m<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| (0.01..=1e4).contains(&v), "from 0.01 to 10000 m")
 }
 
 /// A finite number ≥ 0.

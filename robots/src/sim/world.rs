@@ -29,11 +29,11 @@ pub struct Xy {
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CorridorConfig {
-    /// Wall to wall, m.
-    #[serde(deserialize_with = "positive")]
+    /// Wall to wall, m (0.01 to 10 000).
+    #[serde(deserialize_with = "ubf_core::config::extent_m")]
     pub width: f64,
-    /// End to end, m.
-    #[serde(deserialize_with = "positive")]
+    /// End to end, m (0.01 to 10 000).
+    #[serde(deserialize_with = "ubf_core::config::extent_m")]
     pub length: f64,
 }
 
@@ -109,12 +109,25 @@ impl LandmarkConfig {
     }
 }
 
+/// The most landmarks `random_landmarks` may draw: far more than any
+/// corridor shows a camera, and they fit in memory.
+pub const MOST_RANDOM_LANDMARKS: u32 = 1_000_000;
+
+fn landmark_count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    let count = u32::deserialize(d)?;
+    if count > MOST_RANDOM_LANDMARKS {
+        return Err(serde::de::Error::custom(format!("{count} landmarks: at most {MOST_RANDOM_LANDMARKS}")));
+    }
+    Ok(count)
+}
+
 /// Landmarks drawn at random on the corridor's walls, as in the thesis's
 /// simulations (§4.2.1): some on the side walls, the rest on the far end.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RandomLandmarks {
-    /// How many.
+    /// How many, at most [`MOST_RANDOM_LANDMARKS`].
+    #[serde(deserialize_with = "landmark_count")]
     pub count: u32,
     /// The share on the side walls; the rest go on the far end wall.
     #[serde(default = "RandomLandmarks::default_side_share", deserialize_with = "unit_interval")]
