@@ -849,11 +849,10 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
                             let Some(c) = techniques.get(t.name()) else { continue };
                             let e = &c.endpoint_error_m;
                             println!(
-                                "{:>9} {:>7.2} [{:>6.2}, {:>6.2}] {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
+                                "{:>9} {:>7.2} {:>16} {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
                                 t.name(),
                                 e.mean,
-                                e.ci95[0],
-                                e.ci95[1],
+                                e.ci95.map_or("(n too small)".to_owned(), |[l, h]| format!("[{l:>6.2}, {h:>6.2}]")),
                                 c.endpoint_error_pct.mean,
                                 c.predicted_sigma_m.mean,
                                 c.actual_over_predicted,

@@ -30,8 +30,30 @@ pub struct FieldStats {
     pub mean: f64,
     /// Sample standard deviation (0 for one run).
     pub sd: f64,
-    /// 95 % confidence interval of the mean (Student's t).
-    pub ci95: [f64; 2],
+    /// 95 % confidence interval of the mean; `None` below two runs, where
+    /// it means nothing.
+    pub ci95: Option<[f64; 2]>,
+    /// How the interval was found: `t` (Student's t), or `bootstrap` (the
+    /// percentile bootstrap of the mean) for a field with no negative value
+    /// whose t interval would reach below zero.
+    pub ci95_method: Option<&'static str>,
+}
+
+/// Resamples of the bootstrap interval.
+const BOOTSTRAP_RESAMPLES: usize = 4000;
+
+/// The percentile bootstrap 95 % interval of the mean of `values`, with a
+/// fixed seed so that a summary is reproducible.
+fn bootstrap_ci95(values: &[f64]) -> [f64; 2] {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let n = values.len();
+    let mut means: Vec<f64> = (0..BOOTSTRAP_RESAMPLES)
+        .map(|_| (0..n).map(|_| values[rng.random_range(0..n)]).sum::<f64>() / n as f64)
+        .collect();
+    means.sort_by(f64::total_cmp);
+    let at = |q: f64| means[((q * (BOOTSTRAP_RESAMPLES - 1) as f64).round() as usize).min(BOOTSTRAP_RESAMPLES - 1)];
+    [at(0.025), at(0.975)]
 }
 
 /// The summary of one scenario's runs.
@@ -87,8 +109,16 @@ pub fn stats(values: &[f64]) -> FieldStats {
     let n = values.len();
     let mean = values.iter().sum::<f64>() / n as f64;
     let sd = if n > 1 { (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
-    let half = if n > 1 { t95(n - 1) * sd / (n as f64).sqrt() } else { 0.0 };
-    FieldStats { n, mean, sd, ci95: [mean - half, mean + half] }
+    if n < 2 {
+        return FieldStats { n, mean, sd, ci95: None, ci95_method: None };
+    }
+    let half = t95(n - 1) * sd / (n as f64).sqrt();
+    let (ci95, method) = if mean - half < 0.0 && values.iter().all(|v| *v >= 0.0) {
+        (bootstrap_ci95(values), "bootstrap")
+    } else {
+        ([mean - half, mean + half], "t")
+    };
+    FieldStats { n, mean, sd, ci95: Some(ci95), ci95_method: Some(method) }
 }
 
 /// Every numeric leaf of a report, with dotted names.
@@ -200,7 +230,8 @@ fn write_summary(summary: &SweepSummary, out: &Path) -> Result<(), SweepError> {
     let mut csv = String::from("scenario,field,n,mean,sd,ci95_low,ci95_high\n");
     for (label, s) in &summary.scenarios {
         for (field, f) in &s.fields {
-            csv.push_str(&format!("{label},{field},{},{},{},{},{}\n", f.n, f.mean, f.sd, f.ci95[0], f.ci95[1]));
+            let (low, high) = f.ci95.map_or((String::new(), String::new()), |[l, h]| (l.to_string(), h.to_string()));
+            csv.push_str(&format!("{label},{field},{},{},{},{low},{high}\n", f.n, f.mean, f.sd));
         }
     }
     let csv_path = out.join("summary.csv");
@@ -229,7 +260,17 @@ mod tests {
         assert_eq!(s.mean, 2.5);
         assert!((s.sd - 1.290_994).abs() < 1e-6);
         let half = 3.182 * s.sd / 2.0;
-        assert!((s.ci95[1] - (2.5 + half)).abs() < 1e-12);
-        assert_eq!(stats(&[5.0]).ci95, [5.0, 5.0]);
+        assert!((s.ci95.unwrap()[1] - (2.5 + half)).abs() < 1e-12);
+        assert_eq!(s.ci95_method, Some("t"));
+        // One run: no interval at all, not a zero-width one.
+        assert_eq!(stats(&[5.0]).ci95, None);
+        // Errors cannot be negative, nor can their interval: three skewed
+        // end-point errors whose t interval reaches −6.7 m.
+        let skewed = stats(&[0.3, 0.5, 24.0]);
+        let [low, high] = skewed.ci95.unwrap();
+        assert_eq!(skewed.ci95_method, Some("bootstrap"));
+        assert!((0.3..=24.0).contains(&low) && low < skewed.mean && skewed.mean < high && high <= 24.0, "{skewed:?}");
+        // A field that can be negative keeps its t interval.
+        assert_eq!(stats(&[-1.0, 0.5, 2.0]).ci95_method, Some("t"));
     }
 }
