@@ -117,7 +117,8 @@ impl Scenario {
         Ok(())
     }
 
-    /// Whether the robot can start where the scenario puts it.
+    /// Whether the robot can start where the scenario puts it, and reach
+    /// its goal's place.
     pub fn check_start(&self) -> Result<(), String> {
         let robot = ubf_robots::sim::SimRobot::new(&self.robot, &self.world, self.period_s, self.seed);
         if robot.starts_in_contact() {
@@ -127,6 +128,19 @@ impl Scenario {
                  a corridor runs from x = 0, so start it at least a metre in",
                 start.x, start.y
             ));
+        }
+        if let (Some(goal), Some(corridor)) = (self.goal, self.world.corridor) {
+            let inside = goal.x > 0.0 && goal.x < corridor.length && goal.y.abs() < corridor.width / 2.0;
+            if !inside {
+                return Err(format!(
+                    "goal: ({}, {}) lies outside the corridor (x from 0 to {}, y within ±{}); the robot could \
+                     never reach it",
+                    goal.x,
+                    goal.y,
+                    corridor.length,
+                    corridor.width / 2.0
+                ));
+            }
         }
         Ok(())
     }
