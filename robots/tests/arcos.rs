@@ -370,6 +370,19 @@ fn heading_commands_carry_their_rate_and_the_world_frame_is_the_callers() {
 }
 
 #[test]
+fn a_rate_command_after_a_slow_heading_turns_at_its_own_rate() {
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let mut robot = emulator.connect();
+    let mut state = State::default();
+    let slow = Turn::Heading { heading: 0.3, max_rate: 10f64.to_radians() };
+    drive(&mut robot, Command::Drive { velocity: 0.0, turn: slow }, 0.5, &mut state);
+    drive(&mut robot, Command::Drive { velocity: 0.0, turn: Turn::Rate(1.0) }, 2.0, &mut state);
+    assert!(state.rot_velocity > 0.95, "SETRV was restored: {}", state.rot_velocity);
+    robot.shutdown().unwrap();
+    assert_eq!(emulator.finish().speed_limits.map(|l| l.1), Some(360));
+}
+
+#[test]
 fn drives_to_a_goal_on_heading_commands() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
     let mut robot = emulator.connect();

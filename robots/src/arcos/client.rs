@@ -402,6 +402,16 @@ impl ArcosRobot {
         ((l + r) / 2.0, rot)
     }
 
+    /// Sends SETRV for `rad_s` if it differs from the limit last sent.
+    fn set_rot_limit(&mut self, rad_s: f64) -> Result<(), RobotError> {
+        let deg_s = rad_s.to_degrees().round() as u16;
+        if deg_s != self.rot_limit_sent {
+            self.send(ClientCommand::SetRv(deg_s))?;
+            self.rot_limit_sent = deg_s;
+        }
+        Ok(())
+    }
+
     /// Waits, up to the configured bound, until a fresh SIP says the robot
     /// stands still: STOP decelerates under power, while motors switched off
     /// at speed let a 100 kg robot coast.
@@ -478,17 +488,17 @@ impl Robot for ArcosRobot {
                 self.send(ClientCommand::Vel(mm_s))?;
                 match turn {
                     Turn::Rate(rate) => {
+                        // SETRV also bounds RVEL: undo a heading command's
+                        // lower limit first.
+                        self.set_rot_limit(limits.max_rot_velocity)?;
                         let deg_s = rate.clamp(-limits.max_rot_velocity, limits.max_rot_velocity).to_degrees();
                         self.send(ClientCommand::RVel(deg_s.round() as i16))
                     }
                     Turn::Heading { heading, max_rate } => {
-                        // HEAD turns at the SETRV limit: send the rate the
-                        // command allows whenever it changes.
-                        let deg_s = max_rate.clamp(0.0, limits.max_rot_velocity).to_degrees().round() as u16;
-                        if deg_s != self.rot_limit_sent {
-                            self.send(ClientCommand::SetRv(deg_s))?;
-                            self.rot_limit_sent = deg_s;
-                        }
+                        // HEAD turns at the SETRV limit: the rate the command
+                        // allows (NaN: no limit of its own).
+                        let rate = if max_rate.is_nan() { limits.max_rot_velocity } else { max_rate };
+                        self.set_rot_limit(rate.clamp(0.0, limits.max_rot_velocity))?;
                         // The controller's heading is its own; the command's
                         // is in the world frame.
                         let offset = self.to_world.map_or(0.0, |t| t.theta);
