@@ -135,6 +135,11 @@ enum Command {
         /// enabling the motors.
         #[arg(long)]
         dry_run: bool,
+        /// Show the live state (link, pose, speeds, winning behaviour, hold)
+        /// on stderr even when it is not a terminal (on a terminal it is
+        /// always shown, on one updating line).
+        #[arg(long)]
+        status: bool,
     },
     /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
     /// for trying things out without a robot.
@@ -361,7 +366,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
-        Command::Drive { file, dry_run } => drive_command(&registry, &file, dry_run),
+        Command::Drive { file, dry_run, status } => drive_command(&registry, &file, dry_run, status),
         Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
             let mut config =
                 ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
@@ -458,7 +463,7 @@ fn run_command(
     }
 }
 
-fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> ExitCode {
+fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool, status: bool) -> ExitCode {
     use crate::drive::{drive, DriveConfig, DriveEnd};
     let (config, model) = match DriveConfig::load(registry, file) {
         Ok(c) => c,
@@ -477,7 +482,13 @@ fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool) -> 
             }
         };
     }
-    let outcome = drive(&config, &model, &stop);
+    use std::io::IsTerminal;
+    let status = match (std::io::stderr().is_terminal(), status) {
+        (true, _) => crate::drive::Status::Line,
+        (false, true) => crate::drive::Status::Lines,
+        (false, false) => crate::drive::Status::Off,
+    };
+    let outcome = drive(&config, &model, &stop, status);
     match outcome.logs.as_slice() {
         [] => eprintln!("no session opened; no log written"),
         [one] => eprintln!("log in {}", one.display()),

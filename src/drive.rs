@@ -332,6 +332,49 @@ fn create_fresh_log(base: &Path) -> std::io::Result<(std::fs::File, PathBuf)> {
     Err(std::io::Error::other(format!("{}: 10 000 logs already; move some away", base.display())))
 }
 
+/// How `ubf drive` shows its live state on stderr.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// Not at all (stderr is not a terminal and nobody asked).
+    Off,
+    /// One line, rewritten twice a second (a terminal).
+    Line,
+    /// A line a second (asked for, stderr not a terminal).
+    Lines,
+}
+
+impl Status {
+    /// How often the state is shown.
+    fn every(self) -> Duration {
+        match self {
+            Status::Line => Duration::from_millis(500),
+            Status::Off | Status::Lines => Duration::from_secs(1),
+        }
+    }
+}
+
+/// The live state in one line: link, pose, speeds, winning behaviour, hold.
+fn status_line<R: Robot>(controller: &Controller<SafetyGuard<R>>) -> String {
+    let state = controller.state();
+    let layout = controller.layout();
+    let winner = layout.winning_leaf(controller.last_record()).map_or("-", |i| layout.nodes[i].path.as_str());
+    let hold = match controller.robot().hold() {
+        Some(ubf_core::Hold::StaleData) => "stale data",
+        Some(ubf_core::Hold::Contact) => "contact",
+        None => "-",
+    };
+    format!(
+        "t {:.1} s | SIP {:.2} s old | pose ({:.2}, {:.2}) m {:.0}° | {:.2} m/s {:.0}°/s | winner {winner} | hold {hold}",
+        state.time,
+        state.sensor_age,
+        state.pose.x,
+        state.pose.y,
+        state.pose.theta.to_degrees(),
+        state.velocity,
+        state.rot_velocity.to_degrees()
+    )
+}
+
 /// How a session ended.
 enum SessionEnd {
     Stopped,
@@ -344,9 +387,9 @@ enum SessionEnd {
 /// so the goal) carried over from the last pose. Every tick goes to the
 /// session's log; on the way out the robot gets STOP, ENABLE 0 and CLOSE and
 /// the log is flushed, whatever ended the session (a panic included).
-pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> DriveOutcome {
+pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool, status: Status) -> DriveOutcome {
     let mut logs = Vec::new();
-    let end = drive_sessions(config, model, stop, &mut logs);
+    let end = drive_sessions(config, model, stop, status, &mut logs);
     DriveOutcome { end, logs }
 }
 
@@ -354,6 +397,7 @@ fn drive_sessions(
     config: &DriveConfig,
     model: &RobotModel,
     stop: &AtomicBool,
+    status: Status,
     logs: &mut Vec<PathBuf>,
 ) -> Result<DriveEnd, String> {
     let started = Instant::now();
@@ -402,7 +446,7 @@ fn drive_sessions(
                 eprintln!("logging to {}", path.display());
                 logs.push(path.clone());
                 let ended = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    run_session(&mut controller, &mut log, stop, &out_of_time)
+                    run_session(&mut controller, &mut log, stop, &out_of_time, status)
                 }))
                 .unwrap_or_else(|panic| {
                     SessionEnd::Failed(format!("internal error: {}", ubf_core::BehaviorPanic::caught("drive", panic)))
@@ -441,13 +485,18 @@ fn run_session<R: Robot>(
     log: &mut TrajectoryWriter,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
+    status: Status,
 ) -> SessionEnd {
-    while !stop.load(Ordering::SeqCst) && !out_of_time() {
+    let mut shown = Instant::now();
+    let ended = loop {
+        if stop.load(Ordering::SeqCst) || out_of_time() {
+            break SessionEnd::Stopped;
+        }
         match controller.tick() {
             Ok(_) => {}
-            Err(ControllerError::Robot(RobotError::Disconnected(why))) => return SessionEnd::LinkLost(why),
-            Err(ControllerError::Robot(e)) => return SessionEnd::LinkLost(e.to_string()),
-            Err(e) => return SessionEnd::Failed(e.to_string()),
+            Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
+            Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),
+            Err(e) => break SessionEnd::Failed(e.to_string()),
         }
         let state: &State = controller.state();
         let row = Row {
@@ -460,8 +509,18 @@ fn run_session<R: Robot>(
         if let Err(e) = log.write(controller.last_record(), controller.layout(), &row) {
             tracing::warn!("writing the log: {e}");
         }
+        if status != Status::Off && shown.elapsed() >= status.every() {
+            shown = Instant::now();
+            match status {
+                Status::Line => eprint!("\r{}\x1b[K", status_line(controller)),
+                Status::Lines | Status::Off => eprintln!("{}", status_line(controller)),
+            }
+        }
+    };
+    if status == Status::Line {
+        eprintln!();
     }
-    SessionEnd::Stopped
+    ended
 }
 
 /// `--dry-run`: connect without enabling the motors, print who the robot is

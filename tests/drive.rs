@@ -473,3 +473,25 @@ fn a_camera_no_pair_could_have_is_refused_before_connecting() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success() && stdout.contains("ok, robot file \"powerbot-emulator\""), "{stdout}");
 }
+
+#[test]
+fn live_state_is_shown_when_asked_and_quiet_when_piped() {
+    let (mut emulator, address, _) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = "goal: (x: 20.0, y: 0.0), max_time_s: 2.5,";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(args).arg(&file).output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let shown = run(&["drive", "--status"]);
+    assert!(
+        shown.lines().any(|l| l.contains(" s old | pose (") && l.ends_with("| winner root/GoTo | hold -")),
+        "{shown}"
+    );
+    let piped = run(&["drive"]);
+    assert!(!piped.contains("winner"), "{piped}");
+    emulator.kill().unwrap();
+}
