@@ -236,7 +236,8 @@ impl DriveConfig {
     /// Reads a configuration file. Paths in it (a model file, a camera's
     /// image directory) become relative to the file's directory.
     pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = ubf_core::config::utf8_text(bytes).map_err(|e| format!("{}:{e}", path.display()))?;
         let mut config: DriveConfig =
             registry.from_ron(&text).map_err(|e: RonError| format!("{}:{e}", path.display()))?;
         if config.egomotion.is_some() && config.camera.is_none() {

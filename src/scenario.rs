@@ -86,7 +86,9 @@ impl Scenario {
     /// [`Scenario::load`] without the bound on the work a run may do: for a
     /// deliberately huge run (`--huge`).
     pub fn load_unbounded(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
-        let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
+        let bytes = std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
+        let text =
+            ubf_core::config::utf8_text(bytes).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
         let scenario =
             Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
         scenario.check_start().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;

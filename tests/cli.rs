@@ -403,3 +403,25 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     let result = ubf(&["model", "fit", "--depths", "1e-300..1e-299"]);
     assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
 }
+
+#[test]
+fn deep_trees_and_non_utf8_files_get_a_position_and_plain_words() {
+    let tree = |depth: usize| {
+        let mut inner = "Stop()".to_owned();
+        for _ in 0..depth {
+            inner = format!("Composite(arbiter: CommandFusion, children: [(behavior: {inner})])");
+        }
+        format!(r#"Scenario(name: "t", max_time_s: 10.0, root: {inner})"#)
+    };
+    assert_eq!(check(&tree(15)).0, 0);
+    let (code, stderr) = check(&tree(16));
+    assert_eq!(code, 2);
+    assert!(stderr.contains("FILE:1:") && stderr.contains("at most 15 composites deep"), "{stderr}");
+    assert!(!stderr.contains("serde_stacker"), "{stderr}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("latin1.ron");
+    std::fs::write(&path, b"Scenario(\n  name: \"caf\xe9\", max_time_s: 10.0, root: Stop())").unwrap();
+    let out = ubf(&["check", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("latin1.ron:2:13: not UTF-8"), "{}", text(&out.stderr));
+}

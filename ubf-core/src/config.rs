@@ -40,8 +40,28 @@ impl fmt::Display for RonError {
 
 impl From<ron::error::SpannedError> for RonError {
     fn from(e: ron::error::SpannedError) -> Self {
-        RonError { line: e.span.start.line, column: e.span.start.col, message: e.code.to_string() }
+        // The parser's limit, in the terms of the file: each level of a tree
+        // is several levels of RON. (Inside a behaviour's own config it
+        // arrives as text, so the text is what is matched.)
+        let message = match e.code.to_string() {
+            text if text.starts_with("Exceeded recursion limit") => {
+                "nested too deeply: a behaviour tree may be at most 15 composites deep".to_owned()
+            }
+            text => text,
+        };
+        RonError { line: e.span.start.line, column: e.span.start.col, message }
     }
+}
+
+/// A file's bytes as text, or where the first byte that is not UTF-8 sits.
+pub fn utf8_text(bytes: Vec<u8>) -> Result<String, RonError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = good.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let column = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
+        RonError { line, column, message: "not UTF-8 text: save the file as UTF-8".into() }
+    })
 }
 
 /// The RON dialect of scenario and robot files: `Name(field: ..)` for
