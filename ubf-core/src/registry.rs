@@ -278,16 +278,26 @@ fn parse_composite(d: &mut dyn erased_serde::Deserializer) -> Result<Arc<Factory
 
 /// Child names default to the behaviour's kind; repeats get `_2`, `_3`… so
 /// that every column of a trajectory file is unambiguous.
+/// Linear in the number of children: a set of the names taken and, per
+/// base name, the next suffix to try.
 fn unique_names(children: &[ChildSpec]) -> Vec<String> {
+    let mut taken: std::collections::HashSet<String> = std::collections::HashSet::with_capacity(children.len());
+    let mut next_suffix: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     let mut names: Vec<String> = Vec::with_capacity(children.len());
     for child in children {
         let base = child.name.clone().unwrap_or_else(|| child.behavior.kind().to_owned());
         let mut name = base.clone();
-        let mut n = 2;
-        while names.contains(&name) {
-            name = format!("{base}_{n}");
-            n += 1;
+        if taken.contains(&name) {
+            let n = next_suffix.entry(base.clone()).or_insert(2);
+            loop {
+                name = format!("{base}_{n}");
+                *n += 1;
+                if !taken.contains(&name) {
+                    break;
+                }
+            }
         }
+        taken.insert(name.clone());
         names.push(name);
     }
     names

@@ -132,3 +132,17 @@ fn specs_outside_a_registry_are_an_error_not_a_panic() {
     let e = ubf_core::config::from_ron::<BehaviorSpec>("Cruise(speed: 1.0)").unwrap_err();
     assert!(e.message.contains("Registry::from_ron"), "{}", e.message);
 }
+
+#[test]
+fn ten_thousand_children_load_with_unique_names_including_taken_suffixes() {
+    // Naming was cubic in the children once: 3 000 took 23 s to load.
+    let mut children = vec!["(behavior: Cruise(speed: 1.0))".to_owned(); 10_000];
+    children[1] = "(behavior: Cruise(speed: 1.0), name: \"Cruise_3\")".to_owned();
+    let text = format!("Composite(arbiter: CommandFusion, children: [{}])", children.join(", "));
+    let spec: BehaviorSpec = registry().from_ron(&text).unwrap();
+    let tree = spec.build(&BuildContext::new(0));
+    let names: Vec<&str> = tree.as_composite().unwrap().children().map(|(n, _)| n).collect();
+    assert_eq!(&names[..4], ["Cruise", "Cruise_3", "Cruise_2", "Cruise_4"]);
+    let unique: std::collections::HashSet<&&str> = names.iter().collect();
+    assert_eq!(unique.len(), 10_000);
+}
