@@ -382,6 +382,10 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
             "focal_px",
         ),
         (
+            r#"Scenario(name: "t", max_time_s: 10.0, robot: (camera: (min_depth_m: 100.0)), root: Stop())"#,
+            "it would see nothing",
+        ),
+        (
             r#"Scenario(name: "t", max_time_s: 10.0, robot: (start: (x: 1.0, y: 0.0)), goal: (x: 30.0, y: 0.0),
                 world: (corridor: (width: 4.0, length: 20.0)), root: Stop())"#,
             "goal: (30, 0) lies outside the corridor",

@@ -68,6 +68,33 @@ pub struct SimCameraConfig {
 }
 
 impl SimCameraConfig {
+    /// Why the camera could never see a landmark, or could not run, if so:
+    /// its nearest matchable depth beyond its farthest (detection range, or
+    /// the depth of the smallest disparity), more frames a second than a
+    /// simulation can take, or more flipped bits than a descriptor has.
+    pub fn check(&self) -> Result<(), String> {
+        let stereo_limit = if self.min_disparity_px > 0.0 {
+            self.stereo.focal_px * self.stereo.baseline_m / self.min_disparity_px
+        } else {
+            f64::INFINITY
+        };
+        let farthest = self.max_range_m.min(stereo_limit);
+        if self.images.is_none() && self.min_depth_m >= farthest {
+            return Err(format!(
+                "camera: min_depth_m {} is beyond the farthest depth it can match, {farthest:.2} m \
+                 (max_range_m {}, or the depth of a {} px disparity); it would see nothing",
+                self.min_depth_m, self.max_range_m, self.min_disparity_px
+            ));
+        }
+        if self.rate_hz > 1000.0 {
+            return Err(format!("camera: rate_hz {}: at most 1000 frames a second", self.rate_hz));
+        }
+        if self.descriptor_noise_bits > 256 {
+            return Err(format!("camera: descriptor_noise_bits {}: a descriptor has 256", self.descriptor_noise_bits));
+        }
+        Ok(())
+    }
+
     fn default_rate() -> f64 {
         2.0
     }

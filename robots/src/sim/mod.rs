@@ -85,6 +85,9 @@ impl Check for SimRobotConfig {
         if self.egomotion.is_some() && self.camera.is_none() {
             return Err("egomotion needs a stereo camera: add `camera: ()` to the robot".into());
         }
+        if let Some(camera) = &self.camera {
+            camera.check()?;
+        }
         Ok(())
     }
 }
