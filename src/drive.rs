@@ -105,7 +105,7 @@ pub struct DriveCamera {
     #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub stereo: StereoCamera,
     /// The feature pipeline's settings.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub features: FeatureConfig,
 }
 

@@ -375,7 +375,7 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
         (
             r#"Scenario(name: "t", max_time_s: 10.0, world: (corridor: (width: 4.0, length: 9.0),
                 random_landmarks: (count: 4000000000)), root: Stop())"#,
-            "at most 1000000",
+            "at most 1000000 landmarks",
         ),
         (
             r#"Scenario(name: "t", max_time_s: 10.0, robot: (camera: (stereo: (focal_px: 1e-300))), root: Stop())"#,

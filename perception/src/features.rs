@@ -44,6 +44,31 @@ pub struct FeatureConfig {
     pub max_disparity_px: f64,
 }
 
+impl ubf_core::config::Check for FeatureConfig {
+    /// Settings the matcher can work with: at least one feature, a Hamming
+    /// distance within the 256 bits, a ratio in (0, 1], a row tolerance
+    /// of at most 64 px and a disparity range that is one.
+    fn check(&self) -> Result<(), String> {
+        if !(1..=100_000).contains(&self.max_features) {
+            return Err(format!("max_features: {}; 1 to 100000", self.max_features));
+        }
+        if self.max_distance > 256 {
+            return Err(format!("max_distance: {}; a descriptor has 256 bits", self.max_distance));
+        }
+        if !(self.ratio > 0.0 && self.ratio <= 1.0) {
+            return Err(format!("ratio: {}; within (0, 1]", self.ratio));
+        }
+        if self.row_tolerance_px > 64 {
+            return Err(format!("row_tolerance_px: {}; at most 64", self.row_tolerance_px));
+        }
+        let (low, high) = (self.min_disparity_px, self.max_disparity_px);
+        if !(low.is_finite() && high.is_finite() && low >= 0.0 && low < high) {
+            return Err(format!("min_disparity_px {low}, max_disparity_px {high}: need 0 ≤ min < max"));
+        }
+        Ok(())
+    }
+}
+
 impl Default for FeatureConfig {
     fn default() -> Self {
         FeatureConfig {
@@ -312,7 +337,10 @@ pub fn match_stereo(left: &[Feature], right: &[Feature], config: &FeatureConfig)
                 }
             }
         }
-        if best.0 <= config.max_distance && (second == u32::MAX || f64::from(best.0) < config.ratio * f64::from(second))
+        let found = best.1 != usize::MAX;
+        if found
+            && best.0 <= config.max_distance
+            && (second == u32::MAX || f64::from(best.0) < config.ratio * f64::from(second))
         {
             claims.push((best.0, i, best.1));
         }

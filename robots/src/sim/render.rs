@@ -36,7 +36,7 @@ pub struct RenderConfig {
     #[serde(default = "RenderConfig::default_poster", deserialize_with = "positive")]
     pub poster_m: f64,
     /// The feature pipeline's settings.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub features: FeatureConfig,
 }
 

@@ -116,7 +116,7 @@ pub const MOST_RANDOM_LANDMARKS: u32 = 1_000_000;
 fn landmark_count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
     let count = u32::deserialize(d)?;
     if count > MOST_RANDOM_LANDMARKS {
-        return Err(serde::de::Error::custom(format!("{count} landmarks: at most {MOST_RANDOM_LANDMARKS}")));
+        return Err(serde::de::Error::custom(format!("{count}: at most {MOST_RANDOM_LANDMARKS} landmarks")));
     }
     Ok(count)
 }
@@ -169,8 +169,9 @@ pub struct PersonConfig {
     /// Body radius, m.
     #[serde(default = "PersonConfig::default_radius", deserialize_with = "positive")]
     pub radius: f64,
-    /// Features on the person that the camera can pick up.
-    #[serde(default = "PersonConfig::default_features")]
+    /// Features on the person that the camera can pick up, at most
+    /// [`MOST_RANDOM_LANDMARKS`].
+    #[serde(default = "PersonConfig::default_features", deserialize_with = "landmark_count")]
     pub features: u32,
 }
 
