@@ -70,8 +70,9 @@ pub struct SimCameraConfig {
 impl SimCameraConfig {
     /// Why the camera could never see a landmark, or could not run, if so:
     /// its nearest matchable depth beyond its farthest (detection range, or
-    /// the depth of the smallest disparity), more frames a second than a
-    /// simulation can take, or more flipped bits than a descriptor has.
+    /// the depth of the smallest disparity), pixel noise beyond 100 px,
+    /// more frames a second than a simulation can take, or more flipped
+    /// bits than a descriptor has.
     pub fn check(&self) -> Result<(), String> {
         let stereo_limit = if self.min_disparity_px > 0.0 {
             self.stereo.focal_px * self.stereo.baseline_m / self.min_disparity_px
@@ -85,6 +86,9 @@ impl SimCameraConfig {
                  (max_range_m {}, or the depth of a {} px disparity); it would see nothing",
                 self.min_depth_m, self.max_range_m, self.min_disparity_px
             ));
+        }
+        if self.pixel_noise_px > 100.0 {
+            return Err(format!("camera: pixel_noise_px {:?}: at most 100 px", self.pixel_noise_px));
         }
         if self.rate_hz > 1000.0 {
             return Err(format!("camera: rate_hz {}: at most 1000 frames a second", self.rate_hz));
