@@ -14,9 +14,23 @@ struct CountingAllocator;
 
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
+thread_local! {
+    /// Set on the thread whose ticks are measured: the test harness's own
+    /// threads allocate when they please (more so on a loaded machine), and
+    /// those allocations are not the tick's.
+    static MEASURED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Counts an allocation if it happens on the measured thread.
+fn count() {
+    if MEASURED.with(std::cell::Cell::get) {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
 unsafe impl GlobalAlloc for CountingAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: forwarded unchanged to the system allocator.
         unsafe { System.alloc(layout) }
     }
@@ -25,7 +39,7 @@ unsafe impl GlobalAlloc for CountingAllocator {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: forwarded unchanged to the system allocator.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -62,9 +76,11 @@ fn allocations_in_ticks(root: Box<dyn Behavior>) -> usize {
         controller.tick().unwrap();
     }
     let before = ALLOCATIONS.load(Ordering::Relaxed);
+    MEASURED.with(|m| m.set(true));
     for _ in 0..1000 {
         controller.tick().unwrap();
     }
+    MEASURED.with(|m| m.set(false));
     ALLOCATIONS.load(Ordering::Relaxed) - before
 }
 
@@ -84,6 +100,14 @@ fn a_warm_tick_allocates_nothing() {
             when: Condition::Any(vec![Condition::Bumped, Condition::ObstacleWithin { range: 0.3 }]),
         },
     ];
+    // The count can fail: a behaviour that formats a string every tick is
+    // seen.
+    let allocating = from_fn("chatty", |s: &State| {
+        std::hint::black_box(format!("{}", s.time));
+        Action::none()
+    });
+    assert!(allocations_in_ticks(Box::new(allocating)) >= 1000);
+
     for spec in specs {
         let mut tree = Composite::with_arbiter("root", spec.build(ChaCha8Rng::seed_from_u64(1)));
         let take = if matches!(spec, ArbiterSpec::Conditional { .. }) { 2 } else { 4 };
