@@ -450,7 +450,7 @@ fn drive_sessions(
                     run_session(&mut controller, &mut log, stop, &out_of_time, status)
                 }))
                 .unwrap_or_else(|panic| {
-                    SessionEnd::Failed(format!("internal error: {}", ubf_core::BehaviorPanic::caught("drive", panic)))
+                    SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
                 });
                 if let Err(e) = log.finish() {
                     tracing::warn!("{}: {e}", path.display());

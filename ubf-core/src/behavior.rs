@@ -60,16 +60,18 @@ impl BehaviorPanic {
     pub fn caught(name: &str, payload: Box<dyn std::any::Any + Send>) -> BehaviorPanic {
         match payload.downcast::<BehaviorPanic>() {
             Ok(inner) => BehaviorPanic { path: format!("{name}/{}", inner.path), message: inner.message },
-            Err(payload) => {
-                let message = payload
-                    .downcast_ref::<&str>()
-                    .map(|s| (*s).to_owned())
-                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "(no message)".into());
-                BehaviorPanic { path: name.to_owned(), message }
-            }
+            Err(payload) => BehaviorPanic { path: name.to_owned(), message: panic_message(payload.as_ref()) },
         }
     }
+}
+
+/// What a panic said: its `&str` or `String` payload.
+pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(no message)".into())
 }
 
 /// `a::b::Wander<c::D>` → `Wander<c::D>`: the path adds noise to records.

@@ -60,7 +60,7 @@ mod state;
 
 pub use action::{Action, Channel, Motion};
 pub use arbiter::{Arbiter, ArbiterSpec, Arbitration, Bid};
-pub use behavior::{from_fn, Behavior, BehaviorPanic, FnBehavior};
+pub use behavior::{from_fn, panic_message, Behavior, BehaviorPanic, FnBehavior};
 pub use clock::{Clock, SimClock, Stopwatch, WallClock};
 pub use command::{Command, Limits, Turn};
 pub use composite::Composite;

@@ -22,7 +22,7 @@ use std::io::{self, Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use ubf_core::Pose2;
+use ubf_core::{wrap_angle, Pose2};
 
 /// The emulator's settings.
 #[derive(Clone, Debug)]
@@ -221,7 +221,7 @@ impl Motors {
         };
         let w = match self.rotation {
             Rotation::Rate(w) => w.clamp(-self.max_w, self.max_w),
-            Rotation::Heading(target) => toward(wrap(target - heading), self.max_w, self.rot_dec),
+            Rotation::Heading(target) => toward(wrap_angle(target - heading), self.max_w, self.rot_dec),
         };
         (v, w)
     }
@@ -257,16 +257,11 @@ impl Motors {
             }
         }
         if let Rotation::Heading(target) = self.rotation {
-            if wrap(target - heading).abs() < 0.2f64.to_radians() && self.w.abs() < 0.01 {
+            if wrap_angle(target - heading).abs() < 0.2f64.to_radians() && self.w.abs() < 0.01 {
                 self.rotation = Rotation::Rate(0.0);
             }
         }
     }
-}
-
-/// An angle in (−π, π].
-fn wrap(a: f64) -> f64 {
-    a.sin().atan2(a.cos())
 }
 
 /// Moves `speed` toward `target` by at most `accel·dt` when speeding up
@@ -500,7 +495,7 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
             moving: vv != 0.0 || ww != 0.0,
             xpos: to_pos(x),
             ypos: to_pos(y),
-            thpos: (wrap(th) / arcos.angle_conv_factor).round() as i16,
+            thpos: (wrap_angle(th) / arcos.angle_conv_factor).round() as i16,
             l_vel: ((vv - wheel) / arcos.vel_conv_factor).round() as i16,
             r_vel: ((vv + wheel) / arcos.vel_conv_factor).round() as i16,
             battery: 130,
