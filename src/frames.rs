@@ -82,20 +82,26 @@ fn median(values: &mut [f64]) -> f64 {
     values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
+/// The calibration in `dir`'s `camera.ron`, checked; the default camera if
+/// there is none.
+pub fn load_camera(dir: &Path) -> Result<StereoCamera, String> {
+    let path = dir.join(CAMERA_FILE);
+    let bytes = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(StereoCamera::default()),
+        Err(e) => return Err(format!("{}: {e}", path.display())),
+    };
+    ubf_core::config::utf8_text(bytes)
+        .and_then(|text| ubf_core::config::from_ron::<ubf_core::config::Checked<StereoCamera>>(&text))
+        .map(|checked| checked.0)
+        .map_err(|e| format!("{}:{e}", path.display()))
+}
+
 /// Replays `dir` through the pipeline and the rigid estimator on this
 /// thread, with the calibration in its `camera.ron` (the default camera if
 /// there is none).
 pub fn replay(dir: &Path, features: &FeatureConfig) -> Result<PipelineReport, String> {
-    let camera_path = dir.join(CAMERA_FILE);
-    let camera: StereoCamera = match std::fs::read_to_string(&camera_path) {
-        Ok(text) => {
-            ubf_core::config::from_ron::<ubf_core::config::Checked<StereoCamera>>(&text)
-                .map_err(|e| format!("{}:{e}", camera_path.display()))?
-                .0
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => StereoCamera::default(),
-        Err(e) => return Err(format!("{}: {e}", camera_path.display())),
-    };
+    let camera = load_camera(dir)?;
     let mut source = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
     let pipeline = StereoPipeline::new(camera, *features);
     let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
@@ -105,7 +111,9 @@ pub fn replay(dir: &Path, features: &FeatureConfig) -> Result<PipelineReport, St
     while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
         number += 1;
         let started = Instant::now();
-        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| format!("pair {number}: {e}"))?;
+        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| {
+            format!("{}: pair {number}: {e} (in {})", dir.join("frames.csv").display(), dir.join(CAMERA_FILE).display())
+        })?;
         let processed = Instant::now();
         landmarks += observed.len();
         let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };

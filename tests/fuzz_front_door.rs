@@ -1,10 +1,12 @@
 //! The front door under careless input: every shipped scenario and robot
 //! file, mutated (numbers to NaN, ±inf, 0, −1, 1e308, u32::MAX; lines
-//! deleted or repeated), must be refused with a position or load into a run
-//! that finishes (within 5 simulated seconds, a minute of wall time, and
-//! without aborting on memory). 2 000 cases in the suite (`UBF_FUZZ_CASES`
-//! sets another number; `UBF_FUZZ_TRACE=FILE` keeps the case being tried,
-//! for a crash); the ignored test runs 10⁵.
+//! deleted or repeated; brackets nested thousands deep), must be refused
+//! with a position or load into a run that finishes (within 5 simulated
+//! seconds, a minute of wall time, and without aborting on memory). The
+//! same for a recorded image directory's `camera.ron` and `frames.csv`,
+//! replayed through the stereo pipeline. 2 000 cases in the suite
+//! (`UBF_FUZZ_CASES` sets another number; `UBF_FUZZ_TRACE=FILE` keeps the
+//! case being tried, for a crash); the ignored test runs 10⁵.
 
 use proptest::prelude::*;
 use std::path::Path;
@@ -28,11 +30,19 @@ fn shipped() -> Vec<(String, String)> {
 
 const REPLACEMENTS: [&str; 8] = ["NaN", "inf", "-inf", "0", "-1", "1e308", "4294967295", "0.0"];
 
-/// One mutation of `text`: a number replaced, a line deleted, or a line
-/// repeated, chosen by `pick`.
+/// One mutation of `text`: a number replaced, a line deleted, a line
+/// repeated, or brackets opened 5 000 deep, chosen by `pick`.
 fn mutate(text: &str, kind: u8, pick: usize, replacement: &str) -> String {
     let lines: Vec<&str> = text.lines().collect();
-    match kind % 3 {
+    match kind % 4 {
+        3 => {
+            let mut at = pick % (text.len() + 1);
+            while !text.is_char_boundary(at) {
+                at -= 1;
+            }
+            let bracket = ["(", "[", "Composite(arbiter: Priority, children: [(behavior: "][pick % 3];
+            format!("{}{}{}", &text[..at], bracket.repeat(5000), &text[at..])
+        }
         0 => {
             // The pick-th number in the file.
             let numbers: Vec<(usize, usize)> = number_spans(text);
@@ -109,6 +119,42 @@ fn front_door(path: &str, text: &str) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// A directory of three small rendered pairs, recorded once.
+fn recording() -> &'static Path {
+    static DIR: std::sync::OnceLock<tempfile::TempDir> = std::sync::OnceLock::new();
+    DIR.get_or_init(|| {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut scenario = Scenario::load(&ubf::registry(), &root.join("scenarios/rendered-corridor.ron")).unwrap();
+        let camera = &mut scenario.robot.camera.as_mut().unwrap().stereo;
+        (camera.width_px, camera.height_px, camera.focal_px) = (160, 120, 138.6);
+        let dir = tempfile::tempdir().unwrap();
+        ubf::frames::record(&scenario, 1, dir.path(), 3).unwrap();
+        dir
+    })
+    .path()
+}
+
+/// Replays a copy of the recording with `file` (`camera.ron` or
+/// `frames.csv`) replaced by `text`: it runs, or it is refused naming the
+/// file and where in it (or the image it lists that cannot be read).
+fn replayed(file: &str, text: &str) -> Result<(), TestCaseError> {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["camera.ron", "frames.csv", "left", "right"] {
+        std::os::unix::fs::symlink(recording().join(name), dir.path().join(name)).unwrap();
+    }
+    std::fs::remove_file(dir.path().join(file)).unwrap();
+    std::fs::write(dir.path().join(file), text).unwrap();
+    let started = std::time::Instant::now();
+    match ubf::frames::replay(dir.path(), &ubf_perception::features::FeatureConfig::default()) {
+        Ok(report) => prop_assert!(report.frames <= 6, "{report:?}"),
+        Err(e) if file == "camera.ron" && e.contains("camera.ron:") => {}
+        Err(e) if e.contains("frames.csv:") || e.contains("no pairs listed") => {}
+        Err(e) => prop_assert!(false, "refused without saying where: {e}"),
+    }
+    prop_assert!(started.elapsed().as_secs() < 60, "three pairs took {:?}", started.elapsed());
+    Ok(())
+}
+
 fn check_cases(cases: u32) {
     let files = shipped();
     let config = ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() };
@@ -119,6 +165,15 @@ fn check_cases(cases: u32) {
             std::fs::write(trace, format!("{path}\n{mutated}")).unwrap();
         }
         front_door(path, &mutated)?;
+    });
+    let recorded: Vec<(&str, String)> = ["camera.ron", "frames.csv"]
+        .into_iter()
+        .map(|name| (name, std::fs::read_to_string(recording().join(name)).unwrap()))
+        .collect();
+    let config = ProptestConfig { cases: cases / 4, failure_persistence: None, ..ProptestConfig::default() };
+    proptest!(config, |(file in 0..2usize, kind in any::<u8>(), pick in any::<usize>(), r in 0..REPLACEMENTS.len())| {
+        let (name, text) = &recorded[file];
+        replayed(name, &mutate(text, kind, pick, REPLACEMENTS[r]))?;
     });
 }
 

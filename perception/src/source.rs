@@ -15,7 +15,7 @@
 
 use image::GrayImage;
 use std::fs;
-use std::io::{self, Write};
+use std::io::{self, BufRead, Write};
 use std::path::{Path, PathBuf};
 
 /// A rectified stereo pair and when it was taken.
@@ -58,6 +58,16 @@ pub enum SourceError {
         /// What is wrong.
         message: String,
     },
+    /// An image a line of `frames.csv` lists could not be read.
+    #[error("{index}:{line}: {source}")]
+    Listed {
+        /// The index file.
+        index: PathBuf,
+        /// The line that lists the image, from 1.
+        line: usize,
+        /// Why the image could not be read.
+        source: Box<SourceError>,
+    },
 }
 
 /// A source of stereo pairs.
@@ -66,17 +76,25 @@ pub trait CameraSource {
     fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError>;
 }
 
-/// One pair listed in a directory's index.
-#[derive(Clone, Debug, PartialEq)]
+/// One pair listed in a directory's index: its time and where its two
+/// image names lie in [`ImageDirectory::names`].
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Entry {
     time: f64,
-    left: PathBuf,
-    right: PathBuf,
+    line: u32,
+    left_end: u32,
+    right_end: u32,
 }
 
 /// Replays a directory of pairs in the order of its index.
+///
+/// The index is held compactly (the names of every pair in one string, and
+/// 16 bytes a pair besides), so a long recording's index costs about its
+/// own size in memory.
 #[derive(Clone, Debug)]
 pub struct ImageDirectory {
+    dir: PathBuf,
+    names: String,
     entries: Vec<Entry>,
     next: usize,
 }
@@ -88,24 +106,34 @@ impl ImageDirectory {
     /// Reads the index of `dir`; images are read as they are asked for.
     pub fn open(dir: &Path) -> Result<ImageDirectory, SourceError> {
         let path = dir.join(INDEX);
-        let text = fs::read_to_string(&path).map_err(|source| SourceError::Io { path: path.clone(), source })?;
-        let mut entries = Vec::new();
-        for (number, line) in text.lines().enumerate().skip(1) {
-            if line.trim().is_empty() {
+        let io_error = |source| SourceError::Io { path: path.clone(), source };
+        let reader = io::BufReader::new(fs::File::open(&path).map_err(io_error)?);
+        let mut listing = ImageDirectory { dir: dir.to_owned(), names: String::new(), entries: Vec::new(), next: 0 };
+        for (number, line) in reader.lines().enumerate() {
+            let bad = |message: String| SourceError::Index { path: path.clone(), line: number + 1, message };
+            let line = line.map_err(|e| bad(e.to_string()))?;
+            if number == 0 || line.trim().is_empty() {
                 continue;
             }
-            let bad = |message: String| SourceError::Index { path: path.clone(), line: number + 1, message };
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             let [time, left, right] = fields[..] else {
                 return Err(bad(format!("expected time_s,left,right; got {} fields", fields.len())));
             };
             let time: f64 = time.parse().map_err(|_| bad(format!("time {time:?} is not a number")))?;
-            if !time.is_finite() || entries.last().is_some_and(|e: &Entry| time < e.time) {
+            if !time.is_finite() || listing.entries.last().is_some_and(|e| time < e.time) {
                 return Err(bad(format!("time {time} is not finite and non-decreasing")));
             }
-            entries.push(Entry { time, left: dir.join(left), right: dir.join(right) });
+            let too_long = || bad("the index passes 4 GB or 4 billion lines".into());
+            let mut end = |name: &str| {
+                listing.names.push_str(name);
+                u32::try_from(listing.names.len()).map_err(|_| too_long())
+            };
+            let left_end = end(left)?;
+            let right_end = end(right)?;
+            let line = u32::try_from(number + 1).map_err(|_| too_long())?;
+            listing.entries.push(Entry { time, line, left_end, right_end });
         }
-        Ok(ImageDirectory { entries, next: 0 })
+        Ok(listing)
     }
 
     /// How many pairs the directory lists.
@@ -116,6 +144,14 @@ impl ImageDirectory {
     /// Whether it lists none.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
+    }
+
+    /// The paths of pair `i`'s two images.
+    fn paths(&self, i: usize) -> (PathBuf, PathBuf) {
+        let start = if i == 0 { 0 } else { self.entries[i - 1].right_end as usize };
+        let Entry { left_end, right_end, .. } = self.entries[i];
+        let (left, right) = (&self.names[start..left_end as usize], &self.names[left_end as usize..right_end as usize]);
+        (self.dir.join(left), self.dir.join(right))
     }
 }
 
@@ -129,9 +165,19 @@ fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
 
 impl CameraSource for ImageDirectory {
     fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError> {
-        let Some(entry) = self.entries.get(self.next) else { return Ok(None) };
+        let Some(&entry) = self.entries.get(self.next) else { return Ok(None) };
+        let (left, right) = self.paths(self.next);
         self.next += 1;
-        Ok(Some(StereoPair { time: entry.time, left: read_grey(&entry.left)?, right: read_grey(&entry.right)? }))
+        let listed = |source| SourceError::Listed {
+            index: self.dir.join(INDEX),
+            line: entry.line as usize,
+            source: Box::new(source),
+        };
+        Ok(Some(StereoPair {
+            time: entry.time,
+            left: read_grey(&left).map_err(listed)?,
+            right: read_grey(&right).map_err(listed)?,
+        }))
     }
 }
 
@@ -220,10 +266,11 @@ mod tests {
         assert!(err.contains(":2: time \"soon\""), "{err}");
         let mut source = open_with("h\n0,missing.png,b.png\n").unwrap();
         let err = source.next_pair().unwrap_err().to_string();
-        assert!(err.contains("missing.png"), "{err}");
+        assert!(err.contains("frames.csv:2: ") && err.contains("missing.png"), "{err}");
         fs::write(dir.join("junk.png"), b"not a png").unwrap();
         let mut source = open_with("h\n0,junk.png,junk.png\n").unwrap();
-        assert!(matches!(source.next_pair(), Err(SourceError::Image { .. })));
+        let err = source.next_pair().unwrap_err();
+        assert!(matches!(&err, SourceError::Listed { source, .. } if matches!(**source, SourceError::Image { .. })));
         let _ = fs::remove_dir_all(&dir);
     }
 }
