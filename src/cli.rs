@@ -116,6 +116,10 @@ enum Command {
         /// Stop after this many pairs.
         #[arg(long, default_value_t = 100_000)]
         max_frames: usize,
+        /// Record even beyond 10 GB of images (a deliberately huge
+        /// recording).
+        #[arg(long)]
+        huge: bool,
     },
     /// Replay a directory of stereo pairs through the feature pipeline and
     /// the rigid egomotion estimator on one core, and time them.
@@ -383,7 +387,9 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 emulate_command(&listen, &config)
             }
         }
-        Command::Frames { file, out, seed, max_frames } => frames_command(&registry, &file, &out, seed, max_frames),
+        Command::Frames { file, out, seed, max_frames, huge } => {
+            frames_command(&registry, &file, &out, seed, max_frames, huge)
+        }
         Command::Pipeline { dir, json } => pipeline_command(&dir, json),
         Command::Behaviors => {
             for name in registry.names() {
@@ -516,14 +522,26 @@ fn frames_command(
     out: &std::path::Path,
     seed: Option<u64>,
     max: usize,
+    huge: bool,
 ) -> ExitCode {
-    let scenario = match Scenario::load(registry, file) {
+    let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
+    let scenario = match loaded {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    let bytes = crate::frames::recording_bytes(&scenario, max);
+    if bytes > crate::scenario::Work::MOST_RECORDING_BYTES && !huge {
+        eprintln!(
+            "error: up to {} of images (PNG compresses rendered noise little), more than {}; \
+             lower --max-frames, or pass --huge to record them anyway",
+            crate::scenario::Work::bytes_text(bytes),
+            crate::scenario::Work::bytes_text(crate::scenario::Work::MOST_RECORDING_BYTES)
+        );
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
     match crate::frames::record(&scenario, seed.unwrap_or(scenario.seed), out, max) {
         Ok(count) => {
             println!("{count} stereo pairs in {}", out.display());

@@ -54,6 +54,19 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     writer.finish().map_err(|e| e.to_string())
 }
 
+/// The most bytes [`record`] writes for `scenario` and at most
+/// `max_frames` pairs: the scenario's frames (rendered or not, `record`
+/// renders them) as uncompressed grey images, an upper bound, since PNG
+/// compresses rendered noise little.
+pub fn recording_bytes(scenario: &Scenario, max_frames: usize) -> u64 {
+    let work = scenario.work();
+    let pairs = match &scenario.robot.camera {
+        Some(camera) => ((scenario.max_time_s * camera.rate_hz).ceil() as u64 + 1).min(max_frames as u64),
+        None => 0,
+    };
+    pairs.saturating_mul(work.pair_bytes)
+}
+
 /// What replaying a directory measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct PipelineReport {

@@ -100,7 +100,18 @@ impl Scenario {
     pub fn work(&self) -> Work {
         let ticks = self.max_ticks();
         let nodes = ubf_core::TreeLayout::of(self.root.build(&ubf_core::BuildContext::new(0)).as_ref()).nodes.len();
-        Work { ticks, trajectory_bytes: ticks.saturating_mul(24 * (16 + nodes as u64)) }
+        let rendered_pairs = match &self.robot.camera {
+            Some(camera) if camera.images.is_some() => (self.max_time_s * camera.rate_hz).ceil() as u64 + 1,
+            _ => 0,
+        };
+        let pair_pixels =
+            self.robot.camera.as_ref().map_or(0, |c| 2 * u64::from(c.stereo.width_px) * u64::from(c.stereo.height_px));
+        Work {
+            ticks,
+            trajectory_bytes: ticks.saturating_mul(24 * (16 + nodes as u64)),
+            rendered_pairs,
+            pair_bytes: pair_pixels,
+        }
     }
 
     /// Refuses a run beyond [`Work::MOST_TICKS`] ticks, saying how to
@@ -114,6 +125,16 @@ impl Scenario {
                 work.ticks,
                 Work::MOST_TICKS,
                 Work::bytes_text(work.trajectory_bytes)
+            ));
+        }
+        let pixels = work.rendered_pairs.saturating_mul(work.pair_bytes);
+        if pixels > Work::MOST_RENDERED_PIXELS {
+            return Err(format!(
+                "robot.camera.images: {} rendered pairs of {} each, more than {:.0e} pixels (hours of rendering); \
+                 shorten max_time_s, lower rate_hz or the image size, or pass --huge to run it anyway",
+                work.rendered_pairs,
+                Work::bytes_text(work.pair_bytes),
+                Work::MOST_RENDERED_PIXELS as f64
             ));
         }
         Ok(())
@@ -155,12 +176,23 @@ pub struct Work {
     pub ticks: u64,
     /// Bytes of `trajectory.csv`, about.
     pub trajectory_bytes: u64,
+    /// Stereo pairs rendered, at most (0 when the camera renders none).
+    pub rendered_pairs: u64,
+    /// Bytes (pixels) of one stereo pair, both images; 0 without a camera.
+    pub pair_bytes: u64,
 }
 
 impl Work {
     /// The most ticks a run may take without `--huge`: a week of simulated
     /// time at 0.1 s, a few hundred megabytes of trajectory.
     pub const MOST_TICKS: u64 = 6_000_000;
+
+    /// The most pixels a run may render without `--huge`: about 160 000
+    /// pairs of 640 × 480, over an hour of rendering at 30 ms a pair.
+    pub const MOST_RENDERED_PIXELS: u64 = 100_000_000_000;
+
+    /// The most bytes `ubf frames` may write without `--huge`.
+    pub const MOST_RECORDING_BYTES: u64 = 10_000_000_000;
 
     /// `1.2 GB`, `350 kB`.
     pub fn bytes_text(bytes: u64) -> String {

@@ -390,6 +390,10 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
                 world: (corridor: (width: 4.0, length: 20.0)), root: Stop())"#,
             "goal: (30, 0) lies outside the corridor",
         ),
+        (
+            r#"Scenario(name: "t", max_time_s: 5e5, robot: (camera: (images: (), rate_hz: 100.0)), root: Stop())"#,
+            "rendered pairs",
+        ),
     ] {
         let (code, stderr) = check(body);
         assert_eq!(code, 2, "{body}: {stderr}");
@@ -406,6 +410,13 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     }
     let result = ubf(&["model", "fit", "--depths", "1e-300..1e-299"]);
     assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
+    // A recording of a day at 2 pairs a second: about 106 GB of images.
+    let day = scenario_file(&dir, r#"Scenario(name: "t", max_time_s: 86400.0, robot: (camera: ()), root: Stop())"#);
+    let frames = dir.path().join("frames");
+    let result = ubf(&["frames", day.to_str().unwrap(), "--out", frames.to_str().unwrap()]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(text(&result.stderr).contains("lower --max-frames, or pass --huge"), "{}", text(&result.stderr));
+    assert!(!frames.exists(), "nothing was written");
 }
 
 #[test]
