@@ -144,6 +144,11 @@ enum Command {
         /// always shown, on one updating line).
         #[arg(long)]
         status: bool,
+        /// End the drive once the robot believes it is at the goal (the
+        /// robot is stopped and the session closed); without it the tree
+        /// holds the robot there until Ctrl-C.
+        #[arg(long)]
+        until_goal: bool,
     },
     /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
     /// for trying things out without a robot.
@@ -324,6 +329,14 @@ struct CameraArgs {
     depths: [f64; 2],
 }
 
+/// Whether `ubf` accepts `args` (the words after the program's name) as a
+/// command line, without running anything: the docs test checks every
+/// command the docs show with it. The error is clap's message.
+pub fn parses<I: IntoIterator<Item = T>, T: Into<std::ffi::OsString> + Clone>(args: I) -> Result<(), String> {
+    let words = std::iter::once(std::ffi::OsString::from("ubf")).chain(args.into_iter().map(Into::into));
+    Cli::try_parse_from(words).map(drop).map_err(|e| e.to_string())
+}
+
 /// Runs the command line with `registry` resolving behaviour names.
 pub fn main_with(registry: Registry) -> ExitCode {
     let cli = match Cli::try_parse() {
@@ -370,7 +383,9 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
-        Command::Drive { file, dry_run, status } => drive_command(&registry, &file, dry_run, status),
+        Command::Drive { file, dry_run, status, until_goal } => {
+            drive_command(&registry, &file, dry_run, status, until_goal)
+        }
         Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
             let mut config =
                 ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
@@ -469,15 +484,22 @@ fn run_command(
     }
 }
 
-fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool, status: bool) -> ExitCode {
+fn drive_command(
+    registry: &Registry,
+    file: &std::path::Path,
+    dry_run: bool,
+    status: bool,
+    until_goal: bool,
+) -> ExitCode {
     use crate::drive::{drive, DriveConfig, DriveEnd};
-    let (config, model) = match DriveConfig::load(registry, file) {
+    let (mut config, model) = match DriveConfig::load(registry, file) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    config.until_goal |= until_goal;
     let stop = crate::drive::install_stop_flag();
     if dry_run {
         return match crate::drive::dry_run(&config, &model, &stop) {
@@ -506,6 +528,10 @@ fn drive_command(registry: &Registry, file: &std::path::Path, dry_run: bool, sta
     match outcome.end {
         Ok(DriveEnd::Stopped) => {
             eprintln!("stopped");
+            ExitCode::SUCCESS
+        }
+        Ok(DriveEnd::GoalReached) => {
+            eprintln!("at the goal; stopped");
             ExitCode::SUCCESS
         }
         Ok(DriveEnd::LinkLost) => ExitCode::from(EXIT_FAILURE),

@@ -166,6 +166,10 @@ pub struct DriveConfig {
     /// Stop by itself after this long, s (unset: run until stopped).
     #[serde(default)]
     pub max_time_s: Option<f64>,
+    /// End the drive (robot stopped, session closed) once the robot
+    /// believes it is at the goal; `ubf drive --until-goal` sets it.
+    #[serde(default)]
+    pub until_goal: bool,
     /// The behaviour tree.
     pub root: BehaviorSpec,
 }
@@ -303,6 +307,8 @@ struct OpenCamera {
 pub enum DriveEnd {
     /// Ctrl-C, SIGTERM or the time limit.
     Stopped,
+    /// At the goal, with `until_goal`.
+    GoalReached,
     /// The link was lost and the configuration says exit.
     LinkLost,
 }
@@ -379,6 +385,7 @@ fn status_line<R: Robot>(controller: &Controller<SafetyGuard<R>>) -> String {
 /// How a session ended.
 enum SessionEnd {
     Stopped,
+    GoalReached,
     LinkLost(String),
     Failed(String),
 }
@@ -447,7 +454,7 @@ fn drive_sessions(
                 eprintln!("logging to {}", path.display());
                 logs.push(path.clone());
                 let ended = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    run_session(&mut controller, &mut log, stop, &out_of_time, status)
+                    run_session(&mut controller, &mut log, stop, &out_of_time, config.until_goal, status)
                 }))
                 .unwrap_or_else(|panic| {
                     SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
@@ -467,6 +474,7 @@ fn drive_sessions(
         arm_second_interrupt(None);
         match ended {
             SessionEnd::Stopped => return Ok(DriveEnd::Stopped),
+            SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
             SessionEnd::Failed(why) => return Err(why),
             SessionEnd::LinkLost(why) => {
                 eprintln!("link lost: {why}");
@@ -486,6 +494,7 @@ fn run_session<R: Robot>(
     log: &mut TrajectoryWriter,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
+    until_goal: bool,
     status: Status,
 ) -> SessionEnd {
     let mut shown = Instant::now();
@@ -509,6 +518,9 @@ fn run_session<R: Robot>(
         };
         if let Err(e) = log.write(controller.last_record(), controller.layout(), &row) {
             tracing::warn!("writing the log: {e}");
+        }
+        if until_goal && state.goal_reached() {
+            break SessionEnd::GoalReached;
         }
         if status != Status::Off && shown.elapsed() >= status.every() {
             shown = Instant::now();
