@@ -122,13 +122,31 @@ enum Command {
         huge: bool,
     },
     /// Replay a directory of stereo pairs through the feature pipeline and
-    /// the rigid egomotion estimator on one core, and time them.
+    /// the rigid egomotion estimator on one core, and time them; with
+    /// ground truth, measure the estimate's accuracy (KITTI's metrics).
     Pipeline {
-        /// A directory written by `ubf frames` (or laid out the same way).
+        /// A directory written by `ubf frames` (or laid out the same way),
+        /// or a KITTI odometry sequence (`image_0/`, `image_1/`,
+        /// `calib.txt`, `times.txt`).
         dir: PathBuf,
         /// Print the measurements as JSON.
         #[arg(long)]
         json: bool,
+        /// Ground-truth poses for a KITTI sequence, in KITTI's format
+        /// (default: the sequence's `poses.txt`, if it has one).
+        #[arg(long, value_name = "FILE")]
+        poses: Option<PathBuf>,
+        /// The fastest motion egomotion accepts, m/s (default: 0.6, the
+        /// robot's, for a recording; 40, a road vehicle's, for KITTI).
+        #[arg(long, value_name = "M/S", value_parser = parse_limit)]
+        max_speed: Option<f64>,
+        /// The fastest turn egomotion accepts, °/s (default: 100 for a
+        /// recording, 90 for KITTI).
+        #[arg(long, value_name = "DEG/S", value_parser = parse_limit)]
+        max_turn_rate: Option<f64>,
+        /// Draw the estimated path (over the true one, if known) here (PNG).
+        #[arg(long, value_name = "FILE.png")]
+        plot: Option<PathBuf>,
     },
     /// Drive a real robot (or an emulator) with a behaviour tree; Ctrl-C or
     /// SIGTERM stops it safely.
@@ -405,7 +423,15 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Frames { file, out, seed, max_frames, huge } => {
             frames_command(&registry, &file, &out, seed, max_frames, huge)
         }
-        Command::Pipeline { dir, json } => pipeline_command(&dir, json),
+        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, plot } => {
+            let options = crate::frames::ReplayOptions {
+                features: ubf_perception::features::FeatureConfig::default(),
+                max_speed,
+                max_turn_rate_deg: max_turn_rate,
+                poses,
+            };
+            pipeline_command(&dir, &options, json, plot.as_deref())
+        }
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -580,29 +606,70 @@ fn frames_command(
     }
 }
 
-fn pipeline_command(dir: &std::path::Path, json: bool) -> ExitCode {
-    let report = match crate::frames::replay(dir, &ubf_perception::features::FeatureConfig::default()) {
+fn pipeline_command(
+    dir: &std::path::Path,
+    options: &crate::frames::ReplayOptions,
+    json: bool,
+    plot: Option<&std::path::Path>,
+) -> ExitCode {
+    let replay = match crate::frames::replay(dir, options) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    if let Some(path) = plot {
+        if let Err(e) = crate::plot::draw_paths(&replay.estimate, replay.truth.as_deref(), path) {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_FAILURE);
+        }
+    }
+    let report = &replay.report;
     if json {
-        println!("{}", serde_json::to_string_pretty(&report).expect("the report serialises"));
-    } else {
-        println!("{} stereo pairs, {:.0} landmarks each on average", report.frames, report.landmarks_mean);
-        println!("median per pair: features and stereo {:.2} ms, egomotion {:.2} ms, total {:.2} ms ({:.0} pairs/s on one core)",
-            report.pipeline_ms_median, report.egomotion_ms_median, report.total_ms_median, report.frames_per_s);
+        println!("{}", serde_json::to_string_pretty(report).expect("the report serialises"));
+        return ExitCode::SUCCESS;
+    }
+    println!(
+        "{} stereo pairs ({}), {:.0} landmarks each on average",
+        report.frames, report.layout, report.landmarks_mean
+    );
+    println!(
+        "median per pair: features and stereo {:.2} ms, egomotion {:.2} ms, total {:.2} ms ({:.0} pairs/s on one core)",
+        report.pipeline_ms_median, report.egomotion_ms_median, report.total_ms_median, report.frames_per_s
+    );
+    println!(
+        "egomotion: {} failures; end pose ({:.2}, {:.2}) m, {:.1}°; limits {} m/s, {} °/s",
+        report.failures,
+        report.final_pose[0],
+        report.final_pose[1],
+        report.final_pose[2].to_degrees(),
+        report.limits[0],
+        report.limits[1]
+    );
+    if let Some(a) = &report.accuracy {
+        let lengths: Vec<String> = a.segment_lengths_m.iter().map(|l| format!("{l}")).collect();
+        println!("path {:.1} m; end point off by {:.2} % of it", a.path_m, a.endpoint_drift_pct);
         println!(
-            "egomotion: {} failures; end pose ({:.2}, {:.2}) m, {:.1}°",
-            report.egomotion_failures,
-            report.final_pose[0],
-            report.final_pose[1],
-            report.final_pose[2].to_degrees()
+            "KITTI error over {} m segments: translation {:.2} %, rotation {:.4} °/m",
+            lengths.join(", "),
+            a.translation_error_pct,
+            a.rotation_error_deg_per_m
+        );
+        println!(
+            "per step (median): translation error {:.2} %, scale {:.3}, rotation {:.4} °/m",
+            a.step_translation_error_pct_median, a.step_scale_median, a.step_rotation_error_deg_per_m_median
         );
     }
     ExitCode::SUCCESS
+}
+
+/// A speed or turn-rate limit: finite and positive.
+fn parse_limit(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1e4 => Ok(v),
+        _ => Err(format!("expected a number above 0 and at most 10 000; got {text:?}")),
+    }
 }
 
 /// `LENGTHxWIDTH` in metres, both positive.

@@ -1,15 +1,18 @@
 //! Stereo image files: `ubf frames` records the rendered pairs of a
 //! scenario run into a directory, and `ubf pipeline` replays a directory
-//! through the feature pipeline and the rigid egomotion estimator, timing
-//! each stage (the same files the OpenCV comparison script reads).
+//! (such a recording, or a KITTI odometry sequence) through the feature
+//! pipeline and the rigid egomotion estimator, timing each stage (the same
+//! files the OpenCV comparison script reads) and, with ground truth,
+//! measuring its accuracy.
 
 use crate::scenario::Scenario;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
+use ubf_perception::kitti::{self, Accuracy};
 use ubf_perception::source::{CameraSource, ImageDirectory, ImageDirectoryWriter, StereoPair};
 use ubf_perception::StereoCamera;
 use ubf_robots::sim::render::RenderConfig;
@@ -70,6 +73,9 @@ pub fn recording_bytes(scenario: &Scenario, max_frames: usize) -> u64 {
 /// What replaying a directory measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct PipelineReport {
+    /// What the directory held: `recording` (`frames.csv`, as `ubf frames`
+    /// writes) or `kitti` (a KITTI odometry sequence).
+    pub layout: &'static str,
     /// Pairs processed.
     pub frames: usize,
     /// Landmarks triangulated per pair, mean.
@@ -77,22 +83,121 @@ pub struct PipelineReport {
     /// Median time of the feature pipeline per pair (detect and describe
     /// both images, match them, refine, triangulate), ms.
     pub pipeline_ms_median: f64,
-    /// Median time of the egomotion step per pair (match to the previous
-    /// frame, rigid estimate), ms.
+    /// Median time of the egomotion step per pair (match to the keyframes,
+    /// rigid estimate), ms.
     pub egomotion_ms_median: f64,
     /// Median end-to-end time per pair, ms.
     pub total_ms_median: f64,
     /// 1000 / the median end-to-end time.
     pub frames_per_s: f64,
     /// Egomotion steps that found no motion.
-    pub egomotion_failures: u32,
+    pub failures: u32,
     /// The visual odometry's end pose: x, y (m), heading (rad).
     pub final_pose: [f64; 3],
+    /// The egomotion limits used: top speed, m/s, and turn rate, °/s.
+    pub limits: [f64; 2],
+    /// With ground truth: the estimate's accuracy.
+    #[serde(flatten)]
+    pub accuracy: Option<Accuracy>,
 }
 
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+/// How to replay a directory.
+#[derive(Clone, Debug, Default)]
+pub struct ReplayOptions {
+    /// The feature pipeline's settings.
+    pub features: FeatureConfig,
+    /// The fastest motion egomotion accepts, m/s (default: the robot's
+    /// 0.6 for a recording, a road vehicle's 40 for a KITTI sequence).
+    pub max_speed: Option<f64>,
+    /// The fastest turn egomotion accepts, °/s (default: the robot's 100
+    /// for a recording, 90 for a KITTI sequence).
+    pub max_turn_rate_deg: Option<f64>,
+    /// Ground-truth poses for a KITTI sequence (default: its `poses.txt`).
+    pub poses: Option<PathBuf>,
+}
+
+/// A KITTI sequence's egomotion limits, for a car on public roads: 40 m/s
+/// (144 km/h) and 90 °/s.
+const ROAD_VEHICLE_LIMITS: (f64, f64) = (40.0, 90.0);
+
+/// A replayed directory: the report, and the estimated and true paths.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// What was measured.
+    pub report: PipelineReport,
+    /// Egomotion's pose after each pair.
+    pub estimate: Vec<Pose2>,
+    /// The ground truth at each pair, when there is one.
+    pub truth: Option<Vec<Pose2>>,
+}
+
+/// Replays `dir` (a recording with `frames.csv` and `camera.ron`, or a
+/// KITTI odometry sequence) through the pipeline and the rigid estimator on
+/// this thread. There is no odometry on replay, so the odometry gate is off
+/// and an outage is bridged by standing still.
+pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
+    let (layout, camera, mut source, truth, limits) = if kitti::is_sequence(dir) {
+        let sequence = kitti::open(dir, options.poses.as_deref()).map_err(|e| e.to_string())?;
+        ("kitti", sequence.camera, sequence.pairs, sequence.truth, ROAD_VEHICLE_LIMITS)
+    } else {
+        if let Some(poses) = &options.poses {
+            return Err(format!("--poses {}: ground truth is read for KITTI sequences only", poses.display()));
+        }
+        let defaults = EgomotionConfig::default();
+        let camera = load_camera(dir)?;
+        let source = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+        ("recording", camera, source, None, (defaults.max_speed, defaults.max_turn_rate_deg))
+    };
+    let limits = [options.max_speed.unwrap_or(limits.0), options.max_turn_rate_deg.unwrap_or(limits.1)];
+    let config = EgomotionConfig {
+        max_speed: limits[0],
+        max_turn_rate_deg: limits[1],
+        odometry_gate: None,
+        ..EgomotionConfig::default()
+    };
+    let index = if layout == "kitti" { dir.join("times.txt") } else { dir.join("frames.csv") };
+    let pipeline = StereoPipeline::new(camera, options.features);
+    let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+    let (mut pipeline_ms, mut egomotion_ms, mut total_ms) = (Vec::new(), Vec::new(), Vec::new());
+    let mut estimate = Vec::new();
+    let mut landmarks = 0usize;
+    let mut number = 0;
+    while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
+        number += 1;
+        let started = Instant::now();
+        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| {
+            format!("{}: pair {number}: {e} (in {})", index.display(), calibration_file(dir, layout).display())
+        })?;
+        let processed = Instant::now();
+        landmarks += observed.len();
+        let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };
+        let odometry = tracker.state().pose.unwrap_or_default();
+        tracker.update(&frame, &odometry);
+        let done = Instant::now();
+        estimate.push(tracker.state().pose.unwrap_or_default());
+        pipeline_ms.push((processed - started).as_secs_f64() * 1e3);
+        egomotion_ms.push((done - processed).as_secs_f64() * 1e3);
+        total_ms.push((done - started).as_secs_f64() * 1e3);
+    }
+    if number == 0 {
+        return Err(format!("{}: no pairs listed", index.display()));
+    }
+    let pose = tracker.state().pose.unwrap_or_default();
+    let total = median(&mut total_ms);
+    let report = PipelineReport {
+        layout,
+        frames: number as usize,
+        landmarks_mean: landmarks as f64 / number as f64,
+        pipeline_ms_median: median(&mut pipeline_ms),
+        egomotion_ms_median: median(&mut egomotion_ms),
+        total_ms_median: total,
+        frames_per_s: 1e3 / total,
+        failures: tracker.state().failures,
+        final_pose: [pose.x, pose.y, pose.theta],
+        limits,
+        accuracy: truth.as_deref().and_then(|truth| kitti::accuracy(&estimate, truth)),
+    };
+    Ok(Replay { report, estimate, truth })
 }
 
 /// The calibration in `dir`'s `camera.ron`, checked; the default camera if
@@ -110,48 +215,12 @@ pub fn load_camera(dir: &Path) -> Result<StereoCamera, String> {
         .map_err(|e| format!("{}:{e}", path.display()))
 }
 
-/// Replays `dir` through the pipeline and the rigid estimator on this
-/// thread, with the calibration in its `camera.ron` (the default camera if
-/// there is none).
-pub fn replay(dir: &Path, features: &FeatureConfig) -> Result<PipelineReport, String> {
-    let camera = load_camera(dir)?;
-    let mut source = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
-    let pipeline = StereoPipeline::new(camera, *features);
-    let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
-    let (mut pipeline_ms, mut egomotion_ms, mut total_ms) = (Vec::new(), Vec::new(), Vec::new());
-    let mut landmarks = 0usize;
-    let mut number = 0;
-    while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
-        number += 1;
-        let started = Instant::now();
-        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| {
-            format!("{}: pair {number}: {e} (in {})", dir.join("frames.csv").display(), dir.join(CAMERA_FILE).display())
-        })?;
-        let processed = Instant::now();
-        landmarks += observed.len();
-        let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };
-        // No odometry on replay: the visual estimate stands in, so the
-        // journey CV is weighed by the distance it measured.
-        let odometry = tracker.state().pose.unwrap_or_default();
-        tracker.update(&frame, &odometry);
-        let done = Instant::now();
-        pipeline_ms.push((processed - started).as_secs_f64() * 1e3);
-        egomotion_ms.push((done - processed).as_secs_f64() * 1e3);
-        total_ms.push((done - started).as_secs_f64() * 1e3);
-    }
-    if number == 0 {
-        return Err(format!("{}: no pairs listed", dir.display()));
-    }
-    let pose = tracker.state().pose.unwrap_or_default();
-    let total = median(&mut total_ms);
-    Ok(PipelineReport {
-        frames: number as usize,
-        landmarks_mean: landmarks as f64 / number as f64,
-        pipeline_ms_median: median(&mut pipeline_ms),
-        egomotion_ms_median: median(&mut egomotion_ms),
-        total_ms_median: total,
-        frames_per_s: 1e3 / total,
-        egomotion_failures: tracker.state().failures,
-        final_pose: [pose.x, pose.y, pose.theta],
-    })
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// The file a directory's calibration comes from.
+fn calibration_file(dir: &Path, layout: &str) -> PathBuf {
+    dir.join(if layout == "kitti" { "calib.txt" } else { CAMERA_FILE })
 }

@@ -143,6 +143,35 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     Ok(())
 }
 
+/// Draws a replayed sequence's egomotion path over the true one (when
+/// there is one), from above: x ahead of the first pose, y to its left.
+pub fn draw_paths(
+    estimate: &[ubf_core::Pose2],
+    truth: Option<&[ubf_core::Pose2]>,
+    path: &Path,
+) -> Result<(), PlotError> {
+    let world = World {
+        segments: Vec::new(),
+        landmarks: Vec::new(),
+        people: Vec::new(),
+        corridor: None,
+        featureless: Vec::new(),
+    };
+    let points = |poses: &[ubf_core::Pose2]| poses.iter().map(|p| (p.x, p.y)).collect::<Vec<_>>();
+    let estimated_path = points(estimate);
+    let true_path = truth.map(points).unwrap_or_default();
+    let title = if truth.is_some() { "egomotion (green) over the ground truth (blue)" } else { "egomotion" };
+    let plot = RunPlot {
+        title,
+        world: &world,
+        true_path: &true_path,
+        estimated_path: &estimated_path,
+        decisions: &[],
+        goal: None,
+    };
+    draw(&plot, path)
+}
+
 /// Draws the CV of `cv` over the floor ahead of the camera as a heat map
 /// (thesis figure 16): lateral position across, depth up, log₁₀ CV as
 /// colour from blue (best) to red (worst); outside the stereo field of view

@@ -440,3 +440,53 @@ fn deep_trees_and_non_utf8_files_get_a_position_and_plain_words() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("latin1.ron:2:13: not UTF-8"), "{}", text(&out.stderr));
 }
+
+/// KITTI odometry 06, frames 0–50, beside the checkout (or `UBF_DATA`).
+fn kitti_sample() -> Option<PathBuf> {
+    let found = ubf_perception::kitti::shared_sample(std::path::Path::new(env!("CARGO_MANIFEST_DIR")));
+    if found.is_none() {
+        eprintln!("SKIPPED: no KITTI sample (set UBF_DATA, or put it at ../shared/data)");
+    }
+    found
+}
+
+#[test]
+fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_poses() {
+    let Some(dir) = kitti_sample() else { return };
+    let plot = tempfile::tempdir().unwrap().keep().join("kitti.png");
+    let result = ubf(&["pipeline", dir.to_str().unwrap(), "--json", "--plot", plot.to_str().unwrap()]);
+    assert_eq!(result.status.code(), Some(0), "{}", text(&result.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    assert_eq!(report["layout"], "kitti");
+    assert_eq!(report["frames"], 51);
+    // The targets: no failed step, end-point drift at most 1 %.
+    assert_eq!(report["failures"], 0, "{report}");
+    let drift = report["endpoint_drift_pct"].as_f64().unwrap();
+    assert!(drift <= 1.0, "end-point drift {drift} %");
+    assert!(report["translation_error_pct"].as_f64().unwrap() < 5.0, "{report}");
+    assert_eq!(report["limits"], serde_json::json!([40.0, 90.0]));
+    assert!(std::fs::metadata(&plot).unwrap().len() > 10_000);
+    // The robot's limits reject every step of a car at 12 m/s.
+    let slow = ubf(&["pipeline", dir.to_str().unwrap(), "--json", "--max-speed", "0.6"]);
+    let slow: serde_json::Value = serde_json::from_slice(&slow.stdout).unwrap();
+    assert!(slow["failures"].as_u64().unwrap() >= 45, "{slow}");
+}
+
+#[test]
+fn a_broken_kitti_calibration_is_named_with_its_line() {
+    let Some(sample) = kitti_sample() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["image_0", "image_1", "times.txt"] {
+        std::os::unix::fs::symlink(sample.join(name), dir.path().join(name)).unwrap();
+    }
+    let calib = std::fs::read_to_string(sample.join("calib.txt")).unwrap();
+    std::fs::write(dir.path().join("calib.txt"), calib.replacen("P1: 7.07", "P1: x7.07", 1)).unwrap();
+    let result = ubf(&["pipeline", dir.path().to_str().unwrap()]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(text(&result.stderr).contains("calib.txt:2: `P1:` needs 12 finite numbers"), "{}", text(&result.stderr));
+    std::fs::write(dir.path().join("calib.txt"), calib).unwrap();
+    std::fs::write(dir.path().join("poses.txt"), "1 0 0 0 0 1 0 0 0 0 1 0\n").unwrap();
+    let result = ubf(&["pipeline", dir.path().to_str().unwrap()]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(text(&result.stderr).contains("1 poses for 51 frames"), "{}", text(&result.stderr));
+}

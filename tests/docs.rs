@@ -214,7 +214,7 @@ fn scratch() -> tempfile::TempDir {
     for entry in std::fs::read_dir(root()).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_name().unwrap();
-        if [".git", "target", "out", "docs"].iter().any(|skip| name == *skip) {
+        if [".git", "out", "docs"].iter().any(|skip| name == *skip) {
             continue;
         }
         std::os::unix::fs::symlink(&path, dir.path().join(name)).unwrap();

@@ -198,7 +198,14 @@ mod tests {
     use super::*;
 
     fn calibration() -> StereoCalibration {
-        StereoCalibration { focal_px: 554.0, baseline_m: 0.6, width_px: 640, height_px: 480, mount: [0.0, 0.0, 1.0] }
+        StereoCalibration {
+            focal_px: 554.0,
+            baseline_m: 0.6,
+            width_px: 640,
+            height_px: 480,
+            mount: [0.0, 0.0, 1.0],
+            ..StereoCalibration::default()
+        }
     }
 
     fn obs(point_cam: [f64; 3], seed: u64) -> LandmarkObservation {

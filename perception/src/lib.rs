@@ -21,9 +21,10 @@ pub mod egomotion;
 pub mod error_model;
 pub mod features;
 pub mod fusion;
+pub mod kitti;
 pub mod source;
 pub mod stereo;
 #[cfg(feature = "v4l")]
 pub mod v4l_source;
 
-pub use stereo::{CameraMount, StereoCamera};
+pub use stereo::{CameraMount, PrincipalPoint, StereoCamera};

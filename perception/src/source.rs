@@ -48,7 +48,8 @@ pub enum SourceError {
         /// Why.
         message: String,
     },
-    /// A line of `frames.csv` is not `time_s,left,right`.
+    /// A line of an index (`frames.csv`, a KITTI sequence's text files) is
+    /// not what it should be.
     #[error("{path}:{line}: {message}")]
     Index {
         /// The index file.
@@ -58,7 +59,7 @@ pub enum SourceError {
         /// What is wrong.
         message: String,
     },
-    /// An image a line of `frames.csv` lists could not be read.
+    /// An image a line of an index lists could not be read.
     #[error("{index}:{line}: {source}")]
     Listed {
         /// The index file.
@@ -94,6 +95,8 @@ struct Entry {
 #[derive(Clone, Debug)]
 pub struct ImageDirectory {
     dir: PathBuf,
+    /// The file that lists the pairs, for errors.
+    index: PathBuf,
     names: String,
     entries: Vec<Entry>,
     next: usize,
@@ -108,7 +111,7 @@ impl ImageDirectory {
         let path = dir.join(INDEX);
         let io_error = |source| SourceError::Io { path: path.clone(), source };
         let reader = io::BufReader::new(fs::File::open(&path).map_err(io_error)?);
-        let mut listing = ImageDirectory { dir: dir.to_owned(), names: String::new(), entries: Vec::new(), next: 0 };
+        let mut listing = ImageDirectory::empty(dir, &path);
         for (number, line) in reader.lines().enumerate() {
             let bad = |message: String| SourceError::Index { path: path.clone(), line: number + 1, message };
             let line = line.map_err(|e| bad(e.to_string()))?;
@@ -120,20 +123,36 @@ impl ImageDirectory {
                 return Err(bad(format!("expected time_s,left,right; got {} fields", fields.len())));
             };
             let time: f64 = time.parse().map_err(|_| bad(format!("time {time:?} is not a number")))?;
-            if !time.is_finite() || listing.entries.last().is_some_and(|e| time < e.time) {
-                return Err(bad(format!("time {time} is not finite and non-decreasing")));
-            }
-            let too_long = || bad("the index passes 4 GB or 4 billion lines".into());
-            let mut end = |name: &str| {
-                listing.names.push_str(name);
-                u32::try_from(listing.names.len()).map_err(|_| too_long())
-            };
-            let left_end = end(left)?;
-            let right_end = end(right)?;
-            let line = u32::try_from(number + 1).map_err(|_| too_long())?;
-            listing.entries.push(Entry { time, line, left_end, right_end });
+            listing.push(time, number + 1, left, right).map_err(bad)?;
         }
         Ok(listing)
+    }
+
+    /// A listing of no pairs yet, of images relative to `dir`, listed by
+    /// the file `index`.
+    pub(crate) fn empty(dir: &Path, index: &Path) -> ImageDirectory {
+        ImageDirectory {
+            dir: dir.to_owned(),
+            index: index.to_owned(),
+            names: String::new(),
+            entries: Vec::new(),
+            next: 0,
+        }
+    }
+
+    /// Lists a pair, from line `line` of the index.
+    pub(crate) fn push(&mut self, time: f64, line: usize, left: &str, right: &str) -> Result<(), String> {
+        if !time.is_finite() || self.entries.last().is_some_and(|e| time < e.time) {
+            return Err(format!("time {time} is not finite and non-decreasing"));
+        }
+        let too_long = || "the index passes 4 GB or 4 billion lines".to_owned();
+        let line = u32::try_from(line).map_err(|_| too_long())?;
+        self.names.push_str(left);
+        let left_end = u32::try_from(self.names.len()).map_err(|_| too_long())?;
+        self.names.push_str(right);
+        let right_end = u32::try_from(self.names.len()).map_err(|_| too_long())?;
+        self.entries.push(Entry { time, line, left_end, right_end });
+        Ok(())
     }
 
     /// How many pairs the directory lists.
@@ -169,7 +188,7 @@ impl CameraSource for ImageDirectory {
         let (left, right) = self.paths(self.next);
         self.next += 1;
         let listed = |source| SourceError::Listed {
-            index: self.dir.join(INDEX),
+            index: self.index.clone(),
             line: entry.line as usize,
             source: Box::new(source),
         };

@@ -4,8 +4,11 @@
 //! Frames. The *camera frame* is the thesis's: origin midway between the two
 //! cameras, x to the right, y ahead along the optical axes, z up. The *robot
 //! frame* is x forward, y left, z up, at the robot's centre of rotation on
-//! the floor. Images are rectified: both cameras share the focal length, the
-//! principal point and the rows. Pixels count from the top-left corner.
+//! the floor. Images are rectified: both cameras share the focal length and
+//! the rows; the right camera's principal point may sit a fixed number of
+//! columns from the left's (the disparity offset). Pixels count from the
+//! top-left corner, and the continuous coordinate of pixel k's centre is
+//! k + ½ (calibration tools put it at k: see [`PrincipalPoint`]).
 
 use serde::{Deserialize, Serialize};
 use ubf_core::config::{finite, positive};
@@ -70,6 +73,33 @@ pub struct StereoCamera {
     /// Where the pair sits on the robot.
     #[serde(default)]
     pub mount: CameraMount,
+    /// The left camera's principal point; unset, the image centre.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub principal_point: Option<PrincipalPoint>,
+    /// The right camera's principal point column minus the left's, pixels:
+    /// Middlebury's `doffs`; 0 for a pair rectified to share it (KITTI,
+    /// OpenCV's `stereoRectify` with `CALIB_ZERO_DISPARITY`). A point's
+    /// depth is `focal_px · baseline_m / (disparity + disparity_offset_px)`.
+    #[serde(default, deserialize_with = "finite", skip_serializing_if = "is_zero")]
+    pub disparity_offset_px: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// A principal point, pixels, as calibration tools write it (OpenCV's and
+/// ROS's `K`, KITTI's `P0`: `cx`, `cy`, with the first pixel's centre at
+/// (0, 0)).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrincipalPoint {
+    /// Column, pixels.
+    #[serde(deserialize_with = "finite")]
+    pub x: f64,
+    /// Row, pixels.
+    #[serde(deserialize_with = "finite")]
+    pub y: f64,
 }
 
 impl Default for StereoCamera {
@@ -80,6 +110,8 @@ impl Default for StereoCamera {
             focal_px: Self::default_focal(),
             baseline_m: Self::default_baseline(),
             mount: CameraMount::default(),
+            principal_point: None,
+            disparity_offset_px: 0.0,
         }
     }
 }
@@ -113,6 +145,18 @@ impl ubf_core::config::Check for StereoCamera {
         if self.focal_px > 1e6 {
             return Err(format!("focal_px: {}; at most 1e6 pixels", self.focal_px));
         }
+        if let Some(p) = self.principal_point {
+            let (w, h) = (f64::from(self.width_px), f64::from(self.height_px));
+            if !(0.0..w).contains(&p.x) || !(0.0..h).contains(&p.y) {
+                return Err(format!("principal_point: ({}, {}) lies outside the {w} × {h} image", p.x, p.y));
+            }
+        }
+        if self.disparity_offset_px.abs() >= f64::from(self.width_px) {
+            return Err(format!(
+                "disparity_offset_px: {}; its size must be less than the image width, {}",
+                self.disparity_offset_px, self.width_px
+            ));
+        }
         Ok(())
     }
 }
@@ -139,6 +183,8 @@ impl StereoCamera {
             width_px: self.width_px,
             height_px: self.height_px,
             mount: [self.mount.forward, self.mount.left, self.mount.height],
+            principal_point: self.principal_point.map(|p| [p.x, p.y]),
+            disparity_offset_px: self.disparity_offset_px,
         }
     }
 
@@ -150,22 +196,26 @@ impl StereoCamera {
             focal_px: c.focal_px,
             baseline_m: c.baseline_m,
             mount: CameraMount { forward: c.mount[0], left: c.mount[1], height: c.mount[2] },
+            principal_point: c.principal_point.map(|[x, y]| PrincipalPoint { x, y }),
+            disparity_offset_px: c.disparity_offset_px,
         }
     }
 
-    /// Principal point column: the image centre.
+    /// The left camera's principal point column, in continuous image
+    /// coordinates (pixel k's centre at k + ½).
     pub fn cx(&self) -> f64 {
-        f64::from(self.width_px) / 2.0
+        self.principal_point.map_or(f64::from(self.width_px) / 2.0, |p| p.x + 0.5)
     }
 
-    /// Principal point row: the image centre.
+    /// The principal point row, in continuous image coordinates.
     pub fn cy(&self) -> f64 {
-        f64::from(self.height_px) / 2.0
+        self.principal_point.map_or(f64::from(self.height_px) / 2.0, |p| p.y + 0.5)
     }
 
     /// The horizontal field of view of one camera, radians.
     pub fn horizontal_fov(&self) -> f64 {
-        2.0 * (self.cx() / self.focal_px).atan()
+        let right = f64::from(self.width_px) - self.cx();
+        (self.cx() / self.focal_px).atan() + (right / self.focal_px).atan()
     }
 
     /// Where `p` (camera frame) appears in both images, or `None` when it is
@@ -180,7 +230,7 @@ impl StereoCamera {
         let f = self.focal_px;
         Some(StereoPixels {
             u_left: f * (x + half) / y + self.cx(),
-            u_right: f * (x - half) / y + self.cx(),
+            u_right: f * (x - half) / y + self.cx() + self.disparity_offset_px,
             v: -f * z / y + self.cy(),
         })
     }
@@ -195,9 +245,10 @@ impl StereoCamera {
 
     /// Where a matched pair of pixels puts the point, camera frame (thesis
     /// eq. 12–14, with the origin moved from the left camera to the middle of
-    /// the pair). `None` for a disparity that is not positive.
+    /// the pair). `None` for a disparity that is not positive once the
+    /// disparity offset is added.
     pub fn triangulate(&self, px: &StereoPixels) -> Option<[f64; 3]> {
-        let disparity = px.disparity();
+        let disparity = px.disparity() + self.disparity_offset_px;
         if disparity <= 0.0 || !disparity.is_finite() {
             return None;
         }
@@ -245,6 +296,32 @@ mod tests {
         // the robot's left is to the camera's left (negative x).
         let ahead_left = mount.robot_to_cam([5.0, 1.0, 1.1]);
         assert!(ahead_left[1] > 0.0 && ahead_left[0] < 0.0);
+    }
+
+    #[test]
+    fn a_principal_point_and_disparity_offset_move_the_pixels_not_the_point() {
+        let cam = StereoCamera {
+            principal_point: Some(PrincipalPoint { x: 301.5, y: 250.0 }),
+            disparity_offset_px: 12.0,
+            ..StereoCamera::default()
+        };
+        let px = cam.project([0.0, 10.0, 0.0]).unwrap();
+        assert!((px.v - 250.5).abs() < 1e-12, "the optical axis meets the row of cy");
+        assert!((px.u_left - 302.0 - cam.focal_px * 0.3 / 10.0).abs() < 1e-9);
+        assert!((px.disparity() + 12.0 - cam.focal_px * 0.6 / 10.0).abs() < 1e-9);
+        let p = cam.triangulate(&px).unwrap();
+        assert!(p.iter().zip([0.0, 10.0, 0.0]).all(|(a, b)| (a - b).abs() < 1e-9), "{p:?}");
+        assert_eq!(StereoCamera::from_calibration(&cam.calibration()), cam);
+    }
+
+    #[test]
+    fn a_principal_point_outside_the_image_is_refused() {
+        use ubf_core::config::Check;
+        let cam =
+            StereoCamera { principal_point: Some(PrincipalPoint { x: 700.0, y: 10.0 }), ..StereoCamera::default() };
+        assert!(cam.check().unwrap_err().contains("principal_point"));
+        let cam = StereoCamera { disparity_offset_px: 1e9, ..StereoCamera::default() };
+        assert!(cam.check().unwrap_err().contains("disparity_offset_px"));
     }
 
     proptest! {

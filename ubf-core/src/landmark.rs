@@ -72,6 +72,13 @@ pub struct StereoCalibration {
     /// Where the pair's midpoint sits in the robot frame (x forward, y
     /// left, z up), m.
     pub mount: [f64; 3],
+    /// The left camera's principal point (x, y), pixels, with the first
+    /// pixel's centre at (0, 0) as calibration tools write it; `None`: the
+    /// image centre.
+    pub principal_point: Option<[f64; 2]>,
+    /// The right camera's principal point column minus the left's, pixels
+    /// (0 when rectification made them equal).
+    pub disparity_offset_px: f64,
 }
 
 /// The latest stereo frame's landmarks.

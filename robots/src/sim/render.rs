@@ -184,15 +184,24 @@ impl Renderer {
         let half = self.camera.baseline_m / 2.0;
         let eye = |side: f64| (centre.0 + side * half * right.0, centre.1 + side * half * right.1);
         (
-            self.render_eye(eye(-1.0), (c, s), right, frame << 1),
-            self.render_eye(eye(1.0), (c, s), right, frame << 1 | 1),
+            self.render_eye(eye(-1.0), (c, s), right, 0.0, frame << 1),
+            self.render_eye(eye(1.0), (c, s), right, self.camera.disparity_offset_px, frame << 1 | 1),
         )
     }
 
-    fn render_eye(&self, eye: (f64, f64), forward: (f64, f64), right: (f64, f64), image_key: u64) -> GrayImage {
+    /// One camera's image; `cx_offset` moves its principal point (the right
+    /// camera's disparity offset).
+    fn render_eye(
+        &self,
+        eye: (f64, f64),
+        forward: (f64, f64),
+        right: (f64, f64),
+        cx_offset: f64,
+        image_key: u64,
+    ) -> GrayImage {
         let cam = &self.camera;
         let (w, h) = (cam.width_px, cam.height_px);
-        let (f, cx, cy) = (cam.focal_px, cam.cx(), cam.cy());
+        let (f, cx, cy) = (cam.focal_px, cam.cx() + cx_offset, cam.cy());
         let eye_height = cam.mount.height;
         let ceiling = self.config.wall_height_m;
         let mut image = GrayImage::new(w, h);
