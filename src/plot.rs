@@ -91,39 +91,58 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     chart
         .draw_series(plot.world.segments.iter().map(|s| PathElement::new(vec![s.a, s.b], wall)))
         .map_err(|e| fail(&e))?;
+    // Only what the plot shows goes in the legend.
     let landmark_style = ShapeStyle::from(&RED).filled();
-    chart
-        .draw_series(plot.world.landmarks.iter().filter_map(|lm| match lm.anchor {
-            Anchor::Fixed { position, .. } => Some(Circle::new((position[0], position[1]), 4, landmark_style)),
+    let fixed: Vec<(f64, f64)> = plot
+        .world
+        .landmarks
+        .iter()
+        .filter_map(|lm| match lm.anchor {
+            Anchor::Fixed { position, .. } => Some((position[0], position[1])),
             Anchor::Person { .. } => None,
-        }))
-        .map_err(|e| fail(&e))?
-        .label("landmark")
-        .legend(move |(x, y)| Circle::new((x + 10, y), 4, landmark_style));
+        })
+        .collect();
+    if !fixed.is_empty() {
+        chart
+            .draw_series(fixed.iter().map(|&p| Circle::new(p, 4, landmark_style)))
+            .map_err(|e| fail(&e))?
+            .label("landmark")
+            .legend(move |(x, y)| Circle::new((x + 10, y), 4, landmark_style));
+    }
     let person_style = ShapeStyle::from(&RGBColor(230, 140, 0)).stroke_width(2);
-    chart
-        .draw_series(
-            (0..plot.world.people.len()).map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person_style)),
-        )
-        .map_err(|e| fail(&e))?;
+    if !plot.world.people.is_empty() {
+        chart
+            .draw_series(
+                (0..plot.world.people.len()).map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person_style)),
+            )
+            .map_err(|e| fail(&e))?
+            .label("person (at the start)")
+            .legend(move |(x, y)| Circle::new((x + 10, y), 6, person_style));
+    }
 
     let truth = RGBColor(30, 80, 200);
     let estimate = RGBColor(20, 150, 60);
-    chart
-        .draw_series(LineSeries::new(plot.true_path.iter().copied(), truth.stroke_width(2)))
-        .map_err(|e| fail(&e))?
-        .label("true path")
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], truth.stroke_width(2)));
-    chart
-        .draw_series(LineSeries::new(plot.estimated_path.iter().copied(), estimate.stroke_width(1)))
-        .map_err(|e| fail(&e))?
-        .label("estimated path")
-        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], estimate.stroke_width(1)));
-    chart
-        .draw_series(plot.decisions.iter().map(|&p| Cross::new(p, 5, truth.stroke_width(2))))
-        .map_err(|e| fail(&e))?
-        .label("decision point")
-        .legend(move |(x, y)| Cross::new((x + 10, y), 5, truth.stroke_width(2)));
+    if !plot.true_path.is_empty() {
+        chart
+            .draw_series(LineSeries::new(plot.true_path.iter().copied(), truth.stroke_width(2)))
+            .map_err(|e| fail(&e))?
+            .label("true path")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], truth.stroke_width(2)));
+    }
+    if !plot.estimated_path.is_empty() {
+        chart
+            .draw_series(LineSeries::new(plot.estimated_path.iter().copied(), estimate.stroke_width(1)))
+            .map_err(|e| fail(&e))?
+            .label("estimated path")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], estimate.stroke_width(1)));
+    }
+    if !plot.decisions.is_empty() {
+        chart
+            .draw_series(plot.decisions.iter().map(|&p| Cross::new(p, 5, truth.stroke_width(2))))
+            .map_err(|e| fail(&e))?
+            .label("decision point")
+            .legend(move |(x, y)| Cross::new((x + 10, y), 5, truth.stroke_width(2)));
+    }
     if let Some(g) = plot.goal {
         let goal_style = ShapeStyle::from(&BLACK).stroke_width(2);
         chart
@@ -160,7 +179,7 @@ pub fn draw_paths(
     let points = |poses: &[ubf_core::Pose2]| poses.iter().map(|p| (p.x, p.y)).collect::<Vec<_>>();
     let estimated_path = points(estimate);
     let true_path = truth.map(points).unwrap_or_default();
-    let title = if truth.is_some() { "egomotion (green) over the ground truth (blue)" } else { "egomotion" };
+    let title = if truth.is_some() { "egomotion over the ground truth, from above" } else { "egomotion, from above" };
     let plot = RunPlot {
         title,
         world: &world,
