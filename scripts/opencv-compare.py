@@ -4,7 +4,8 @@
     python3 scripts/opencv-compare.py DIR [--ubf PATH]
 
 DIR is a directory written by `ubf frames` (frames.csv, camera.ron, left/,
-right/). The script creates a virtual environment in .venv-opencv beside
+right/), or a KITTI odometry sequence (calib.txt, times.txt, image_0/,
+image_1/). The script creates a virtual environment in .venv-opencv beside
 the repository's scripts/ and installs opencv-python-headless and numpy
 into it on first use, then re-runs itself there.
 
@@ -43,6 +44,19 @@ def ensure_opencv():
     os.execv(PY, [PY] + sys.argv)
 
 
+def kitti(directory):
+    """Focal length, principal point, baseline and the pairs of a KITTI sequence."""
+    rows = {}
+    for line in open(os.path.join(directory, "calib.txt")):
+        name, _, numbers = line.partition(":")
+        rows[name.strip()] = [float(v) for v in numbers.split()]
+    p0, p1 = rows["P0"], rows["P1"]
+    count = sum(1 for line in open(os.path.join(directory, "times.txt")) if line.strip())
+    pairs = [(f"image_0/{i:06d}.png", f"image_1/{i:06d}.png") for i in range(count)]
+    # OpenCV's pixel centres are at integers, as KITTI's principal point is.
+    return (p0[0], p0[2], p0[6], -p1[3] / p1[0]), pairs
+
+
 def camera(directory):
     """Focal length, principal point and baseline from camera.ron (or the defaults)."""
     values = {"width_px": 640.0, "height_px": 480.0, "focal_px": 554.2562584220408, "baseline_m": 0.6}
@@ -68,11 +82,14 @@ def main():
     if "--ubf" in args:
         ubf = args[args.index("--ubf") + 1]
     cv2.setNumThreads(1)
-    f, cx, cy, baseline = camera(directory)
-    lines = open(os.path.join(directory, "frames.csv")).read().split("\n")[1:]
-    pairs = [l.split(",") for l in lines if l.strip()]
+    if os.path.exists(os.path.join(directory, "calib.txt")):
+        (f, cx, cy, baseline), pairs = kitti(directory)
+    else:
+        f, cx, cy, baseline = camera(directory)
+        lines = open(os.path.join(directory, "frames.csv")).read().split("\n")[1:]
+        pairs = [l.split(",")[1:] for l in lines if l.strip()]
     images = [(cv2.imread(os.path.join(directory, l), cv2.IMREAD_GRAYSCALE),
-               cv2.imread(os.path.join(directory, r), cv2.IMREAD_GRAYSCALE)) for _, l, r in pairs]
+               cv2.imread(os.path.join(directory, r), cv2.IMREAD_GRAYSCALE)) for l, r in pairs]
     orb = cv2.ORB_create(nfeatures=1000, fastThreshold=20)
     matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
     times, counts, previous = [], [], None
