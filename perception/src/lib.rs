@@ -22,6 +22,7 @@ pub mod error_model;
 pub mod features;
 pub mod fusion;
 pub mod kitti;
+pub mod rectify;
 pub mod source;
 pub mod stereo;
 #[cfg(feature = "v4l")]
