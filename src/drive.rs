@@ -63,15 +63,36 @@ pub enum CameraSourceChoice {
 
 /// Opens the source a configuration names; `true` if it is a recording to
 /// be replayed at its own pace.
-fn open_source(
-    source: &CameraSourceChoice,
-    stereo: &StereoCamera,
-) -> Result<(Box<dyn CameraSource + Send>, bool), String> {
-    match source {
+fn open_source(camera: &DriveCamera) -> Result<(Box<dyn CameraSource + Send>, bool), String> {
+    let (raw, paced): (Box<dyn CameraSource + Send>, bool) = match &camera.source {
         CameraSourceChoice::Directory(dir) => {
-            Ok((Box::new(ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?), true))
+            (Box::new(ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?), true)
         }
-        CameraSourceChoice::V4l { left, right } => open_v4l(left, right, stereo).map(|s| (s, false)),
+        CameraSourceChoice::V4l { left, right } => (open_v4l(left, right, &camera.stereo)?, false),
+    };
+    match &camera.rectify {
+        None => Ok((raw, paced)),
+        Some(files) => {
+            let rectifier = files.load()?;
+            Ok((Box::new(ubf_perception::rectify::Rectified::new(raw, rectifier)), paced))
+        }
+    }
+}
+
+/// A calibrated, unrectified pair's ROS `camera_info` files, relative to
+/// the configuration file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectifyFiles {
+    /// The left camera's.
+    pub left: String,
+    /// The right camera's.
+    pub right: String,
+}
+
+impl RectifyFiles {
+    fn load(&self) -> Result<ubf_perception::rectify::Rectifier, String> {
+        ubf_perception::rectify::load_pair(Path::new(&self.left), Path::new(&self.right))
     }
 }
 
@@ -107,6 +128,11 @@ pub struct DriveCamera {
     /// The feature pipeline's settings.
     #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub features: FeatureConfig,
+    /// The pair is calibrated but not rectified: rectify each pair by these
+    /// `camera_info` files, whose projections then give the calibration
+    /// (`stereo` keeps only its `mount`).
+    #[serde(default)]
+    pub rectify: Option<RectifyFiles>,
 }
 
 /// A robot configuration file: `RobotConfig(...)`.
@@ -192,7 +218,7 @@ impl DriveConfig {
     /// camera that fails never leaves the motors on.
     fn open_camera(&self) -> Result<Option<OpenCamera>, String> {
         let Some(camera) = &self.camera else { return Ok(None) };
-        let (source, paced) = open_source(&camera.source, &camera.stereo).map_err(|e| format!("camera: {e}"))?;
+        let (source, paced) = open_source(camera).map_err(|e| format!("camera: {e}"))?;
         Ok(Some(OpenCamera { source, paced }))
     }
 
@@ -247,8 +273,16 @@ impl DriveConfig {
         if config.egomotion.is_some() && config.camera.is_none() {
             return Err(format!("{}: egomotion needs a camera: add `camera: (...)`", path.display()));
         }
-        if let Some(DriveCamera { source: CameraSourceChoice::Directory(dir), .. }) = &mut config.camera {
-            *dir = path.parent().unwrap_or(Path::new(".")).join(&*dir).to_string_lossy().into_owned();
+        let beside = |file: &str| path.parent().unwrap_or(Path::new(".")).join(file).to_string_lossy().into_owned();
+        if let Some(camera) = &mut config.camera {
+            if let CameraSourceChoice::Directory(dir) = &mut camera.source {
+                *dir = beside(dir);
+            }
+            if let Some(files) = &mut camera.rectify {
+                (files.left, files.right) = (beside(&files.left), beside(&files.right));
+                let rectified = files.load().map_err(|e| format!("{}: camera.rectify: {e}", path.display()))?;
+                camera.stereo = StereoCamera { mount: camera.stereo.mount, ..rectified.camera() };
+            }
         }
         let model = match &config.model {
             ModelChoice::Powerbot => RobotModel::powerbot(),

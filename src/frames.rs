@@ -13,6 +13,7 @@ use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::kitti::{self, Accuracy};
+use ubf_perception::rectify::Rectified;
 use ubf_perception::source::{CameraSource, ImageDirectory, ImageDirectoryWriter, StereoPair};
 use ubf_perception::StereoCamera;
 use ubf_robots::sim::render::RenderConfig;
@@ -20,6 +21,12 @@ use ubf_robots::sim::SimRobot;
 
 /// The file beside `frames.csv` that holds the pair's calibration.
 pub const CAMERA_FILE: &str = "camera.ron";
+
+/// Instead of [`CAMERA_FILE`], a recording of raw (unrectified) pairs holds
+/// the two cameras' ROS `camera_info` files, and is rectified on replay.
+pub const RAW_LEFT_INFO: &str = "left.yaml";
+/// The right camera's `camera_info`; see [`RAW_LEFT_INFO`].
+pub const RAW_RIGHT_INFO: &str = "right.yaml";
 
 /// Runs `scenario` with rendered images (turned on if the camera uses the
 /// geometric model) and writes every pair into `dir`, with the camera's
@@ -138,14 +145,33 @@ pub struct Replay {
 pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
     let (layout, camera, mut source, truth, limits) = if kitti::is_sequence(dir) {
         let sequence = kitti::open(dir, options.poses.as_deref()).map_err(|e| e.to_string())?;
-        ("kitti", sequence.camera, sequence.pairs, sequence.truth, ROAD_VEHICLE_LIMITS)
+        (
+            "kitti",
+            sequence.camera,
+            Box::new(sequence.pairs) as Box<dyn CameraSource>,
+            sequence.truth,
+            ROAD_VEHICLE_LIMITS,
+        )
     } else {
         if let Some(poses) = &options.poses {
             return Err(format!("--poses {}: ground truth is read for KITTI sequences only", poses.display()));
         }
         let defaults = EgomotionConfig::default();
-        let camera = load_camera(dir)?;
-        let source = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+        let raw = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+        let (left, right) = (dir.join(RAW_LEFT_INFO), dir.join(RAW_RIGHT_INFO));
+        let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if left.exists() || right.exists() {
+            if dir.join(CAMERA_FILE).exists() {
+                return Err(format!(
+                    "{}: holds both {CAMERA_FILE} (rectified images) and {RAW_LEFT_INFO}/{RAW_RIGHT_INFO} (raw \
+                     images to rectify); keep the one that describes its images",
+                    dir.display()
+                ));
+            }
+            let rectifier = ubf_perception::rectify::load_pair(&left, &right)?;
+            (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
+        } else {
+            (load_camera(dir)?, Box::new(raw))
+        };
         ("recording", camera, source, None, (defaults.max_speed, defaults.max_turn_rate_deg))
     };
     let limits = [options.max_speed.unwrap_or(limits.0), options.max_turn_rate_deg.unwrap_or(limits.1)];

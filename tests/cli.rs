@@ -490,3 +490,51 @@ fn a_broken_kitti_calibration_is_named_with_its_line() {
     assert_eq!(result.status.code(), Some(2));
     assert!(text(&result.stderr).contains("1 poses for 51 frames"), "{}", text(&result.stderr));
 }
+
+/// A `camera_info` file for a camera that needs no rectification: the
+/// rendered camera's intrinsics (its principal point the image centre, at
+/// 319.5, 239.5 where pixel centres are integers), no distortion, `R` the
+/// identity, and the camera `shift` metres right of the left one.
+fn identity_camera_info(focal: f64, shift: f64) -> String {
+    let k = format!("[{focal}, 0, 319.5, 0, {focal}, 239.5, 0, 0, 1]");
+    let p = format!("[{focal}, 0, 319.5, {}, 0, {focal}, 239.5, 0, 0, 0, 1, 0]", -focal * shift);
+    format!(
+        "image_width: 640\nimage_height: 480\ncamera_name: c\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: {k}\n\
+         distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n\
+         rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
+         projection_matrix:\n  rows: 3\n  cols: 4\n  data: {p}\n"
+    )
+}
+
+#[test]
+fn a_raw_recording_with_camera_info_files_is_rectified_on_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    let scenario = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
+    let recorded = ubf(&["frames", scenario.to_str().unwrap(), "--out", frames.to_str().unwrap(), "--max-frames", "6"]);
+    assert!(recorded.status.success(), "{}", text(&recorded.stderr));
+    let replay = |dir: &std::path::Path| {
+        let result = ubf(&["pipeline", dir.to_str().unwrap(), "--json"]);
+        assert!(result.status.success(), "{}", text(&result.stderr));
+        let report: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+        (report["landmarks_mean"].clone(), report["final_pose"].clone())
+    };
+    let rectified = replay(&frames);
+    // The same images as "raw" ones with an identity rectification give the
+    // same landmarks and the same path.
+    let camera: String = std::fs::read_to_string(frames.join("camera.ron")).unwrap();
+    let number = |key: &str| -> f64 {
+        let line = camera.lines().find(|l| l.trim_start().starts_with(key)).unwrap();
+        line.split(':').nth(1).unwrap().trim().trim_end_matches(',').parse().unwrap()
+    };
+    std::fs::remove_file(frames.join("camera.ron")).unwrap();
+    let (focal, baseline) = (number("focal_px"), number("baseline_m"));
+    std::fs::write(frames.join("left.yaml"), identity_camera_info(focal, 0.0)).unwrap();
+    std::fs::write(frames.join("right.yaml"), identity_camera_info(focal, baseline)).unwrap();
+    assert_eq!(replay(&frames), rectified);
+    // Both kinds of calibration in one directory: refused, not guessed.
+    std::fs::write(frames.join("camera.ron"), camera).unwrap();
+    let both = ubf(&["pipeline", frames.to_str().unwrap()]);
+    assert_eq!(both.status.code(), Some(2));
+    assert!(text(&both.stderr).contains("keep the one that describes its images"), "{}", text(&both.stderr));
+}

@@ -74,7 +74,8 @@ fn blocks(page: &Path) -> Vec<Block> {
     let mut blocks = Vec::new();
     let mut open: Option<Block> = None;
     for (i, line) in text.lines().enumerate() {
-        match (line.strip_prefix("```"), open.take()) {
+        // Fences may be indented, inside a list item.
+        match (line.trim_start().strip_prefix("```"), open.take()) {
             (Some(_), Some(block)) => blocks.push(block),
             (Some(info), None) => {
                 open = Some(Block {

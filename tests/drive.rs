@@ -495,3 +495,32 @@ fn live_state_is_shown_when_asked_and_quiet_when_piped() {
     assert!(!piped.contains("winner"), "{piped}");
     emulator.kill().unwrap();
 }
+
+#[test]
+fn a_camera_to_rectify_takes_its_calibration_from_the_camera_info_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("perception/tests/data");
+    for name in ["left.yaml", "right.yaml"] {
+        std::fs::copy(data.join(name), dir.path().join(name)).unwrap();
+    }
+    let file = dir.path().join("robot.ron");
+    let write = |rectify: &str| {
+        std::fs::write(
+            &file,
+            format!(
+                r#"RobotConfig(name: "r", connection: "tcp://127.0.0.1:1", model: Powerbot, root: Stop(),
+                    camera: (source: Directory("frames"), stereo: (mount: (height: 1.3)), rectify: {rectify}))"#
+            ),
+        )
+        .unwrap();
+    };
+    write(r#"(left: "left.yaml", right: "right.yaml")"#);
+    let (config, _) = ubf::drive::DriveConfig::load(&ubf::registry(), &file).unwrap();
+    let stereo = config.camera.unwrap().stereo;
+    assert_eq!((stereo.width_px, stereo.height_px), (1280, 720));
+    assert!((stereo.focal_px - 906.3).abs() < 1e-9 && (stereo.baseline_m - 0.12).abs() < 1e-3);
+    assert_eq!(stereo.mount.height, 1.3, "the mount is the file's own");
+    write(r#"(left: "right.yaml", right: "left.yaml")"#);
+    let err = ubf::drive::DriveConfig::load(&ubf::registry(), &file).unwrap_err();
+    assert!(err.contains("robot.ron: camera.rectify:") && err.contains("to the right"), "{err}");
+}

@@ -243,3 +243,29 @@ impl Rectifier {
         StereoPair { time: raw.time, left: self.left.apply(&raw.left), right: self.right.apply(&raw.right) }
     }
 }
+
+/// A source of raw pairs, rectified as they come.
+pub struct Rectified<S> {
+    source: S,
+    rectifier: Rectifier,
+}
+
+impl<S> Rectified<S> {
+    /// `source`'s pairs through `rectifier`.
+    pub fn new(source: S, rectifier: Rectifier) -> Self {
+        Rectified { source, rectifier }
+    }
+}
+
+impl<S: crate::source::CameraSource> crate::source::CameraSource for Rectified<S> {
+    fn next_pair(&mut self) -> Result<Option<StereoPair>, crate::source::SourceError> {
+        Ok(self.source.next_pair()?.map(|raw| self.rectifier.rectify(&raw)))
+    }
+}
+
+/// The rectifier for the pair whose `camera_info` files are `left` and
+/// `right`.
+pub fn load_pair(left: &Path, right: &Path) -> Result<Rectifier, String> {
+    Rectifier::new(&CameraInfo::load(left)?, &CameraInfo::load(right)?)
+        .map_err(|e| format!("{} and {}: {e}", left.display(), right.display()))
+}

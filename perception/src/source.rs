@@ -77,6 +77,12 @@ pub trait CameraSource {
     fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError>;
 }
 
+impl<S: CameraSource + ?Sized> CameraSource for Box<S> {
+    fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError> {
+        (**self).next_pair()
+    }
+}
+
 /// One pair listed in a directory's index: its time and where its two
 /// image names lie in [`ImageDirectory::names`].
 #[derive(Clone, Copy, Debug, PartialEq)]
