@@ -7,7 +7,7 @@ use std::path::Path;
 use ubf_perception::rectify::{CameraInfo, Rectifier};
 
 /// (camera, rectified u, v, OpenCV's raw x, y).
-const OPENCV: &[(&str, u32, u32, f32, f32)] = &[
+const OPENCV: &[(&str, u32, u32, f64, f64)] = &[
     ("left", 0, 0, 94.6614, 73.6903),
     ("left", 160, 0, 207.3454, 55.1292),
     ("left", 320, 0, 337.0241, 39.0692),
@@ -146,11 +146,11 @@ fn load(name: &str) -> CameraInfo {
 fn remap_tables_agree_with_opencv_within_a_tenth_of_a_pixel() {
     let rectifier = Rectifier::new(&load("left"), &load("right")).unwrap();
     let (left, right) = rectifier.tables();
-    let mut worst = 0.0f32;
+    let mut worst = 0.0f64;
     for &(camera, u, v, x, y) in OPENCV {
         let table = if camera == "left" { left } else { right };
         let [ours_x, ours_y] = table.source_of(u, v).unwrap();
-        worst = worst.max((ours_x - x).abs()).max((ours_y - y).abs());
+        worst = worst.max((f64::from(ours_x) - x).abs()).max((f64::from(ours_y) - y).abs());
     }
     eprintln!("worst disagreement with OpenCV: {worst} px");
     assert!(worst < 0.1, "worst disagreement {worst} px");
