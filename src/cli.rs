@@ -147,6 +147,11 @@ enum Command {
         /// Draw the estimated path (over the true one, if known) here (PNG).
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
+        /// Write every landmark of every pair here (CSV: pair, pixels with
+        /// the first pixel's centre at (0, 0), disparity, camera-frame
+        /// point).
+        #[arg(long, value_name = "FILE.csv")]
+        landmarks: Option<PathBuf>,
     },
     /// Drive a real robot (or an emulator) with a behaviour tree; Ctrl-C or
     /// SIGTERM stops it safely.
@@ -423,12 +428,13 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Frames { file, out, seed, max_frames, huge } => {
             frames_command(&registry, &file, &out, seed, max_frames, huge)
         }
-        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, plot } => {
+        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, plot, landmarks } => {
             let options = crate::frames::ReplayOptions {
                 features: ubf_perception::features::FeatureConfig::default(),
                 max_speed,
                 max_turn_rate_deg: max_turn_rate,
                 poses,
+                landmarks,
             };
             pipeline_command(&dir, &options, json, plot.as_deref())
         }

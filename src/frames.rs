@@ -7,6 +7,7 @@
 
 use crate::scenario::Scenario;
 use serde::Serialize;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame};
@@ -121,7 +122,14 @@ pub struct ReplayOptions {
     pub max_turn_rate_deg: Option<f64>,
     /// Ground-truth poses for a KITTI sequence (default: its `poses.txt`).
     pub poses: Option<PathBuf>,
+    /// Write every landmark of every pair here (CSV): pair, pixels (the
+    /// first pixel's centre at (0, 0), as calibration tools count),
+    /// disparity, and the point in the camera frame.
+    pub landmarks: Option<PathBuf>,
 }
+
+/// The header of the landmarks CSV that `ubf pipeline --landmarks` writes.
+pub const LANDMARKS_HEADER: &str = "pair,u_left_px,u_right_px,v_px,disparity_px,x_m,y_m,z_m";
 
 /// A KITTI sequence's egomotion limits, for a car on public roads: 40 m/s
 /// (144 km/h) and 90 °/s.
@@ -187,6 +195,15 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
     let (mut pipeline_ms, mut egomotion_ms, mut total_ms) = (Vec::new(), Vec::new(), Vec::new());
     let mut estimate = Vec::new();
     let mut landmarks = 0usize;
+    let mut landmark_log = match &options.landmarks {
+        None => None,
+        Some(path) => {
+            let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let mut log = std::io::BufWriter::new(file);
+            writeln!(log, "{LANDMARKS_HEADER}").map_err(|e| format!("{}: {e}", path.display()))?;
+            Some((log, path))
+        }
+    };
     let mut number = 0;
     while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
         number += 1;
@@ -196,6 +213,20 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         })?;
         let processed = Instant::now();
         landmarks += observed.len();
+        if let Some((log, path)) = &mut landmark_log {
+            for l in &observed {
+                let (p, [x, y, z]) = (&l.pixels, l.point_cam);
+                writeln!(
+                    log,
+                    "{number},{:.4},{:.4},{:.4},{:.4},{x:.4},{y:.4},{z:.4}",
+                    p.u_left - 0.5,
+                    p.u_right - 0.5,
+                    p.v - 0.5,
+                    p.disparity()
+                )
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            }
+        }
         let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };
         let odometry = tracker.state().pose.unwrap_or_default();
         tracker.update(&frame, &odometry);
@@ -207,6 +238,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
     }
     if number == 0 {
         return Err(format!("{}: no pairs listed", index.display()));
+    }
+    if let Some((log, path)) = &mut landmark_log {
+        log.flush().map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let pose = tracker.state().pose.unwrap_or_default();
     let total = median(&mut total_ms);

@@ -520,6 +520,13 @@ fn a_raw_recording_with_camera_info_files_is_rectified_on_replay() {
         (report["landmarks_mean"].clone(), report["final_pose"].clone())
     };
     let rectified = replay(&frames);
+    let listed = dir.path().join("landmarks.csv");
+    let result = ubf(&["pipeline", frames.to_str().unwrap(), "--landmarks", listed.to_str().unwrap()]);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    let rows = std::fs::read_to_string(&listed).unwrap();
+    assert_eq!(rows.lines().next(), Some(ubf::frames::LANDMARKS_HEADER));
+    let mean = rectified.0.as_f64().unwrap();
+    assert_eq!(rows.lines().count() - 1, (mean * 6.0).round() as usize, "one row per landmark of 6 pairs");
     // The same images as "raw" ones with an identity rectification give the
     // same landmarks and the same path.
     let camera: String = std::fs::read_to_string(frames.join("camera.ron")).unwrap();
