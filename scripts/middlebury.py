@@ -20,9 +20,10 @@ import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-VENV = os.path.join(ROOT, ".venv-skimage")
-PY = os.path.join(VENV, "bin", "python")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import script_env  # noqa: E402  (scripts/script_env.py)
+
+ROOT = script_env.ROOT
 
 # Middlebury 2014 Motorcycle (perfect rectification), calib.txt, divided by 4.
 CAMERA = """(
@@ -37,17 +38,7 @@ CAMERA = """(
 
 
 def ensure_skimage():
-    try:
-        import skimage  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.path.abspath(sys.executable) == os.path.abspath(PY):
-        sys.exit("scikit-image is not importable in " + VENV)
-    if not os.path.exists(PY):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-        subprocess.check_call([PY, "-m", "pip", "install", "--quiet", "scikit-image"])
-    os.execv(PY, [PY] + sys.argv)
+    script_env.ensure(".venv-skimage", ["scikit-image"], ["skimage"])
 
 
 def main():

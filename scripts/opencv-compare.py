@@ -24,24 +24,14 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-VENV = os.path.join(ROOT, ".venv-opencv")
-PY = os.path.join(VENV, "bin", "python")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import script_env  # noqa: E402  (scripts/script_env.py)
+
+ROOT = script_env.ROOT
 
 
 def ensure_opencv():
-    try:
-        import cv2  # noqa: F401
-        import numpy  # noqa: F401
-        return
-    except ImportError:
-        pass
-    if os.path.abspath(sys.executable) == os.path.abspath(PY):
-        sys.exit("opencv-python-headless is not importable in " + VENV)
-    if not os.path.exists(PY):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-        subprocess.check_call([PY, "-m", "pip", "install", "--quiet", "opencv-python-headless", "numpy"])
-    os.execv(PY, [PY] + sys.argv)
+    script_env.ensure(".venv-opencv", ["opencv-python-headless", "numpy"], ["cv2", "numpy"])
 
 
 def kitti(directory):
