@@ -102,6 +102,17 @@ enum Command {
     },
     /// List the behaviours this build can read from scenario files.
     Behaviors,
+    /// Print a scenario's (or robot file's) behaviour tree as Graphviz DOT
+    /// (`| dot -Tpng > tree.png`), or as Mermaid for Markdown pages: each
+    /// composite with its arbiter and vote override, each child with its
+    /// share of the vote.
+    Tree {
+        /// The scenario or robot file (RON).
+        file: PathBuf,
+        /// Mermaid instead of DOT.
+        #[arg(long)]
+        mermaid: bool,
+    },
     /// Run a scenario with rendered stereo images and write every pair into
     /// a directory (with `frames.csv` and `camera.ron`), for replay.
     Frames {
@@ -438,6 +449,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             };
             pipeline_command(&dir, &options, json, plot.as_deref())
         }
+        Command::Tree { file, mermaid } => tree_command(&registry, &file, mermaid),
         Command::Behaviors => {
             for name in registry.names() {
                 println!("{name}");
@@ -1236,6 +1248,23 @@ fn sweep_command(
             ExitCode::from(EXIT_FAILURE)
         }
     }
+}
+
+fn tree_command(registry: &Registry, file: &std::path::Path, mermaid: bool) -> ExitCode {
+    let spec = if is_robot_file(file) {
+        crate::drive::DriveConfig::load(registry, file).map(|(config, _)| config.root)
+    } else {
+        Scenario::load(registry, file).map(|s| s.root).map_err(|e| e.to_string())
+    };
+    let root = match spec {
+        Ok(spec) => spec.build(&ubf_core::BuildContext::new(0)),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    print!("{}", if mermaid { crate::tree::mermaid(root.as_ref()) } else { crate::tree::dot(root.as_ref()) });
+    ExitCode::SUCCESS
 }
 
 fn check_command(registry: &Registry, files: &[PathBuf]) -> ExitCode {

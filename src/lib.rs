@@ -26,6 +26,7 @@ pub mod run;
 pub mod scenario;
 pub mod sweep;
 pub mod trajectory;
+pub mod tree;
 
 pub use ubf_core::Registry;
 

@@ -545,3 +545,27 @@ fn a_raw_recording_with_camera_info_files_is_rectified_on_replay() {
     assert_eq!(both.status.code(), Some(2));
     assert!(text(&both.stderr).contains("keep the one that describes its images"), "{}", text(&both.stderr));
 }
+
+#[test]
+fn the_tree_is_drawn_with_its_arbiters_weights_and_votes() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = scenario_file(
+        &dir,
+        r#"Scenario(name: "t", max_time_s: 1.0, root: Composite(arbiter: HighestPriority, children: [
+            (behavior: Stop(), weight: 3.0),
+            (behavior: Composite(arbiter: CommandFusion, vote: 0.5, children: [
+                (behavior: AvoidCollision()), (behavior: GoTo())])),
+        ]))"#,
+    );
+    let dot = ubf(&["tree", file.to_str().unwrap()]);
+    assert!(dot.status.success(), "{}", text(&dot.stderr));
+    let dot = text(&dot.stdout);
+    assert!(dot.starts_with("digraph tree {") && dot.trim_end().ends_with('}'), "{dot}");
+    assert_eq!(dot.matches(" -> ").count(), 4, "five nodes, four edges: {dot}");
+    assert!(dot.contains("HighestPriority") && dot.contains("CommandFusion\\nvote 0.5"), "{dot}");
+    assert!(dot.contains("[label=\"0.75\"]") && dot.contains("[label=\"0.50\"]"), "weights 3:1 and 1:1: {dot}");
+    let mermaid = text(&ubf(&["tree", file.to_str().unwrap(), "--mermaid"]).stdout);
+    assert!(mermaid.starts_with("flowchart TD") && mermaid.matches(" --> ").count() == 4, "{mermaid}");
+    let missing = ubf(&["tree", "no-such.ron"]);
+    assert_eq!(missing.status.code(), Some(2));
+}

@@ -97,6 +97,17 @@ impl Composite {
         self.children.iter().map(|c| (c.name.as_str(), c.behavior.as_ref()))
     }
 
+    /// The arbiter's name.
+    pub fn arbiter_name(&self) -> &str {
+        self.arbiter.name()
+    }
+
+    /// The vote this composite bids to its parent instead of its winner's,
+    /// if one is set.
+    pub fn vote_override(&self) -> Option<f64> {
+        self.vote
+    }
+
     /// Each child's action and normalised weight from the latest tick.
     pub fn last_bids(&self) -> &[Bid] {
         &self.bids

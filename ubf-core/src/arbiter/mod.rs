@@ -87,6 +87,12 @@ pub trait Arbiter: Send {
 
     /// Forgets any memory (a held choice, a generator's position is kept).
     fn reset(&mut self) {}
+
+    /// A name for pictures of the tree: by default the type's own name.
+    fn name(&self) -> &str {
+        let full = std::any::type_name::<Self>();
+        full.rsplit("::").next().unwrap_or(full)
+    }
 }
 
 /// The first voting child with the largest key (ties go to the earlier child).
