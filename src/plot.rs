@@ -206,10 +206,11 @@ pub fn draw_error_model(
     register_font();
     let half_fov = camera.horizontal_fov() / 2.0;
     let x_max = max_depth * half_fov.tan();
-    let root = BitMapBackend::new(path, (900, 900)).into_drawing_area();
+    let root = BitMapBackend::new(path, (1000, 900)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
+    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
+    let (map_area, bar_area) = root.split_horizontally(890);
+    let mut chart = ChartBuilder::on(&map_area)
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(50)
@@ -263,8 +264,32 @@ pub fn draw_error_model(
         let apex = (0.0, camera.baseline_m / 2.0 / half_fov.tan());
         chart.draw_series([PathElement::new(vec![apex, top], edge)]).map_err(|e| fail(&e))?;
     }
-    let caption = format!("log10 CV from {lo:.2} (blue) to {hi:.2} (red)");
-    root.draw(&Text::new(caption, (70, 870), ("sans-serif", 16))).map_err(|e| fail(&e))?;
+    // The colour bar: what each colour means, on the same log scale.
+    let (lo_bar, hi_bar) = if hi > lo { (lo, hi) } else { (lo - 0.5, lo + 0.5) };
+    let mut bar = ChartBuilder::on(&bar_area)
+        .margin_top(12)
+        .margin_bottom(48)
+        .margin_right(14)
+        .y_label_area_size(62)
+        .build_cartesian_2d(0.0..1.0, lo_bar..hi_bar)
+        .map_err(|e| fail(&e))?;
+    bar.configure_mesh()
+        .disable_x_mesh()
+        .disable_x_axis()
+        .disable_y_mesh()
+        .y_desc("log10 CV")
+        .y_label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 15))
+        .y_label_formatter(&|v| format!("{v:.1}"))
+        .draw()
+        .map_err(|e| fail(&e))?;
+    let steps = 100;
+    let step = (hi_bar - lo_bar) / f64::from(steps);
+    bar.draw_series((0..steps).map(|i| {
+        let v = lo_bar + step * f64::from(i);
+        Rectangle::new([(0.0, v), (1.0, v + step)], colour(v + step / 2.0).filled())
+    }))
+    .map_err(|e| fail(&e))?;
     root.present().map_err(|e| fail(&e))?;
     Ok(())
 }

@@ -569,3 +569,17 @@ fn the_tree_is_drawn_with_its_arbiters_weights_and_votes() {
     let missing = ubf(&["tree", "no-such.ron"]);
     assert_eq!(missing.status.code(), Some(2));
 }
+
+#[test]
+fn the_error_model_heat_map_is_drawn_with_its_colour_bar() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("model.png");
+    let result = ubf(&["model", "heatmap", "--out", png.to_str().unwrap()]);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    let image = image::open(&png).unwrap().into_rgb8();
+    assert_eq!(image.dimensions(), (1000, 900));
+    // The bar, right of the map: red at its top, blue at its bottom.
+    let (top, bottom) = (image.get_pixel(965, 60), image.get_pixel(965, 840));
+    assert!(top[0] > 200 && top[2] < 100, "top of the bar {top:?}");
+    assert!(bottom[2] > 200 && bottom[0] < 100, "bottom of the bar {bottom:?}");
+}
