@@ -155,6 +155,10 @@ enum Command {
         /// recording, 90 for KITTI).
         #[arg(long, value_name = "DEG/S", value_parser = parse_limit)]
         max_turn_rate: Option<f64>,
+        /// How far from a keyframe a frame may still be matched to it, m
+        /// (default 10); near 1 m the matching is almost frame to frame.
+        #[arg(long, value_name = "M", value_parser = parse_limit)]
+        keyframe_range: Option<f64>,
         /// Draw the estimated path (over the true one, if known) here (PNG).
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
@@ -439,12 +443,13 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Frames { file, out, seed, max_frames, huge } => {
             frames_command(&registry, &file, &out, seed, max_frames, huge)
         }
-        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, plot, landmarks } => {
+        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, keyframe_range, plot, landmarks } => {
             let options = crate::frames::ReplayOptions {
                 features: ubf_perception::features::FeatureConfig::default(),
                 max_speed,
                 max_turn_rate_deg: max_turn_rate,
                 poses,
+                keyframe_range_m: keyframe_range,
                 landmarks,
             };
             pipeline_command(&dir, &options, json, plot.as_deref())
@@ -833,11 +838,7 @@ fn experiment_command(registry: &Registry, which: ExperimentCommand) -> ExitCode
                 eprintln!("error: need 1 to 20000 seeds in each set");
                 return ExitCode::from(EXIT_BAD_INPUT);
             }
-            let bar = indicatif::ProgressBar::new(24);
-            bar.set_style(
-                indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} environments, {elapsed} ({eta} left)")
-                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-            );
+            let bar = crate::sweep::progress_bar(24, "environments");
             let progress = |done: usize, total: usize| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);

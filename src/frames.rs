@@ -71,19 +71,14 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
 /// compresses rendered noise little.
 pub fn recording_bytes(scenario: &Scenario, max_frames: usize) -> u64 {
     let work = scenario.work();
-    let pairs = match &scenario.robot.camera {
-        Some(camera) => ((scenario.max_time_s * camera.rate_hz).ceil() as u64 + 1).min(max_frames as u64),
-        None => 0,
-    };
-    pairs.saturating_mul(work.pair_bytes)
+    work.camera_pairs.min(max_frames as u64).saturating_mul(work.pair_bytes)
 }
 
 /// What replaying a directory measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct PipelineReport {
-    /// What the directory held: `recording` (`frames.csv`, as `ubf frames`
-    /// writes) or `kitti` (a KITTI odometry sequence).
-    pub layout: &'static str,
+    /// What the directory held.
+    pub layout: Layout,
     /// Pairs processed.
     pub frames: usize,
     /// Landmarks triangulated per pair, mean.
@@ -109,6 +104,44 @@ pub struct PipelineReport {
     pub accuracy: Option<Accuracy>,
 }
 
+/// The layouts of a directory of stereo pairs that `ubf pipeline` reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Layout {
+    /// `frames.csv` and `camera.ron` (or two `camera_info` files), as `ubf
+    /// frames` writes.
+    Recording,
+    /// A KITTI odometry sequence.
+    Kitti,
+}
+
+impl Layout {
+    /// The file that lists the pairs.
+    fn index(self) -> &'static str {
+        match self {
+            Layout::Recording => "frames.csv",
+            Layout::Kitti => "times.txt",
+        }
+    }
+
+    /// The file the calibration comes from.
+    fn calibration(self) -> &'static str {
+        match self {
+            Layout::Recording => CAMERA_FILE,
+            Layout::Kitti => "calib.txt",
+        }
+    }
+}
+
+impl std::fmt::Display for Layout {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Layout::Recording => "recording",
+            Layout::Kitti => "kitti",
+        })
+    }
+}
+
 /// How to replay a directory.
 #[derive(Clone, Debug, Default)]
 pub struct ReplayOptions {
@@ -122,6 +155,9 @@ pub struct ReplayOptions {
     pub max_turn_rate_deg: Option<f64>,
     /// Ground-truth poses for a KITTI sequence (default: its `poses.txt`).
     pub poses: Option<PathBuf>,
+    /// How far from a keyframe a frame may be matched to it, m (default:
+    /// the tracker's 10).
+    pub keyframe_range_m: Option<f64>,
     /// Write every landmark of every pair here (CSV): pair, pixels (the
     /// first pixel's centre at (0, 0), as calibration tools count),
     /// disparity, and the point in the camera frame.
@@ -151,14 +187,16 @@ pub struct Replay {
 /// this thread. There is no odometry on replay, so the odometry gate is off
 /// and an outage is bridged by standing still.
 pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
-    let (layout, camera, mut source, truth, limits) = if kitti::is_sequence(dir) {
+    let (layout, camera, mut source, truth, limits, pairs) = if kitti::is_sequence(dir) {
         let sequence = kitti::open(dir, options.poses.as_deref()).map_err(|e| e.to_string())?;
+        let pairs = sequence.pairs.len();
         (
-            "kitti",
+            Layout::Kitti,
             sequence.camera,
             Box::new(sequence.pairs) as Box<dyn CameraSource>,
             sequence.truth,
             ROAD_VEHICLE_LIMITS,
+            pairs,
         )
     } else {
         if let Some(poses) = &options.poses {
@@ -166,6 +204,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         }
         let defaults = EgomotionConfig::default();
         let raw = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+        let pairs = raw.len();
         let (left, right) = (dir.join(RAW_LEFT_INFO), dir.join(RAW_RIGHT_INFO));
         let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if left.exists() || right.exists() {
             if dir.join(CAMERA_FILE).exists() {
@@ -180,21 +219,23 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         } else {
             (load_camera(dir)?, Box::new(raw))
         };
-        ("recording", camera, source, None, (defaults.max_speed, defaults.max_turn_rate_deg))
+        (Layout::Recording, camera, source, None, (defaults.max_speed, defaults.max_turn_rate_deg), pairs)
     };
     let limits = [options.max_speed.unwrap_or(limits.0), options.max_turn_rate_deg.unwrap_or(limits.1)];
     let config = EgomotionConfig {
         max_speed: limits[0],
         max_turn_rate_deg: limits[1],
         odometry_gate: None,
+        keyframe_range_m: options.keyframe_range_m.unwrap_or(EgomotionConfig::default().keyframe_range_m),
         ..EgomotionConfig::default()
     };
-    let index = if layout == "kitti" { dir.join("times.txt") } else { dir.join("frames.csv") };
+    let index = dir.join(layout.index());
     let pipeline = StereoPipeline::new(camera, options.features);
     let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
     let (mut pipeline_ms, mut egomotion_ms, mut total_ms) = (Vec::new(), Vec::new(), Vec::new());
     let mut estimate = Vec::new();
     let mut landmarks = 0usize;
+    let progress = crate::sweep::progress_bar(pairs as u64, "pairs");
     let mut landmark_log = match &options.landmarks {
         None => None,
         Some(path) => {
@@ -209,7 +250,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         number += 1;
         let started = Instant::now();
         let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| {
-            format!("{}: pair {number}: {e} (in {})", index.display(), calibration_file(dir, layout).display())
+            format!("{}: pair {number}: {e} (in {})", index.display(), dir.join(layout.calibration()).display())
         })?;
         let processed = Instant::now();
         landmarks += observed.len();
@@ -235,7 +276,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         pipeline_ms.push((processed - started).as_secs_f64() * 1e3);
         egomotion_ms.push((done - processed).as_secs_f64() * 1e3);
         total_ms.push((done - started).as_secs_f64() * 1e3);
+        progress.inc(1);
     }
+    progress.finish_and_clear();
     if number == 0 {
         return Err(format!("{}: no pairs listed", index.display()));
     }
@@ -243,13 +286,13 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         log.flush().map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let pose = tracker.state().pose.unwrap_or_default();
-    let total = median(&mut total_ms);
+    let total = ubf_perception::median(&mut total_ms);
     let report = PipelineReport {
         layout,
         frames: number as usize,
         landmarks_mean: landmarks as f64 / number as f64,
-        pipeline_ms_median: median(&mut pipeline_ms),
-        egomotion_ms_median: median(&mut egomotion_ms),
+        pipeline_ms_median: ubf_perception::median(&mut pipeline_ms),
+        egomotion_ms_median: ubf_perception::median(&mut egomotion_ms),
         total_ms_median: total,
         frames_per_s: 1e3 / total,
         failures: tracker.state().failures,
@@ -273,14 +316,4 @@ pub fn load_camera(dir: &Path) -> Result<StereoCamera, String> {
         .and_then(|text| ubf_core::config::from_ron::<ubf_core::config::Checked<StereoCamera>>(&text))
         .map(|checked| checked.0)
         .map_err(|e| format!("{}:{e}", path.display()))
-}
-
-fn median(values: &mut [f64]) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
-/// The file a directory's calibration comes from.
-fn calibration_file(dir: &Path, layout: &str) -> PathBuf {
-    dir.join(if layout == "kitti" { "calib.txt" } else { CAMERA_FILE })
 }

@@ -100,17 +100,15 @@ impl Scenario {
     pub fn work(&self) -> Work {
         let ticks = self.max_ticks();
         let nodes = ubf_core::TreeLayout::of(self.root.build(&ubf_core::BuildContext::new(0)).as_ref()).nodes.len();
-        let rendered_pairs = match &self.robot.camera {
-            Some(camera) if camera.images.is_some() => (self.max_time_s * camera.rate_hz).ceil() as u64 + 1,
-            _ => 0,
-        };
-        let pair_pixels =
-            self.robot.camera.as_ref().map_or(0, |c| 2 * u64::from(c.stereo.width_px) * u64::from(c.stereo.height_px));
+        let camera = self.robot.camera.as_ref();
+        let camera_pairs = camera.map_or(0, |c| (self.max_time_s * c.rate_hz).ceil() as u64 + 1);
+        let renders = camera.is_some_and(|c| c.images.is_some());
         Work {
             ticks,
             trajectory_bytes: ticks.saturating_mul(24 * (16 + nodes as u64)),
-            rendered_pairs,
-            pair_bytes: pair_pixels,
+            camera_pairs,
+            rendered_pairs: if renders { camera_pairs } else { 0 },
+            pair_bytes: camera.map_or(0, |c| 2 * u64::from(c.stereo.width_px) * u64::from(c.stereo.height_px)),
         }
     }
 
@@ -176,7 +174,10 @@ pub struct Work {
     pub ticks: u64,
     /// Bytes of `trajectory.csv`, about.
     pub trajectory_bytes: u64,
-    /// Stereo pairs rendered, at most (0 when the camera renders none).
+    /// Stereo pairs the camera takes, at most (0 without a camera).
+    pub camera_pairs: u64,
+    /// Of those, the pairs rendered as images (0 when the camera renders
+    /// none).
     pub rendered_pairs: u64,
     /// Bytes (pixels) of one stereo pair, both images; 0 without a camera.
     pub pair_bytes: u64,

@@ -181,15 +181,20 @@ pub fn sweep(
     Ok(summary)
 }
 
+/// A progress bar on stderr for `len` items called `unit` ("runs",
+/// "pairs"); indicatif hides it when stderr is not a terminal.
+pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
+    let progress = ProgressBar::new(len);
+    let template = format!("{{bar:40}} {{pos}}/{{len}} {unit}  {{elapsed_precise}} elapsed, {{eta}} to go");
+    progress.set_style(ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar()));
+    progress
+}
+
 /// Runs `work` on every task on `jobs` threads, with a progress bar on
 /// stderr (hidden when stderr is not a terminal), and returns the results in
 /// the tasks' order whatever order they finished in.
 pub fn run_parallel<T: Sync, R: Send>(tasks: &[T], jobs: usize, work: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let progress = ProgressBar::new(tasks.len() as u64);
-    progress.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} runs  {elapsed_precise} elapsed, {eta} to go")
-            .expect("the template is valid"),
-    );
+    let progress = progress_bar(tasks.len() as u64, "runs");
     let next = AtomicUsize::new(0);
     let (sender, receiver) = crossbeam_channel::unbounded();
     std::thread::scope(|scope| {

@@ -173,11 +173,6 @@ pub struct Accuracy {
     pub step_rotation_error_deg_per_m_median: f64,
 }
 
-fn median(mut values: Vec<f64>) -> f64 {
-    values.sort_by(f64::total_cmp);
-    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// Compares `estimate` with `truth`, pose by pose (both from the first
 /// frame, in the ground plane). `None` for fewer than two poses or a path
 /// that does not move.
@@ -229,9 +224,9 @@ pub fn accuracy(estimate: &[Pose2], truth: &[Pose2]) -> Option<Accuracy> {
         translation_error_pct: mean(&translation) * 100.0,
         rotation_error_deg_per_m: mean(&rotation),
         segment_lengths_m: lengths,
-        step_translation_error_pct_median: median(step_translation),
-        step_scale_median: median(step_scale),
-        step_rotation_error_deg_per_m_median: median(step_rotation),
+        step_translation_error_pct_median: crate::median(&mut step_translation),
+        step_scale_median: crate::median(&mut step_scale),
+        step_rotation_error_deg_per_m_median: crate::median(&mut step_rotation),
     })
 }
 

@@ -28,4 +28,11 @@ pub mod stereo;
 #[cfg(feature = "v4l")]
 pub mod v4l_source;
 
+/// The median of `values` (the upper of the middle two for an even count),
+/// sorting them in place; NaN for none.
+pub fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 pub use stereo::{CameraMount, PrincipalPoint, StereoCamera};
