@@ -294,31 +294,67 @@ pub fn extract(image: &GrayImage, config: &FeatureConfig) -> Vec<Feature> {
         .collect()
 }
 
+/// How the right camera's exposure differs from the left's: right grey
+/// levels are mapped to the left's as `gain · right + offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Exposure {
+    gain: f32,
+    offset: f32,
+}
+
+impl Exposure {
+    /// The mapping that gives the right image the left one's mean and
+    /// contrast, from every fourth pixel of each: two cameras with their
+    /// own automatic exposure differ by a gain and an offset over the
+    /// whole image, which biases block matching unless undone. Images with
+    /// no contrast are left as they are.
+    fn between(left: &GrayImage, right: &GrayImage) -> Exposure {
+        let stats = |image: &GrayImage| {
+            let (mut n, mut sum, mut squares) = (0.0f64, 0.0f64, 0.0f64);
+            for &p in image.as_raw().iter().step_by(4) {
+                let p = f64::from(p);
+                (n, sum, squares) = (n + 1.0, sum + p, squares + p * p);
+            }
+            let mean = sum / n.max(1.0);
+            (mean, (squares / n.max(1.0) - mean * mean).max(0.0).sqrt())
+        };
+        let ((mean_l, sd_l), (mean_r, sd_r)) = (stats(left), stats(right));
+        if sd_l < 1.0 || sd_r < 1.0 {
+            return Exposure { gain: 1.0, offset: 0.0 };
+        }
+        let gain = sd_l / sd_r;
+        Exposure { gain: gain as f32, offset: (mean_l - gain * mean_r) as f32 }
+    }
+}
+
 /// Sum of absolute differences of 7×7 blocks centred at `(xl, y)` in the
-/// left image and `(xr, y)` in the right, or `None` off the image.
-fn block_cost(left: &GrayImage, right: &GrayImage, xl: i64, xr: i64, y: i64) -> Option<u32> {
+/// left image and `(xr, y)` in the right (its grey levels mapped by
+/// `exposure`), or `None` off the image.
+fn block_cost(left: &GrayImage, right: &GrayImage, exposure: Exposure, xl: i64, xr: i64, y: i64) -> Option<f32> {
     const R: i64 = 3;
     let (w, h) = (i64::from(left.width()), i64::from(left.height()));
     if xr - R < 0 || xl + R >= w || xr + R >= w || xl - R < 0 || y - R < 0 || y + R >= h {
         return None;
     }
     let (l, r) = (left.as_raw(), right.as_raw());
-    let mut cost = 0u32;
+    let mut cost = 0.0f32;
     for dy in -R..=R {
         let row = ((y + dy) * w) as usize;
         for dx in -R..=R {
-            cost += u32::from(l[row + (xl + dx) as usize].abs_diff(r[row + (xr + dx) as usize]));
+            let mapped = exposure.gain * f32::from(r[row + (xr + dx) as usize]) + exposure.offset;
+            cost += (f32::from(l[row + (xl + dx) as usize]) - mapped).abs();
         }
     }
     Some(cost)
 }
 
 /// The disparity of a stereo match to a fraction of a pixel: block matching
-/// along the row within two pixels of the matched corners' disparity, then
-/// a parabola through the best cost and its neighbours.
-fn refine_disparity(left: &GrayImage, right: &GrayImage, xl: u32, xr: u32, y: u32) -> Option<f64> {
+/// along the row within two pixels of the matched corners' disparity (the
+/// right image brought to the left's exposure), then a parabola through
+/// the best cost and its neighbours.
+fn refine_disparity(left: &GrayImage, right: &GrayImage, exposure: Exposure, xl: u32, xr: u32, y: u32) -> Option<f64> {
     let d0 = i64::from(xl) - i64::from(xr);
-    let cost = |d: i64| block_cost(left, right, i64::from(xl), i64::from(xl) - d, i64::from(y));
+    let cost = |d: i64| block_cost(left, right, exposure, i64::from(xl), i64::from(xl) - d, i64::from(y));
     let (mut best_d, mut best) = (d0, cost(d0)?);
     for d in d0 - 2..=d0 + 2 {
         if let Some(c) = cost(d) {
@@ -330,8 +366,9 @@ fn refine_disparity(left: &GrayImage, right: &GrayImage, xl: u32, xr: u32, y: u3
     let (Some(before), Some(after)) = (cost(best_d - 1), cost(best_d + 1)) else {
         return Some(best_d as f64);
     };
-    let curvature = f64::from(before) - 2.0 * f64::from(best) + f64::from(after);
-    let offset = if curvature > 0.0 { (f64::from(before) - f64::from(after)) / (2.0 * curvature) } else { 0.0 };
+    let (before, best, after) = (f64::from(before), f64::from(best), f64::from(after));
+    let curvature = before - 2.0 * best + after;
+    let offset = if curvature > 0.0 { (before - after) / (2.0 * curvature) } else { 0.0 };
     Some(best_d as f64 + offset.clamp(-0.5, 0.5))
 }
 
@@ -426,10 +463,11 @@ impl StereoPipeline {
             return Err(PipelineError::WrongSize { left: left.dimensions(), right: right.dimensions(), expected });
         }
         let (features_left, features_right) = (extract(left, &self.config), extract(right, &self.config));
+        let exposure = Exposure::between(left, right);
         let mut out = Vec::new();
         for (i, j) in match_stereo(&features_left, &features_right, &self.config) {
             let (l, r) = (&features_left[i], &features_right[j]);
-            let Some(disparity) = refine_disparity(left, right, l.x, r.x, l.y) else { continue };
+            let Some(disparity) = refine_disparity(left, right, exposure, l.x, r.x, l.y) else { continue };
             if disparity < self.config.min_disparity_px {
                 continue;
             }
@@ -501,6 +539,45 @@ mod tests {
         }
         let wrong = GrayImage::new(100, 100);
         assert!(matches!(pipeline.process(&wrong, &right), Err(PipelineError::WrongSize { .. })));
+    }
+
+    /// A smooth texture, and the right camera's view of it: `shift` px
+    /// of disparity, `gain` and `offset` of exposure.
+    fn textured_pair(shift: f64, gain: f64, offset: f64) -> (GrayImage, GrayImage) {
+        let g = |x: f64, y: f64| 120.0 + 50.0 * (0.31 * x + 0.23 * y).sin() + 35.0 * (0.17 * x - 0.29 * y).cos();
+        let left = GrayImage::from_fn(160, 60, |x, y| Luma([g(f64::from(x), f64::from(y)).round() as u8]));
+        let right = GrayImage::from_fn(160, 60, |x, y| {
+            Luma([(gain * g(f64::from(x) + shift, f64::from(y)) + offset).round().clamp(0.0, 255.0) as u8])
+        });
+        (left, right)
+    }
+
+    #[test]
+    fn sub_pixel_disparity_survives_a_different_exposure_in_each_camera() {
+        for (gain, offset) in [(1.0, 0.0), (0.6, 0.0), (0.6, 25.0), (1.3, -20.0)] {
+            let (left, right) = textured_pair(9.4, gain, offset);
+            let exposure = Exposure::between(&left, &right);
+            assert!((f64::from(exposure.gain) * gain - 1.0).abs() < 0.05, "{exposure:?} for gain {gain}");
+            let mut errors: Vec<f64> = (20..140)
+                .step_by(7)
+                .flat_map(|x| [15, 30, 45].map(|y| (x, y)))
+                .filter_map(|(x, y)| refine_disparity(&left, &right, exposure, x, x - 9, y))
+                .map(|d| (d - 9.4).abs())
+                .collect();
+            errors.sort_by(f64::total_cmp);
+            let median = errors[errors.len() / 2];
+            assert!(median < 0.1, "gain {gain}, offset {offset}: median error {median:.3} px");
+            // Without the correction, a different exposure biases it.
+            let ignored = Exposure { gain: 1.0, offset: 0.0 };
+            if gain != 1.0 {
+                let off = (20..140)
+                    .step_by(7)
+                    .filter_map(|x| refine_disparity(&left, &right, ignored, x, x - 9, 30))
+                    .filter(|d| (d - 9.4).abs() > 0.3)
+                    .count();
+                assert!(off > 3, "gain {gain}: only {off} biased");
+            }
+        }
     }
 
     #[test]
