@@ -159,6 +159,12 @@ enum Command {
         /// (default 10); near 1 m the matching is almost frame to frame.
         #[arg(long, value_name = "M", value_parser = parse_limit)]
         keyframe_range: Option<f64>,
+        /// Add this to every disparity before triangulating, px, in place
+        /// of the calibration's offset (`disparity_offset_px` in
+        /// `camera.ron`; KITTI's `calib.txt` has none): for a pair whose
+        /// rectification leaves a disparity bias. Negative values allowed.
+        #[arg(long, value_name = "PX", allow_negative_numbers = true, value_parser = parse_offset)]
+        disparity_offset: Option<f64>,
         /// Draw the estimated path (over the true one, if known) here (PNG).
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
@@ -443,13 +449,24 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Frames { file, out, seed, max_frames, huge } => {
             frames_command(&registry, &file, &out, seed, max_frames, huge)
         }
-        Command::Pipeline { dir, json, poses, max_speed, max_turn_rate, keyframe_range, plot, landmarks } => {
+        Command::Pipeline {
+            dir,
+            json,
+            poses,
+            max_speed,
+            max_turn_rate,
+            keyframe_range,
+            disparity_offset,
+            plot,
+            landmarks,
+        } => {
             let options = crate::frames::ReplayOptions {
                 features: ubf_perception::features::FeatureConfig::default(),
                 max_speed,
                 max_turn_rate_deg: max_turn_rate,
                 poses,
                 keyframe_range_m: keyframe_range,
+                disparity_offset_px: disparity_offset,
                 landmarks,
             };
             pipeline_command(&dir, &options, json, plot.as_deref())
@@ -692,6 +709,15 @@ fn parse_limit(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v <= 1e4 => Ok(v),
         _ => Err(format!("expected a number above 0 and at most 10 000; got {text:?}")),
+    }
+}
+
+/// A disparity offset, px: any finite number (the camera's check bounds it
+/// by the image width).
+fn parse_offset(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("expected a number of pixels; got {text:?}")),
     }
 }
 

@@ -158,6 +158,8 @@ pub struct ReplayOptions {
     /// How far from a keyframe a frame may be matched to it, m (default:
     /// the tracker's 10).
     pub keyframe_range_m: Option<f64>,
+    /// Replaces the calibration's disparity offset, px.
+    pub disparity_offset_px: Option<f64>,
     /// Write every landmark of every pair here (CSV): pair, pixels (the
     /// first pixel's centre at (0, 0), as calibration tools count),
     /// disparity, and the point in the camera frame.
@@ -220,6 +222,14 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
             (load_camera(dir)?, Box::new(raw))
         };
         (Layout::Recording, camera, source, None, (defaults.max_speed, defaults.max_turn_rate_deg), pairs)
+    };
+    let camera = match options.disparity_offset_px {
+        None => camera,
+        Some(offset) => {
+            let camera = StereoCamera { disparity_offset_px: offset, ..camera };
+            ubf_core::config::Check::check(&camera).map_err(|e| format!("--disparity-offset {offset}: {e}"))?;
+            camera
+        }
     };
     let limits = [options.max_speed.unwrap_or(limits.0), options.max_turn_rate_deg.unwrap_or(limits.1)];
     let config = EgomotionConfig {

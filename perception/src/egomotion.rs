@@ -20,7 +20,7 @@
 use crate::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use crate::fusion::{fuse_cv, weighted_mean, weighted_median};
 use crate::stereo::StereoCamera;
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix3, Vector2};
 use rand::seq::index::sample;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -575,17 +575,7 @@ impl Rigid {
     /// `Σ eᵢᵀ Λᵢ eᵢ`, `eᵢ = aᵢ − (R bᵢ + t)`.
     fn refine(pairs: &[Pair], info: &[Matrix2<f64>], mut yaw: f64, mut t: Vector2<f64>) -> (f64, Vector2<f64>) {
         for _ in 0..8 {
-            let (mut h, mut g) = (nalgebra::Matrix3::<f64>::zeros(), nalgebra::Vector3::<f64>::zeros());
-            for (p, l) in pairs.iter().zip(info) {
-                let a = Vector2::new(p.before[0], p.before[1]);
-                let b = Vector2::new(p.after[0], p.after[1]);
-                let e = a - (rotation(yaw) * b + t);
-                let (s, c) = yaw.sin_cos();
-                let d_yaw = -Vector2::new(-s * b[0] - c * b[1], c * b[0] - s * b[1]);
-                let j = nalgebra::Matrix2x3::new(-1.0, 0.0, d_yaw[0], 0.0, -1.0, d_yaw[1]);
-                h += j.transpose() * l * j;
-                g += j.transpose() * l * e;
-            }
+            let (h, g, _) = Self::normal_equations(pairs, info, yaw, t);
             let Some(step) = h.lu().solve(&(-g)) else { break };
             t += Vector2::new(step[0], step[1]);
             yaw += step[2];
@@ -596,13 +586,47 @@ impl Rigid {
         (yaw, t)
     }
 
+    /// The Gauss–Newton normal equations at `(yaw, t)` in the unknowns
+    /// `(tx, ty, yaw)`: the information matrix `H = Σ Jᵀ Λ J`, the gradient
+    /// `Σ Jᵀ Λ e`, and the cost `Σ eᵀ Λ e`.
+    fn normal_equations(
+        pairs: &[Pair],
+        info: &[Matrix2<f64>],
+        yaw: f64,
+        t: Vector2<f64>,
+    ) -> (Matrix3<f64>, nalgebra::Vector3<f64>, f64) {
+        let (mut h, mut g, mut cost) = (Matrix3::zeros(), nalgebra::Vector3::zeros(), 0.0);
+        let (s, c) = yaw.sin_cos();
+        for (p, l) in pairs.iter().zip(info) {
+            let a = Vector2::new(p.before[0], p.before[1]);
+            let b = Vector2::new(p.after[0], p.after[1]);
+            let e = a - (rotation(yaw) * b + t);
+            let d_yaw = -Vector2::new(-s * b[0] - c * b[1], c * b[0] - s * b[1]);
+            let j = nalgebra::Matrix2x3::new(-1.0, 0.0, d_yaw[0], 0.0, -1.0, d_yaw[1]);
+            h += j.transpose() * l * j;
+            g += j.transpose() * l * e;
+            cost += (e.transpose() * l * e)[0];
+        }
+        (h, g, cost)
+    }
+
+    /// The covariance of a refined motion `(forward, left, yaw)`: the
+    /// inverse information, scaled up when the residuals are larger than
+    /// the assumed pixel noise explains (real images rarely match the
+    /// model's σ).
+    fn covariance(pairs: &[Pair], info: &[Matrix2<f64>], yaw: f64, t: Vector2<f64>) -> Option<Matrix3<f64>> {
+        let (h, _, cost) = Self::normal_equations(pairs, info, yaw, t);
+        let dof = (2 * pairs.len()).saturating_sub(3).max(1) as f64;
+        h.try_inverse().map(|c| c * (cost / dof).max(1.0))
+    }
+
     fn estimate(
         config: &RigidConfig,
         camera: &StereoCamera,
         pairs: &[Pair],
         max_step: f64,
         rng: &mut ChaCha8Rng,
-    ) -> Option<(PlanarMotion, usize)> {
+    ) -> Option<(PlanarMotion, usize, Matrix3<f64>)> {
         if pairs.len() < 3 {
             return None;
         }
@@ -635,7 +659,12 @@ impl Rigid {
         let (yaw, t) = kabsch(&chosen, &weights)?;
         let (yaw, t) = Self::refine(&chosen, &chosen_info, yaw, t);
         let motion = PlanarMotion { forward: t[0], left: t[1], yaw };
-        (motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()).then_some((motion, inliers.len()))
+        let covariance = Self::covariance(&chosen, &chosen_info, yaw, t)?;
+        (motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()).then_some((
+            motion,
+            inliers.len(),
+            covariance,
+        ))
     }
 }
 
@@ -649,20 +678,40 @@ struct Keyframe {
     /// The odometric pose then: how far the robot has since driven and
     /// turned, to keep keyframes apart and retire them.
     odometry: Pose2,
-    /// How its pose was reached: odometry bridges, then visual estimates,
-    /// chained since the start. Fewer of each means a better anchor.
-    lineage: (u32, u32),
+    /// Odometry bridges chained into its pose since the start: an anchor
+    /// with fewer rests on more vision.
+    bridges: u32,
+    /// The covariance of its pose (x, y, heading) from the visual estimates
+    /// chained into it.
+    covariance: Matrix3<f64>,
+}
+
+/// The covariance of `pose ∘ motion`, to first order, from the covariances
+/// of the two (independent) parts.
+fn composed_covariance(
+    pose: &Pose2,
+    pose_cov: &Matrix3<f64>,
+    motion: &PlanarMotion,
+    motion_cov: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    let (s, c) = pose.theta.sin_cos();
+    let (f, l) = (motion.forward, motion.left);
+    let j_pose = Matrix3::new(1.0, 0.0, -s * f - c * l, 0.0, 1.0, c * f - s * l, 0.0, 0.0, 1.0);
+    let j_motion = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    j_pose * pose_cov * j_pose.transpose() + j_motion * motion_cov * j_motion.transpose()
 }
 
 /// Integrates egomotion over a run: each new stereo frame is matched against
 /// a bank of keyframes taken from distinct viewpoints.
 ///
 /// With the rigid estimator, the keyframe tried first is the one whose pose
-/// rests on the fewest chained estimates (then the oldest): driving straight, a frame is matched
-/// to a keyframe metres back instead of to the frame before it, so a far
-/// landmark's depth error does not enter step after step; after a physical
-/// scan, the frame at the chosen heading is matched to the keyframe taken
-/// before the sweep, so the sweep costs one rotation estimate. A keyframe is
+/// is the most certain (the fewest chained estimates, then the oldest):
+/// driving straight, a frame is matched to a keyframe metres back instead of
+/// to the frame before it, so a far landmark's depth error does not enter
+/// step after step; after a physical scan, the frame at the chosen heading is
+/// matched to the keyframe taken before the sweep, so the sweep costs one
+/// rotation estimate. The newest keyframe's match is taken instead when it
+/// predicts a smaller error (see `best_estimate`). A keyframe is
 /// retired once the robot has driven `keyframe_range_m` from it (or, with
 /// the bank full, the farthest one makes room), never for elapsed time: a
 /// person standing in front of the camera for a minute loses nothing.
@@ -679,6 +728,8 @@ pub struct Tracker {
     keyframes: Vec<Keyframe>,
     /// The newest frame taken in: its number, and the odometric pose then.
     newest: (u64, Pose2),
+    /// The covariance of the visual pose (x, y, heading).
+    covariance: Matrix3<f64>,
     /// When the latest frame matched (or the first was taken), s.
     last_match: f64,
     /// When the current outage began, if one is under way.
@@ -697,6 +748,8 @@ struct Estimate {
     motion: PlanarMotion,
     landmarks: usize,
     step_cv: Option<f64>,
+    /// The motion's covariance, where the estimator gives one.
+    covariance: Option<Matrix3<f64>>,
 }
 
 impl Tracker {
@@ -711,6 +764,7 @@ impl Tracker {
             rng: ChaCha8Rng::seed_from_u64(seed),
             keyframes: Vec::new(),
             newest: (0, Pose2::default()),
+            covariance: Matrix3::zeros(),
             last_match: 0.0,
             outage_since: None,
             phase: MotionPhase::Still,
@@ -743,7 +797,7 @@ impl Tracker {
     }
 
     /// Takes in `frame` if it is new: matches it against the keyframes,
-    /// best anchored first, and sets the pose from the first good match. A
+    /// best anchored first, and sets the pose from the best match. A
     /// frame no keyframe matches is a failure: the pose is carried on by
     /// odometry and an outage is counted.
     ///
@@ -761,7 +815,7 @@ impl Tracker {
         let Some(pose) = self.state.pose else { return };
         if self.keyframes.is_empty() {
             self.last_match = frame.time;
-            self.add_keyframe(frame, pose, *odometry, (0, 0));
+            self.add_keyframe(frame, pose, *odometry, 0);
             return;
         }
         self.keyframes.retain(|k| k.odometry.distance_to(odometry.x, odometry.y) <= self.config.keyframe_range_m);
@@ -771,7 +825,11 @@ impl Tracker {
             Some((anchor, estimate)) => {
                 let keyframe = &self.keyframes[anchor];
                 let pose = keyframe.pose.compose(&estimate.motion.as_pose());
-                let lineage = (keyframe.lineage.0, keyframe.lineage.1 + 1);
+                let bridges = keyframe.bridges;
+                if let Some(motion_cov) = &estimate.covariance {
+                    self.covariance =
+                        composed_covariance(&keyframe.pose, &keyframe.covariance, &estimate.motion, motion_cov);
+                }
                 self.state.pose = Some(pose);
                 self.state.last_step_cv = estimate.step_cv;
                 self.state.journey_cv += estimate.step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
@@ -781,7 +839,7 @@ impl Tracker {
                     self.state.outage_s += frame.time - since;
                 }
                 if self.frame_to_frame() || self.distinct(odometry) {
-                    self.add_keyframe(frame, pose, *odometry, lineage);
+                    self.add_keyframe(frame, pose, *odometry, bridges);
                 }
             }
             None => {
@@ -801,8 +859,8 @@ impl Tracker {
                 // frames after it (through the odometry bridge) once the old
                 // keyframes are out of sight.
                 if frame.landmarks.len() >= 3 && self.distinct(odometry) {
-                    let lineage = self.keyframes.iter().map(|k| k.lineage).min().unwrap_or_default();
-                    self.add_keyframe(frame, pose, *odometry, (lineage.0 + 1, 0));
+                    let bridges = self.keyframes.iter().map(|k| k.bridges).min().unwrap_or_default();
+                    self.add_keyframe(frame, pose, *odometry, bridges + 1);
                 }
             }
         }
@@ -826,7 +884,7 @@ impl Tracker {
         })
     }
 
-    fn add_keyframe(&mut self, frame: &StereoFrame, pose: Pose2, odometry: Pose2, lineage: (u32, u32)) {
+    fn add_keyframe(&mut self, frame: &StereoFrame, pose: Pose2, odometry: Pose2, bridges: u32) {
         if self.keyframes.len() >= self.config.keyframes {
             // Make room by retiring the keyframe farthest from here.
             let farthest = self
@@ -842,36 +900,79 @@ impl Tracker {
                 self.keyframes.remove(i);
             }
         }
-        self.keyframes.push(Keyframe { landmarks: frame.landmarks.clone(), time: frame.time, pose, odometry, lineage });
+        self.keyframes.push(Keyframe {
+            landmarks: frame.landmarks.clone(),
+            time: frame.time,
+            pose,
+            odometry,
+            bridges,
+            covariance: self.covariance,
+        });
     }
 
-    /// The first good match against the keyframes, best anchored first,
-    /// skipping those facing too far away to share the view; failing a good
-    /// one, the match with the most landmarks.
+    /// The anchor and the match to it: the first good match (at least
+    /// `good_match_landmarks`) against the keyframes facing close enough to
+    /// share the view, fewest odometry bridges first, then the smallest
+    /// pose covariance (the fewest chained estimates); failing a good match,
+    /// the match with the most landmarks. The simplified estimator, which
+    /// works frame to frame, tries the newest first.
+    ///
+    /// A far anchor spares the chain of short steps, but it shares only the
+    /// landmarks still in view, mostly distant ones whose depth is poor, and
+    /// a wrong consensus among them can put the frame metres off (where no
+    /// odometry gate catches it, as on a replayed recording). So the newest
+    /// keyframe is matched too, and the anchor is the one predicting the
+    /// smaller error: the keyframe's pose covariance carried through the
+    /// match's (the estimator's inverse information), position variance plus
+    /// heading variance over the keyframe reach, where a heading error
+    /// becomes a position error.
     fn best_estimate(&mut self, frame: &StereoFrame, odometry: &Pose2) -> Option<(usize, Estimate)> {
         let fov = self.camera.horizontal_fov();
         let mut order: Vec<usize> = (0..self.keyframes.len())
             .filter(|&i| angle_difference(odometry.theta, self.keyframes[i].odometry.theta).abs() < fov)
             .collect();
+        let newest = order.iter().copied().max_by(|&a, &b| self.keyframes[a].time.total_cmp(&self.keyframes[b].time));
         if self.frame_to_frame() {
             order.sort_by(|&a, &b| self.keyframes[b].time.total_cmp(&self.keyframes[a].time));
         } else {
+            let reach = self.config.keyframe_range_m;
+            let spread =
+                |k: &Keyframe| k.covariance[(0, 0)] + k.covariance[(1, 1)] + reach * reach * k.covariance[(2, 2)];
             order.sort_by(|&a, &b| {
                 let (ka, kb) = (&self.keyframes[a], &self.keyframes[b]);
-                ka.lineage.cmp(&kb.lineage).then(ka.time.total_cmp(&kb.time))
+                ka.bridges.cmp(&kb.bridges).then(spread(ka).total_cmp(&spread(kb))).then(ka.time.total_cmp(&kb.time))
             });
         }
         let mut best: Option<(usize, Estimate)> = None;
-        for i in order {
+        for &i in &order {
             let Some(estimate) = self.estimate_from(i, frame, odometry) else { continue };
             if estimate.landmarks >= self.config.good_match_landmarks {
-                return Some((i, estimate));
+                best = Some((i, estimate));
+                break;
             }
             if best.as_ref().is_none_or(|(_, b)| estimate.landmarks > b.landmarks) {
                 best = Some((i, estimate));
             }
         }
-        best
+        let (Some((anchor, far)), Some(newest)) = (&best, newest) else { return best };
+        if *anchor == newest {
+            return best;
+        }
+        let Some(near) = self.estimate_from(newest, frame, odometry) else { return best };
+        if near.landmarks < self.config.good_match_landmarks {
+            return best;
+        }
+        let (Some(far_cov), Some(near_cov)) = (far.covariance, near.covariance) else { return best };
+        let (kf, kn) = (&self.keyframes[*anchor], &self.keyframes[newest]);
+        let reach = self.config.keyframe_range_m;
+        let predicted = |c: Matrix3<f64>| c[(0, 0)] + c[(1, 1)] + reach * reach * c[(2, 2)];
+        let far_error = predicted(composed_covariance(&kf.pose, &kf.covariance, &far.motion, &far_cov));
+        let near_error = predicted(composed_covariance(&kn.pose, &kn.covariance, &near.motion, &near_cov));
+        if near_error < far_error {
+            Some((newest, near))
+        } else {
+            best
+        }
     }
 
     /// The motion from keyframe `index` to `frame`, if the estimator finds
@@ -894,9 +995,11 @@ impl Tracker {
         }
         let dt = (frame.time - keyframe.time).max(1e-6);
         let max_step = self.config.max_speed * dt * 1.5 + 0.02;
-        let (motion, landmarks) = match &self.config.estimator {
-            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase),
-            EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng),
+        let (motion, landmarks, covariance) = match &self.config.estimator {
+            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase)
+                .map(|(motion, landmarks)| (motion, landmarks, None)),
+            EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng)
+                .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance))),
         }?;
         // Frames that share landmarks cannot have turned further apart than
         // the view is wide, nor faster than the robot turns (§4.4.6).
@@ -920,7 +1023,7 @@ impl Tracker {
                 return None;
             }
         }
-        Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)) })
+        Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)), covariance })
     }
 }
 
@@ -1205,6 +1308,24 @@ mod tests {
             assert!((s.pose.unwrap().x - expected).abs() < 1e-6, "{gate:?}: {s:?}");
             assert_eq!(s.failures, u32::from(gate.is_some()));
         }
+    }
+
+    #[test]
+    fn a_heading_error_becomes_a_position_error_along_the_motion() {
+        // A pose known exactly but for its heading (σ 0.01 rad), facing +y,
+        // then an exact 10 m step forward: the error lands across the step
+        // (along x), 0.1 m σ, and the heading's variance carries over.
+        let pose = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+        let pose_cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.0, 0.0, 1e-4));
+        let motion = PlanarMotion { forward: 10.0, left: 0.0, yaw: 0.0 };
+        let c = composed_covariance(&pose, &pose_cov, &motion, &Matrix3::zeros());
+        assert!((c[(0, 0)] - 1e-2).abs() < 1e-12 && c[(1, 1)].abs() < 1e-12, "{c}");
+        assert!((c[(2, 2)] - 1e-4).abs() < 1e-12);
+        // The step's own covariance, given along the step, is turned into
+        // the world frame.
+        let motion_cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(4e-2, 1e-2, 0.0));
+        let c = composed_covariance(&pose, &Matrix3::zeros(), &motion, &motion_cov);
+        assert!((c[(1, 1)] - 4e-2).abs() < 1e-12 && (c[(0, 0)] - 1e-2).abs() < 1e-12, "{c}");
     }
 
     #[test]
