@@ -7,7 +7,8 @@ Runs OpenCV's stereoRectify (CALIB_ZERO_DISPARITY, alpha -1) and
 initUndistortRectifyMap on a fixed, realistic calibration (a 1280 x 720
 pair, 12 cm baseline, strong barrel distortion, the right camera turned
 1.2 degrees and shifted 3 mm), writes the pair as ROS camera_info files
-into perception/tests/data/, and prints where the maps sample the raw
+into perception/tests/data/ (and the unrectified calibration, K1, D1, K2,
+D2, R, T, as OpenCV's FileStorage writes it, into stereo.yaml), and prints where the maps sample the raw
 images for a grid of rectified pixels: the numbers
 perception/tests/rectify.rs checks our tables against. Uses the same
 virtual environment as opencv-compare.py.
@@ -46,6 +47,15 @@ def main():
                                                 flags=cv2.CALIB_ZERO_DISPARITY, alpha=-1)
     out = os.path.join(opencv_compare.ROOT, "perception", "tests", "data")
     os.makedirs(out, exist_ok=True)
+    # The unrectified calibration, as OpenCV's FileStorage writes what
+    # stereoCalibrate returns.
+    storage = cv2.FileStorage(os.path.join(out, "stereo.yaml"), cv2.FILE_STORAGE_WRITE)
+    storage.write("image_width", size[0])
+    storage.write("image_height", size[1])
+    for name, value in [("K1", k1), ("D1", d1.reshape(1, 5)), ("K2", k2), ("D2", d2.reshape(1, 5)),
+                        ("R", rotation), ("T", translation)]:
+        storage.write(name, value)
+    storage.release()
     for name, k, d, r, p in [("left", k1, d1, r1, p1), ("right", k2, d2, r2, p2)]:
         with open(os.path.join(out, f"{name}.yaml"), "w") as f:
             f.write(camera_info(name, size, k, d, r, p))

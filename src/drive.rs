@@ -79,20 +79,34 @@ fn open_source(camera: &DriveCamera) -> Result<(Box<dyn CameraSource + Send>, bo
     }
 }
 
-/// A calibrated, unrectified pair's ROS `camera_info` files, relative to
-/// the configuration file.
-#[derive(Clone, Debug, Deserialize)]
+/// A calibrated, unrectified pair's calibration files, relative to the
+/// configuration file: either the two cameras' ROS `camera_info` files
+/// (`left`, `right`), or OpenCV's `stereoCalibrate` result (`stereo`).
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RectifyFiles {
-    /// The left camera's.
-    pub left: String,
-    /// The right camera's.
-    pub right: String,
+    /// The left camera's `camera_info`.
+    #[serde(default)]
+    pub left: Option<String>,
+    /// The right camera's `camera_info`.
+    #[serde(default)]
+    pub right: Option<String>,
+    /// `K1`, `D1`, `K2`, `D2`, `R`, `T` as OpenCV's `FileStorage` writes
+    /// them; the rectification is computed as OpenCV's `stereoRectify`
+    /// does.
+    #[serde(default)]
+    pub stereo: Option<String>,
 }
 
 impl RectifyFiles {
     fn load(&self) -> Result<ubf_perception::rectify::Rectifier, String> {
-        ubf_perception::rectify::load_pair(Path::new(&self.left), Path::new(&self.right))
+        match (&self.left, &self.right, &self.stereo) {
+            (Some(left), Some(right), None) => ubf_perception::rectify::load_pair(Path::new(left), Path::new(right)),
+            (None, None, Some(stereo)) => ubf_perception::rectify::load_stereo(Path::new(stereo)),
+            _ => Err("give either `left` and `right` (camera_info files) or `stereo` (an OpenCV stereo \
+                      calibration), not both or neither"
+                .into()),
+        }
     }
 }
 
@@ -279,7 +293,9 @@ impl DriveConfig {
                 *dir = beside(dir);
             }
             if let Some(files) = &mut camera.rectify {
-                (files.left, files.right) = (beside(&files.left), beside(&files.right));
+                for file in [&mut files.left, &mut files.right, &mut files.stereo].into_iter().flatten() {
+                    *file = beside(file);
+                }
                 let rectified = files.load().map_err(|e| format!("{}: camera.rectify: {e}", path.display()))?;
                 camera.stereo = StereoCamera { mount: camera.stereo.mount, ..rectified.camera() };
             }

@@ -28,6 +28,9 @@ pub const CAMERA_FILE: &str = "camera.ron";
 pub const RAW_LEFT_INFO: &str = "left.yaml";
 /// The right camera's `camera_info`; see [`RAW_LEFT_INFO`].
 pub const RAW_RIGHT_INFO: &str = "right.yaml";
+/// Or, instead of the two `camera_info` files, OpenCV's stereo calibration
+/// of the raw pairs (`K1`, `D1`, `K2`, `D2`, `R`, `T`).
+pub const RAW_STEREO_CALIBRATION: &str = "stereo.yaml";
 
 /// Runs `scenario` with rendered images (turned on if the camera uses the
 /// geometric model) and writes every pair into `dir`, with the camera's
@@ -207,15 +210,28 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         let defaults = EgomotionConfig::default();
         let raw = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
         let pairs = raw.len();
-        let (left, right) = (dir.join(RAW_LEFT_INFO), dir.join(RAW_RIGHT_INFO));
-        let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if left.exists() || right.exists() {
-            if dir.join(CAMERA_FILE).exists() {
-                return Err(format!(
-                    "{}: holds both {CAMERA_FILE} (rectified images) and {RAW_LEFT_INFO}/{RAW_RIGHT_INFO} (raw \
-                     images to rectify); keep the one that describes its images",
-                    dir.display()
-                ));
-            }
+        let (left, right, stereo) =
+            (dir.join(RAW_LEFT_INFO), dir.join(RAW_RIGHT_INFO), dir.join(RAW_STEREO_CALIBRATION));
+        let calibrations: Vec<&str> = [
+            (dir.join(CAMERA_FILE).exists(), CAMERA_FILE),
+            (left.exists() || right.exists(), "left.yaml/right.yaml"),
+            (stereo.exists(), RAW_STEREO_CALIBRATION),
+        ]
+        .into_iter()
+        .filter_map(|(present, name)| present.then_some(name))
+        .collect();
+        if calibrations.len() > 1 {
+            return Err(format!(
+                "{}: holds {} ({CAMERA_FILE} describes rectified images; the others, raw images to rectify); keep \
+                 the one that describes its images",
+                dir.display(),
+                calibrations.join(" and ")
+            ));
+        }
+        let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if stereo.exists() {
+            let rectifier = ubf_perception::rectify::load_stereo(&stereo)?;
+            (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
+        } else if left.exists() || right.exists() {
             let rectifier = ubf_perception::rectify::load_pair(&left, &right)?;
             (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
         } else {

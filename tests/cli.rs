@@ -554,7 +554,23 @@ fn a_raw_recording_with_camera_info_files_is_rectified_on_replay() {
     std::fs::write(frames.join("left.yaml"), identity_camera_info(focal, 0.0)).unwrap();
     std::fs::write(frames.join("right.yaml"), identity_camera_info(focal, baseline)).unwrap();
     assert_eq!(replay(&frames), rectified);
-    // Both kinds of calibration in one directory: refused, not guessed.
+    // And so does the same identity as OpenCV's unrectified stereo
+    // calibration (K, D, R, T).
+    std::fs::remove_file(frames.join("left.yaml")).unwrap();
+    std::fs::remove_file(frames.join("right.yaml")).unwrap();
+    let matrix = |rows: usize, cols: usize, data: &str| {
+        format!(" !!opencv-matrix\n   rows: {rows}\n   cols: {cols}\n   dt: d\n   data: [ {data} ]\n")
+    };
+    let k = matrix(3, 3, &format!("{focal}, 0., 319.5, 0., {focal}, 239.5, 0., 0., 1."));
+    let d = matrix(1, 5, "0., 0., 0., 0., 0.");
+    let stereo = format!(
+        "%YAML 1.2\n---\nimage_width: 640\nimage_height: 480\nK1:{k}D1:{d}K2:{k}D2:{d}R:{}T:{}",
+        matrix(3, 3, "1., 0., 0., 0., 1., 0., 0., 0., 1."),
+        matrix(3, 1, &format!("{}, 0., 0.", -baseline))
+    );
+    std::fs::write(frames.join("stereo.yaml"), stereo).unwrap();
+    assert_eq!(replay(&frames), rectified);
+    // Two kinds of calibration in one directory: refused, not guessed.
     std::fs::write(frames.join("camera.ron"), camera).unwrap();
     let both = ubf(&["pipeline", frames.to_str().unwrap()]);
     assert_eq!(both.status.code(), Some(2));

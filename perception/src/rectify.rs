@@ -9,11 +9,18 @@
 //! every rectified pixel to where the raw image is sampled, as OpenCV's
 //! `initUndistortRectifyMap` does; pixel centres are at integer
 //! coordinates, as in both of those tools.
+//!
+//! A pair calibrated but never rectified (each camera's `K` and `D`, and
+//! the rotation `R` and translation `T` from the left camera to the right,
+//! as OpenCV's `stereoCalibrate` returns them) is first given its
+//! rectifying rotations and projections by [`stereo_rectify`], OpenCV's
+//! `stereoRectify` with its defaults (zero disparity at infinity, no
+//! scaling).
 
 use crate::source::StereoPair;
 use crate::stereo::{PrincipalPoint, StereoCamera};
 use image::{GrayImage, Luma};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -65,35 +72,11 @@ impl CameraInfo {
     /// Reads `camera_info` YAML text; the error starts with `line:column:`
     /// when the YAML is malformed, or names the field.
     pub fn from_yaml(text: &str) -> Result<CameraInfo, String> {
-        let yaml: YamlCameraInfo = serde_norway::from_str(text).map_err(|e| match e.location() {
-            Some(at) => format!("{}:{}: {e}", at.line(), at.column()),
-            None => format!(" {e}"),
-        })?;
-        fn fixed<const N: usize>(name: &str, m: &YamlMatrix, rows: usize, cols: usize) -> Result<[f64; N], String> {
-            let ok = m.rows == rows && m.cols == cols && m.data.len() == N && m.data.iter().all(|v| v.is_finite());
-            ok.then(|| m.data.clone().try_into().ok()).flatten().ok_or_else(|| {
-                format!(
-                    " {name}: expected {rows} × {cols} finite numbers, got {} × {} with {}",
-                    m.rows,
-                    m.cols,
-                    m.data.len()
-                )
-            })
-        }
+        let yaml: YamlCameraInfo = parse_yaml(text)?;
         if !matches!(yaml.distortion_model.as_str(), "plumb_bob" | "rational_polynomial") {
             return Err(format!(" distortion_model: {:?}; plumb_bob is understood", yaml.distortion_model));
         }
-        let coefficients = &yaml.distortion_coefficients.data;
-        if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
-            return Err(" distortion_coefficients: only k1, k2, p1, p2, k3 are understood".into());
-        }
-        let mut d = [0.0; 5];
-        for (slot, &c) in d.iter_mut().zip(coefficients) {
-            if !c.is_finite() {
-                return Err(" distortion_coefficients: not finite".into());
-            }
-            *slot = c;
-        }
+        let d = plumb_bob("distortion_coefficients", &yaml.distortion_coefficients)?;
         let info = CameraInfo {
             width: yaml.image_width,
             height: yaml.image_height,
@@ -102,16 +85,232 @@ impl CameraInfo {
             r: fixed("rectification_matrix", &yaml.rectification_matrix, 3, 3)?,
             p: fixed("projection_matrix", &yaml.projection_matrix, 3, 4)?,
         };
-        if !(8..=crate::stereo::MAX_IMAGE_SIDE_PX).contains(&info.width)
-            || !(8..=crate::stereo::MAX_IMAGE_SIDE_PX).contains(&info.height)
-        {
-            return Err(format!(" image_width, image_height: {} × {}; each 8 to 16 384", info.width, info.height));
-        }
+        check_size(info.width, info.height)?;
         if info.k[0] <= 0.0 || info.k[4] <= 0.0 || info.p[0] <= 0.0 || info.p[5] <= 0.0 {
             return Err(" camera_matrix, projection_matrix: focal lengths must be positive".into());
         }
         Ok(info)
     }
+}
+
+/// A stereo pair's calibration before rectification, as OpenCV's
+/// `stereoCalibrate` returns it: each camera's intrinsics and distortion,
+/// and the motion from the left camera's frame to the right one's
+/// (`x_right = R · x_left + T`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StereoCalibrationFile {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// The left camera's intrinsic matrix, row major.
+    pub k1: [f64; 9],
+    /// The left camera's distortion (k1, k2, p1, p2, k3).
+    pub d1: [f64; 5],
+    /// The right camera's intrinsic matrix, row major.
+    pub k2: [f64; 9],
+    /// The right camera's distortion.
+    pub d2: [f64; 5],
+    /// Rotation from the left camera's frame to the right's, row major.
+    pub r: [f64; 9],
+    /// Translation from the left camera's frame to the right's, m (about
+    /// `(−baseline, 0, 0)` for a right camera to the right).
+    pub t: [f64; 3],
+}
+
+#[derive(Deserialize)]
+struct YamlStereo {
+    image_width: u32,
+    image_height: u32,
+    #[serde(alias = "M1", alias = "cameraMatrix1")]
+    #[serde(rename = "K1")]
+    k1: YamlMatrix,
+    #[serde(alias = "distCoeffs1")]
+    #[serde(rename = "D1")]
+    d1: YamlMatrix,
+    #[serde(alias = "M2", alias = "cameraMatrix2")]
+    #[serde(rename = "K2")]
+    k2: YamlMatrix,
+    #[serde(alias = "distCoeffs2")]
+    #[serde(rename = "D2")]
+    d2: YamlMatrix,
+    #[serde(rename = "R")]
+    r: YamlMatrix,
+    #[serde(rename = "T")]
+    t: YamlMatrix,
+}
+
+/// A matrix's numbers, checked against its expected shape.
+fn fixed<const N: usize>(name: &str, m: &YamlMatrix, rows: usize, cols: usize) -> Result<[f64; N], String> {
+    let ok = m.rows == rows && m.cols == cols && m.data.len() == N && m.data.iter().all(|v| v.is_finite());
+    ok.then(|| m.data.clone().try_into().ok()).flatten().ok_or_else(|| {
+        format!(" {name}: expected {rows} × {cols} finite numbers, got {} × {} with {}", m.rows, m.cols, m.data.len())
+    })
+}
+
+/// Distortion coefficients as (k1, k2, p1, p2, k3): fewer are padded with
+/// zeros; more must be zero (the rational and thin-prism terms are not
+/// modelled).
+fn plumb_bob(name: &str, m: &YamlMatrix) -> Result<[f64; 5], String> {
+    if m.data.len() > 5 && m.data[5..].iter().any(|&c| c != 0.0) {
+        return Err(format!(" {name}: only k1, k2, p1, p2, k3 are understood"));
+    }
+    let mut d = [0.0; 5];
+    for (slot, &c) in d.iter_mut().zip(&m.data) {
+        if !c.is_finite() {
+            return Err(format!(" {name}: not finite"));
+        }
+        *slot = c;
+    }
+    Ok(d)
+}
+
+/// Parses YAML into `T`; the error starts with `line:column:` where YAML
+/// knows them.
+fn parse_yaml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
+    serde_norway::from_str(text).map_err(|e| match e.location() {
+        Some(at) => format!("{}:{}: {e}", at.line(), at.column()),
+        None => format!(" {e}"),
+    })
+}
+
+/// Checks an image size read from a calibration file.
+fn check_size(width: u32, height: u32) -> Result<(), String> {
+    let side = 8..=crate::stereo::MAX_IMAGE_SIDE_PX;
+    if side.contains(&width) && side.contains(&height) {
+        Ok(())
+    } else {
+        Err(format!(" image_width, image_height: {width} × {height}; each 8 to 16 384"))
+    }
+}
+
+impl StereoCalibrationFile {
+    /// Reads the YAML OpenCV's `FileStorage` writes (`%YAML` header and
+    /// `!!opencv-matrix` tags allowed): `image_width`, `image_height`, and
+    /// the matrices `K1` (or `M1`, `cameraMatrix1`), `D1` (`distCoeffs1`),
+    /// `K2`, `D2`, `R` and `T`. Errors name the file, and the line and
+    /// column or the field.
+    pub fn load(path: &Path) -> Result<StereoCalibrationFile, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        Self::from_yaml(&text).map_err(|e| format!("{}:{e}", path.display()))
+    }
+
+    /// Reads OpenCV `FileStorage` YAML text.
+    pub fn from_yaml(text: &str) -> Result<StereoCalibrationFile, String> {
+        // OpenCV's own header (`%YAML:1.0` in older versions) and tags are
+        // not YAML every parser takes; blanking them keeps line numbers.
+        let plain: String = text
+            .lines()
+            .map(|line| if line.starts_with("%YAML") { "" } else { line })
+            .map(|line| line.replace("!!opencv-matrix", ""))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let yaml: YamlStereo = parse_yaml(&plain)?;
+        check_size(yaml.image_width, yaml.image_height)?;
+        let file = StereoCalibrationFile {
+            width: yaml.image_width,
+            height: yaml.image_height,
+            k1: fixed("K1", &yaml.k1, 3, 3)?,
+            d1: plumb_bob("D1", &yaml.d1)?,
+            k2: fixed("K2", &yaml.k2, 3, 3)?,
+            d2: plumb_bob("D2", &yaml.d2)?,
+            r: fixed("R", &yaml.r, 3, 3)?,
+            t: if yaml.t.rows == 1 { fixed("T", &yaml.t, 1, 3)? } else { fixed("T", &yaml.t, 3, 1)? },
+        };
+        if file.k1[0] <= 0.0 || file.k1[4] <= 0.0 || file.k2[0] <= 0.0 || file.k2[4] <= 0.0 {
+            return Err(" K1, K2: focal lengths must be positive".into());
+        }
+        let r = Matrix3::from_row_slice(&file.r);
+        if ((r.transpose() * r) - Matrix3::identity()).norm() > 1e-3 || r.determinant() < 0.0 {
+            return Err(" R: not a rotation matrix".into());
+        }
+        let t = Vector3::from(file.t);
+        if t.x.abs() <= t.y.abs() || t.norm() == 0.0 {
+            return Err(format!(
+                " T: ({}, {}, {}); the cameras must sit side by side (|T.x| > |T.y|)",
+                file.t[0], file.t[1], file.t[2]
+            ));
+        }
+        Ok(file)
+    }
+}
+
+/// Normalised image coordinates of raw pixel `(u, v)`, undistorted as
+/// OpenCV's `undistortPoints` does by default (five fixed-point
+/// iterations), so that [`stereo_rectify`] places the principal points
+/// where OpenCV does.
+fn undistort(k: &[f64; 9], d: &[f64; 5], u: f64, v: f64) -> (f64, f64) {
+    let [k1, k2, p1, p2, k3] = *d;
+    let y0 = (v - k[5]) / k[4];
+    let x0 = (u - k[2] - k[1] * y0) / k[0];
+    let (mut x, mut y) = (x0, y0);
+    for _ in 0..5 {
+        let r2 = x * x + y * y;
+        let inverse = 1.0 / (1.0 + r2 * (k1 + r2 * (k2 + r2 * k3)));
+        if inverse < 0.0 {
+            return (x0, y0);
+        }
+        let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+        let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+        (x, y) = ((x0 - dx) * inverse, (y0 - dy) * inverse);
+    }
+    (x, y)
+}
+
+/// The rectifying rotations and projections of a horizontal pair, as
+/// OpenCV's `stereoRectify` computes them with its defaults
+/// (`CALIB_ZERO_DISPARITY`, `alpha = −1`): each camera is turned half of
+/// the rotation between them, then both so that their x axis lies along
+/// the baseline; the new focal length is the mean of the two vertical
+/// ones, and the common principal point centres the undistorted image
+/// corners. Returned as the two cameras' `camera_info`.
+pub fn stereo_rectify(calibration: &StereoCalibrationFile) -> (CameraInfo, CameraInfo) {
+    let c = calibration;
+    let r = Rotation3::from_matrix(&Matrix3::from_row_slice(&c.r));
+    let t = Vector3::from(c.t);
+    let half = Rotation3::new(-0.5 * r.scaled_axis());
+    let t_half = half * t;
+    // Turn the baseline onto the x axis.
+    let axis = Vector3::new(t_half.x.signum(), 0.0, 0.0);
+    let w = t_half.cross(&axis);
+    let w = if w.norm() > 0.0 { w * ((t_half.x.abs() / t_half.norm()).acos() / w.norm()) } else { w };
+    let onto_x = Rotation3::new(w);
+    let r1 = (onto_x * half.inverse()).into_inner();
+    let r2 = (onto_x * half).into_inner();
+    let t_rectified = r2 * t;
+    let focal = 0.5 * (c.k1[4] + c.k2[4]);
+    // Each camera's principal point: the one that centres its undistorted,
+    // rotated image corners; with zero disparity, both get their mean.
+    let (w_px, h_px) = (f64::from(c.width), f64::from(c.height));
+    let centre = |k: &[f64; 9], d: &[f64; 5], rotation: &Matrix3<f64>| {
+        let mut sum = (0.0, 0.0);
+        for (u, v) in [(0.0, 0.0), (w_px - 1.0, 0.0), (0.0, h_px - 1.0), (w_px - 1.0, h_px - 1.0)] {
+            // OpenCV passes the corners as 32-bit floats.
+            let (x, y) = undistort(k, d, f64::from(u as f32), f64::from(v as f32));
+            let p = rotation * Vector3::new(x, y, 1.0);
+            sum = (sum.0 + focal * p.x / p.z, sum.1 + focal * p.y / p.z);
+        }
+        ((w_px - 1.0) / 2.0 - sum.0 / 4.0, (h_px - 1.0) / 2.0 - sum.1 / 4.0)
+    };
+    let (a, b) = (centre(&c.k1, &c.d1, &r1), centre(&c.k2, &c.d2, &r2));
+    let (cx, cy) = (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1));
+    let projection = |shift: f64| [focal, 0.0, cx, shift, 0.0, focal, cy, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let row_major = |m: &Matrix3<f64>| {
+        let mut out = [0.0; 9];
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = m[(i / 3, i % 3)];
+        }
+        out
+    };
+    let info = |k: [f64; 9], d: [f64; 5], r: &Matrix3<f64>, p: [f64; 12]| CameraInfo {
+        width: c.width,
+        height: c.height,
+        k,
+        d,
+        r: row_major(r),
+        p,
+    };
+    (info(c.k1, c.d1, &r1, projection(0.0)), info(c.k2, c.d2, &r2, projection(t_rectified.x * focal)))
 }
 
 /// Where each rectified pixel samples the raw image.
@@ -261,6 +460,13 @@ impl<S: crate::source::CameraSource> crate::source::CameraSource for Rectified<S
     fn next_pair(&mut self) -> Result<Option<StereoPair>, crate::source::SourceError> {
         Ok(self.source.next_pair()?.map(|raw| self.rectifier.rectify(&raw)))
     }
+}
+
+/// The rectifier for a pair calibrated but never rectified, from the
+/// OpenCV `FileStorage` file at `path` (see [`StereoCalibrationFile`]).
+pub fn load_stereo(path: &Path) -> Result<Rectifier, String> {
+    let (left, right) = stereo_rectify(&StereoCalibrationFile::load(path)?);
+    Rectifier::new(&left, &right).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// The rectifier for the pair whose `camera_info` files are `left` and

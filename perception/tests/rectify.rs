@@ -1,10 +1,11 @@
-//! Our remap tables against OpenCV's, on the same calibration: OpenCV
-//! 5.0.0's `stereoRectify` and `initUndistortRectifyMap` wrote the two
-//! camera_info files in `data/` and the sample points below
-//! (`scripts/rectify-reference.py` regenerates both).
+//! Our rectification against OpenCV's, on the same calibration: OpenCV
+//! 5.0.0's `FileStorage` wrote the unrectified calibration (`K1`, `D1`,
+//! `K2`, `D2`, `R`, `T`) into `data/stereo.yaml`, its `stereoRectify` and
+//! `initUndistortRectifyMap` the two camera_info files in `data/` and the
+//! sample points below (`scripts/rectify-reference.py` regenerates all).
 
 use std::path::Path;
-use ubf_perception::rectify::{CameraInfo, Rectifier};
+use ubf_perception::rectify::{stereo_rectify, CameraInfo, Rectifier, StereoCalibrationFile};
 
 /// (camera, rectified u, v, OpenCV's raw x, y).
 const OPENCV: &[(&str, u32, u32, f64, f64)] = &[
@@ -142,9 +143,9 @@ fn load(name: &str) -> CameraInfo {
     CameraInfo::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(format!("{name}.yaml"))).unwrap()
 }
 
-#[test]
-fn remap_tables_agree_with_opencv_within_a_tenth_of_a_pixel() {
-    let rectifier = Rectifier::new(&load("left"), &load("right")).unwrap();
+/// The largest disagreement, px, between `rectifier`'s tables and
+/// OpenCV's at the sample points.
+fn worst_disagreement(rectifier: &Rectifier) -> f64 {
     let (left, right) = rectifier.tables();
     let mut worst = 0.0f64;
     for &(camera, u, v, x, y) in OPENCV {
@@ -152,6 +153,12 @@ fn remap_tables_agree_with_opencv_within_a_tenth_of_a_pixel() {
         let [ours_x, ours_y] = table.source_of(u, v).unwrap();
         worst = worst.max((f64::from(ours_x) - x).abs()).max((f64::from(ours_y) - y).abs());
     }
+    worst
+}
+
+#[test]
+fn remap_tables_agree_with_opencv_within_a_tenth_of_a_pixel() {
+    let worst = worst_disagreement(&Rectifier::new(&load("left"), &load("right")).unwrap());
     eprintln!("worst disagreement with OpenCV: {worst} px");
     assert!(worst < 0.1, "worst disagreement {worst} px");
     assert_eq!(OPENCV.len(), 128);
@@ -177,4 +184,48 @@ fn broken_camera_info_is_refused_with_its_place() {
     assert!(err.contains("distortion_model"), "{err}");
     // Swapped cameras put the right one on the left.
     assert!(Rectifier::new(&load("right"), &load("left")).unwrap_err().contains("to the right"));
+}
+
+fn stereo_file() -> StereoCalibrationFile {
+    StereoCalibrationFile::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/stereo.yaml")).unwrap()
+}
+
+#[test]
+fn stereo_rectify_gives_opencvs_rotations_and_projections() {
+    let (left, right) = stereo_rectify(&stereo_file());
+    for (ours, theirs) in [(&left, load("left")), (&right, load("right"))] {
+        assert_eq!((ours.k, ours.d), (theirs.k, theirs.d));
+        for (a, b) in ours.r.iter().zip(&theirs.r) {
+            assert!((a - b).abs() < 1e-9, "R {:?} against OpenCV's {:?}", ours.r, theirs.r);
+        }
+        for (a, b) in ours.p.iter().zip(&theirs.p) {
+            assert!((a - b).abs() < 1e-4, "P {:?} against OpenCV's {:?}", ours.p, theirs.p);
+        }
+    }
+}
+
+#[test]
+fn an_unrectified_calibration_is_rectified_as_opencv_does_it() {
+    let (left, right) = stereo_rectify(&stereo_file());
+    let worst = worst_disagreement(&Rectifier::new(&left, &right).unwrap());
+    eprintln!("worst disagreement with OpenCV, from K, D, R, T: {worst} px");
+    assert!(worst < 0.1, "worst disagreement {worst} px");
+}
+
+#[test]
+fn a_broken_stereo_calibration_is_refused_with_its_place() {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/stereo.yaml")).unwrap();
+    // OpenCV before 4 wrote `%YAML:1.0`; both headers are read.
+    let old = text.replace("%YAML 1.2", "%YAML:1.0");
+    assert_eq!(StereoCalibrationFile::from_yaml(&old).unwrap(), stereo_file());
+    let err = StereoCalibrationFile::from_yaml(&text.replace("image_height: 720", "image_height: [720")).unwrap_err();
+    assert!(err.starts_with("4:"), "{err}");
+    let err = StereoCalibrationFile::from_yaml(&text.replacen("rows: 3", "rows: 2", 1)).unwrap_err();
+    assert!(err.contains("K1: expected 3 × 3"), "{err}");
+    let err = StereoCalibrationFile::from_yaml(&text.replace("T: !!opencv-matrix", "Tx: !!opencv-matrix")).unwrap_err();
+    assert!(err.contains("missing field `T`"), "{err}");
+    // Cameras one above the other are not a horizontal pair.
+    let err = StereoCalibrationFile::from_yaml(&text.replace("[ -0.12, 0.0030000000000000001,", "[ 0.001, -0.12,"))
+        .unwrap_err();
+    assert!(err.contains("side by side"), "{err}");
 }
