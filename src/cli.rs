@@ -48,6 +48,22 @@ struct Cli {
     quiet: bool,
 }
 
+/// What `ubf sweep` does besides sweeping.
+#[derive(Debug, Subcommand)]
+enum SweepAction {
+    /// Combine the shards of a sweep (`ubf sweep ... --shard K/N`) into the
+    /// summary one sweep would have written: `summary.csv` and
+    /// `summary.json`, byte for byte.
+    Merge {
+        /// Directories holding the shards' output (one may hold them all).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where the summary goes (default: the first directory).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a scenario headless on the simulator and print a summary.
@@ -67,20 +83,31 @@ enum Command {
         #[arg(long)]
         huge: bool,
     },
-    /// Run every scenario with every seed in parallel and summarise.
+    /// Run every scenario with every seed in parallel and summarise; with
+    /// `--shard K/N`, a share of the runs, for `ubf sweep merge` to combine.
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
     Sweep {
+        #[command(subcommand)]
+        action: Option<SweepAction>,
         /// The scenario files (RON).
         #[arg(required = true)]
         files: Vec<PathBuf>,
         /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
-        #[arg(long, value_parser = parse_seeds)]
-        seeds: std::ops::Range<u64>,
+        #[arg(long, required = true, value_parser = parse_seeds)]
+        seeds: Option<std::ops::Range<u64>>,
         /// Runs at once (at least 1); by default one per core.
         #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Where the reports and the summary go.
-        #[arg(long)]
-        out: PathBuf,
+        #[arg(long, required = true)]
+        out: Option<PathBuf>,
+        /// Run only share K of N (from 0) of the runs, leaving their
+        /// reports and `shard-K-of-N.json` in `--out` (which may hold other
+        /// shards' output) instead of a summary; `ubf sweep merge` then
+        /// combines the shards. For a Slurm job array or a Kubernetes
+        /// indexed job.
+        #[arg(long, value_name = "K/N", value_parser = crate::sweep::Shard::parse)]
+        shard: Option<crate::sweep::Shard>,
         /// Also write every run's trajectory.csv and plot.png.
         #[arg(long)]
         trajectories: bool,
@@ -408,8 +435,32 @@ pub fn main_with(registry: Registry) -> ExitCode {
     match cli.command {
         Command::Run { file, seed, out, json, huge } => run_command(&registry, file, seed, out, json, huge),
         Command::Check { files } => check_command(&registry, &files),
-        Command::Sweep { files, seeds, jobs, out, trajectories, overwrite, huge } => {
-            let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64);
+        Command::Sweep { action: Some(SweepAction::Merge { dirs, out }), .. } => {
+            let out = out.unwrap_or_else(|| dirs[0].clone());
+            match crate::sweep::merge(&dirs, &out) {
+                Ok(summary) => {
+                    let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
+                    let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
+                    println!("merged {runs} runs of {} scenario(s); {failed} failed", summary.scenarios.len());
+                    println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(crate::sweep::MergeError::Write(e)) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(EXIT_FAILURE)
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(EXIT_BAD_INPUT)
+                }
+            }
+        }
+        Command::Sweep { action: None, files, seeds, jobs, out, shard, trajectories, overwrite, huge } => {
+            let (Some(seeds), Some(out)) = (seeds, out) else {
+                unreachable!("clap requires --seeds and --out without a subcommand")
+            };
+            let share = shard.map_or(1, |s| s.count);
+            let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).div_ceil(share);
             if runs > MOST_SWEEP_RUNS && !huge {
                 eprintln!(
                     "error: {runs} runs ({} seeds × {} files), more than {MOST_SWEEP_RUNS}: each leaves a \
@@ -419,11 +470,15 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 );
                 return ExitCode::from(EXIT_BAD_INPUT);
             }
-            if let Err(message) = clear_sweep_output(&out, overwrite) {
+            let cleared = match shard {
+                None => clear_sweep_output(&out, overwrite),
+                Some(shard) => clear_shard_output(&out, shard, overwrite),
+            };
+            if let Err(message) = cleared {
                 eprintln!("error: {message}");
                 return ExitCode::from(EXIT_BAD_INPUT);
             }
-            sweep_command(&registry, &files, seeds, jobs, &out, trajectories, huge)
+            sweep_command(&registry, &files, seeds, shard, jobs, &out, trajectories, huge)
         }
         Command::Model { action } => model_command(&registry, action),
         Command::Experiment { which } => experiment_command(&registry, which),
@@ -1217,10 +1272,29 @@ fn clear_sweep_output(out: &std::path::Path, overwrite: bool) -> Result<(), Stri
     std::fs::remove_dir_all(out).map_err(|e| format!("clearing --out {shown}: {e}"))
 }
 
+/// Makes `out` ready for one shard of a sweep: other shards' output may be
+/// there (shards often share a directory), but this shard's record only
+/// with `overwrite`.
+fn clear_shard_output(out: &std::path::Path, shard: crate::sweep::Shard, overwrite: bool) -> Result<(), String> {
+    let record = out.join(shard.record_name());
+    if !record.exists() {
+        return Ok(());
+    }
+    if !overwrite {
+        return Err(format!(
+            "{} exists: this shard has run before. Pass --overwrite to run it again",
+            record.display()
+        ));
+    }
+    std::fs::remove_file(&record).map_err(|e| format!("removing {}: {e}", record.display()))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn sweep_command(
     registry: &Registry,
     files: &[PathBuf],
     seeds: std::ops::Range<u64>,
+    shard: Option<crate::sweep::Shard>,
     jobs: Option<usize>,
     out: &std::path::Path,
     trajectories: bool,
@@ -1247,6 +1321,37 @@ fn sweep_command(
     }
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let stopwatch = ubf_core::Stopwatch::start();
+    if let Some(shard) = shard {
+        return match crate::sweep::sweep_shard(&items, seeds.clone(), shard, jobs, out, trajectories) {
+            Ok(record) => {
+                let total = items.len() * (seeds.end - seeds.start) as usize;
+                let runs = (0..total).filter(|&t| shard.takes(t)).count();
+                println!(
+                    "shard {}/{}: {runs} runs in {:.2} s on {jobs} job(s); {} failed",
+                    shard.index,
+                    shard.count,
+                    stopwatch.elapsed_s(),
+                    record.failed.len()
+                );
+                println!(
+                    "record: {}; once every shard has run: ubf sweep merge DIR...",
+                    out.join(shard.record_name()).display()
+                );
+                for (label, seed, error) in &record.failed {
+                    eprintln!("error: {label} seed {seed}: {error}");
+                }
+                if record.failed.is_empty() {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::from(EXIT_FAILURE)
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(EXIT_FAILURE)
+            }
+        };
+    }
     match crate::sweep::sweep(&items, seeds.clone(), jobs, out, trajectories) {
         Ok(summary) => {
             let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();

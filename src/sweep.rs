@@ -3,11 +3,16 @@
 //! The summary depends only on the scenarios and seeds, never on how many
 //! jobs ran them or in which order they finished: results are gathered by
 //! job number, and wall time (the one thing that varies) stays out of it.
+//!
+//! A sweep too big for one machine is split into shards ([`Shard`]): each
+//! runs a fixed share of the runs and leaves their reports and a record of
+//! what it did; [`merge`] reads them back and writes the summary a single
+//! sweep would have written, byte for byte.
 
 use crate::run::{run, write_report, RunError, RunReport};
 use crate::scenario::Scenario;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -77,6 +82,53 @@ pub struct SweepSummary {
     pub scenarios: BTreeMap<String, ScenarioSummary>,
 }
 
+/// A share of a sweep's runs: of the runs in order (scenario by scenario,
+/// seed by seed), those whose position modulo `count` is `index`. Written
+/// `K/N`, 0-based, as a Slurm array task or a Kubernetes indexed job
+/// numbers its workers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// Which share, from 0.
+    pub index: u64,
+    /// How many shares.
+    pub count: u64,
+}
+
+impl Shard {
+    /// Reads `K/N` with `0 ≤ K < N`.
+    pub fn parse(text: &str) -> Result<Shard, String> {
+        let parsed = text.split_once('/').and_then(|(k, n)| Some((k.trim().parse().ok()?, n.trim().parse().ok()?)));
+        match parsed {
+            Some((index, count)) if index < count => Ok(Shard { index, count }),
+            _ => Err(format!("expected K/N with 0 ≤ K < N (shards are numbered from 0), e.g. 0/8; got {text:?}")),
+        }
+    }
+
+    /// Whether the run at `position` (in sweep order) is this shard's.
+    pub fn takes(&self, position: usize) -> bool {
+        position as u64 % self.count == self.index
+    }
+
+    /// The name of the record this shard leaves beside its runs.
+    pub fn record_name(&self) -> String {
+        format!("shard-{}-of-{}.json", self.index, self.count)
+    }
+}
+
+/// What a shard did, `shard-K-of-N.json` beside its runs: enough for
+/// [`merge`] to find every run's report and to know the sweep is whole.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardRecord {
+    /// Which share of the runs.
+    pub shard: Shard,
+    /// The seeds swept, `start..end`.
+    pub seeds: [u64; 2],
+    /// The scenario labels, in sweep order.
+    pub labels: Vec<String>,
+    /// This shard's runs that failed: label, seed and error.
+    pub failed: Vec<(String, u64, String)>,
+}
+
 /// Why a sweep could not write its results.
 #[derive(Debug, thiserror::Error)]
 #[error("writing {}: {source}", path.display())]
@@ -123,6 +175,12 @@ pub fn stats(values: &[f64]) -> FieldStats {
 
 /// Every numeric leaf of a report, with dotted names.
 fn numeric_fields(report: &RunReport) -> Vec<(String, f64)> {
+    numeric_leaves(&serde_json::to_value(report).expect("a report always serialises"))
+}
+
+/// Every numeric leaf of a report read as JSON, with dotted names (booleans
+/// as 0 and 1), leaving out `seed` and `wall_time_s`.
+fn numeric_leaves(report: &serde_json::Value) -> Vec<(String, f64)> {
     fn walk(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, f64)>) {
         match value {
             serde_json::Value::Number(n) => out.extend(n.as_f64().map(|v| (prefix.to_owned(), v))),
@@ -137,7 +195,7 @@ fn numeric_fields(report: &RunReport) -> Vec<(String, f64)> {
         }
     }
     let mut out = Vec::new();
-    walk("", &serde_json::to_value(report).expect("a report always serialises"), &mut out);
+    walk("", report, &mut out);
     out.retain(|(name, _)| name != "seed" && name != "wall_time_s");
     out
 }
@@ -152,31 +210,212 @@ pub fn sweep(
     out: &Path,
     full_outputs: bool,
 ) -> Result<SweepSummary, SweepError> {
-    let tasks: Vec<(usize, u64)> = (0..items.len()).flat_map(|i| seeds.clone().map(move |s| (i, s))).collect();
-    let results = run_parallel(&tasks, jobs, |&(item, seed)| {
+    let results = run_tasks(items, seeds.clone(), jobs, out, full_outputs, |_| true);
+    let labels: Vec<String> = items.iter().map(|i| i.label.clone()).collect();
+    let summary = summarise(&labels, seeds, |task| match &results[task] {
+        Some(Ok(report)) => Ok(numeric_fields(report)),
+        Some(Err(e)) => Err(e.clone()),
+        None => unreachable!("an unsharded sweep runs every task"),
+    });
+    write_summary(&summary, out)?;
+    Ok(summary)
+}
+
+/// Runs `shard`'s share of every item × seed, as [`sweep`] does, and
+/// writes its record (`shard-K-of-N.json`) in `out` instead of a summary.
+pub fn sweep_shard(
+    items: &[SweepItem],
+    seeds: Range<u64>,
+    shard: Shard,
+    jobs: usize,
+    out: &Path,
+    full_outputs: bool,
+) -> Result<ShardRecord, SweepError> {
+    let results = run_tasks(items, seeds.clone(), jobs, out, full_outputs, |task| shard.takes(task));
+    let per_item = (seeds.end - seeds.start) as usize;
+    let failed = results
+        .iter()
+        .enumerate()
+        .filter_map(|(task, r)| match r {
+            Some(Err(e)) => {
+                Some((items[task / per_item].label.clone(), seeds.start + (task % per_item) as u64, e.clone()))
+            }
+            _ => None,
+        })
+        .collect();
+    let record = ShardRecord {
+        shard,
+        seeds: [seeds.start, seeds.end],
+        labels: items.iter().map(|i| i.label.clone()).collect(),
+        failed,
+    };
+    let path = out.join(shard.record_name());
+    let fail = |path: PathBuf| move |source| SweepError { path, source };
+    std::fs::create_dir_all(out).map_err(fail(out.to_owned()))?;
+    let json = serde_json::to_string_pretty(&record).expect("a record always serialises") + "\n";
+    std::fs::write(&path, json).map_err(fail(path.clone()))?;
+    Ok(record)
+}
+
+/// Runs the tasks (item × seed, item by item) that `chosen` picks, on
+/// `jobs` threads; `None` for the others.
+fn run_tasks(
+    items: &[SweepItem],
+    seeds: Range<u64>,
+    jobs: usize,
+    out: &Path,
+    full_outputs: bool,
+    chosen: impl Fn(usize) -> bool,
+) -> Vec<Option<Result<RunReport, String>>> {
+    let tasks: Vec<(usize, usize, u64)> = (0..items.len())
+        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
+        .enumerate()
+        .filter(|(task, _)| chosen(*task))
+        .map(|(task, (i, s))| (task, i, s))
+        .collect();
+    let results = run_parallel(&tasks, jobs, |&(_, item, seed)| {
         let dir = out.join(&items[item].label).join(format!("seed-{seed}"));
         run_one(&items[item].scenario, seed, &dir, full_outputs).map_err(|e| e.to_string())
     });
+    let mut all: Vec<Option<Result<RunReport, String>>> =
+        (0..items.len() * (seeds.end - seeds.start) as usize).map(|_| None).collect();
+    for ((task, _, _), result) in tasks.into_iter().zip(results) {
+        all[task] = Some(result);
+    }
+    all
+}
+
+/// The summary of every label × seed, from each task's numeric fields or
+/// error (tasks item by item, seed by seed). The one place summaries are
+/// made, so that a merged sweep's is the same as a single one's.
+fn summarise(
+    labels: &[String],
+    seeds: Range<u64>,
+    outcome: impl Fn(usize) -> Result<Vec<(String, f64)>, String>,
+) -> SweepSummary {
+    let per_item = (seeds.end - seeds.start) as usize;
     let mut scenarios = BTreeMap::new();
-    for (i, item) in items.iter().enumerate() {
+    for (i, label) in labels.iter().enumerate() {
         let mut values: BTreeMap<String, Vec<f64>> = BTreeMap::new();
         let mut failed = Vec::new();
         let mut runs = 0;
-        for (task, result) in tasks.iter().zip(&results).filter(|(t, _)| t.0 == i) {
-            match result {
-                Ok(report) => {
+        for (k, seed) in seeds.clone().enumerate() {
+            match outcome(i * per_item + k) {
+                Ok(fields) => {
                     runs += 1;
-                    for (name, v) in numeric_fields(report) {
+                    for (name, v) in fields {
                         values.entry(name).or_default().push(v);
                     }
                 }
-                Err(e) => failed.push((task.1, e.clone())),
+                Err(e) => failed.push((seed, e)),
             }
         }
         let fields = values.into_iter().map(|(k, v)| (k, stats(&v))).collect();
-        scenarios.insert(item.label.clone(), ScenarioSummary { runs, failed, fields });
+        scenarios.insert(label.clone(), ScenarioSummary { runs, failed, fields });
     }
-    let summary = SweepSummary { seeds: [seeds.start, seeds.end], scenarios };
+    SweepSummary { seeds: [seeds.start, seeds.end], scenarios }
+}
+
+/// Why shards could not be merged.
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A record or report is not what a shard writes.
+    #[error("{}: {message}", path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, with the line and column where JSON knows them.
+        message: String,
+    },
+    /// The shards do not make one whole sweep.
+    #[error("{0}")]
+    Incomplete(String),
+    /// The summary could not be written.
+    #[error(transparent)]
+    Write(#[from] SweepError),
+}
+
+/// Merges the shards recorded in `dirs` (each holding one or more
+/// `shard-K-of-N.json` and those shards' runs) into the summary one sweep
+/// would have written, and writes `summary.csv` and `summary.json` into
+/// `out`. Refuses shards of different sweeps, a shard twice, and a
+/// missing one.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<SweepSummary, MergeError> {
+    let mut records: Vec<(PathBuf, ShardRecord)> = Vec::new();
+    for dir in dirs {
+        let entries = std::fs::read_dir(dir).map_err(|source| MergeError::Read { path: dir.clone(), source })?;
+        let mut names: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("shard-") && n.ends_with(".json"))
+            })
+            .collect();
+        names.sort();
+        for path in names {
+            let text =
+                std::fs::read_to_string(&path).map_err(|source| MergeError::Read { path: path.clone(), source })?;
+            let record: ShardRecord = serde_json::from_str(&text)
+                .map_err(|e| MergeError::Malformed { path: path.clone(), message: e.to_string() })?;
+            records.push((dir.clone(), record));
+        }
+    }
+    let Some((_, first)) = records.first() else {
+        let shown: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        return Err(MergeError::Incomplete(format!("no shard records (shard-K-of-N.json) in {}", shown.join(", "))));
+    };
+    let (seeds, labels, count) = (first.seeds, first.labels.clone(), first.shard.count);
+    let mut owner: Vec<Option<usize>> = vec![None; count as usize];
+    for (n, (dir, record)) in records.iter().enumerate() {
+        if record.seeds != seeds || record.labels != labels || record.shard.count != count {
+            return Err(MergeError::Incomplete(format!(
+                "{}: {} belongs to another sweep (seeds {:?}, scenarios {:?}, {} shards; expected {:?}, {:?}, {count})",
+                dir.display(),
+                record.shard.record_name(),
+                record.seeds,
+                record.labels,
+                record.shard.count,
+                seeds,
+                labels
+            )));
+        }
+        let slot = &mut owner[record.shard.index as usize];
+        if slot.is_some() {
+            return Err(MergeError::Incomplete(format!("shard {}/{count} is recorded twice", record.shard.index)));
+        }
+        *slot = Some(n);
+    }
+    let missing: Vec<String> =
+        owner.iter().enumerate().filter(|(_, o)| o.is_none()).map(|(k, _)| format!("{k}/{count}")).collect();
+    if !missing.is_empty() {
+        return Err(MergeError::Incomplete(format!("missing shards: {}", missing.join(", "))));
+    }
+    let range = seeds[0]..seeds[1];
+    let per_item = (seeds[1] - seeds[0]) as usize;
+    // Read every run's report first, so that a broken one is an error, not
+    // a failed run.
+    let mut outcomes: Vec<Result<Vec<(String, f64)>, String>> = Vec::with_capacity(labels.len() * per_item);
+    for task in 0..labels.len() * per_item {
+        let (label, seed) = (&labels[task / per_item], seeds[0] + (task % per_item) as u64);
+        let (dir, record) = &records[owner[(task as u64 % count) as usize].expect("every shard is present")];
+        if let Some((_, _, error)) = record.failed.iter().find(|(l, s, _)| l == label && *s == seed) {
+            outcomes.push(Err(error.clone()));
+            continue;
+        }
+        let path = dir.join(label).join(format!("seed-{seed}")).join("report.json");
+        let text = std::fs::read_to_string(&path).map_err(|source| MergeError::Read { path: path.clone(), source })?;
+        let report: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| MergeError::Malformed { path: path.clone(), message: e.to_string() })?;
+        outcomes.push(Ok(numeric_leaves(&report)));
+    }
+    let summary = summarise(&labels, range, |task| outcomes[task].clone());
     write_summary(&summary, out)?;
     Ok(summary)
 }

@@ -110,7 +110,25 @@ fn as_run(body: &str) -> String {
 /// The words of each `ubf` command line in a shell block, without
 /// redirections, pipes, background `&` and comments.
 fn ubf_commands(body: &str) -> Vec<Vec<String>> {
-    as_run(body)
+    // Lines continued with a backslash are one command, as in a shell; a
+    // shell variable (`"$SLURM_ARRAY_TASK_ID/100"`) stands for 1, its
+    // quotes for nothing, so that the rest of the line is still checked.
+    let joined = as_run(body).replace("\\\n", " ");
+    let mut plain = String::new();
+    let mut chars = joined.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => {}
+            '$' => {
+                while chars.peek().is_some_and(|c| c.is_ascii_alphanumeric() || *c == '_') {
+                    chars.next();
+                }
+                plain.push('1');
+            }
+            c => plain.push(c),
+        }
+    }
+    plain
         .lines()
         .filter_map(|line| {
             let line = line.split(" #").next()?.split(['|', '&']).next()?;

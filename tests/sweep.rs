@@ -102,3 +102,59 @@ fn a_sweep_never_leaves_old_runs_beside_a_new_summary() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(other.join("holiday.jpg").is_file());
 }
+
+fn shard(out: &Path, shard: &str) -> Output {
+    ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "3..=14",
+        "--out",
+        out.to_str().unwrap(),
+        "--shard",
+        shard,
+    ])
+}
+
+#[test]
+fn shards_merged_give_the_same_summary_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    assert!(sweep(&whole, "2").status.success());
+    // Shards in their own directories (machines without a shared disk)…
+    let parts: Vec<_> = (0..5).map(|k| dir.path().join(format!("part-{k}"))).collect();
+    for (k, part) in parts.iter().enumerate() {
+        let out = shard(part, &format!("{k}/5"));
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(part.join(format!("shard-{k}-of-5.json")).is_file() && !part.join("summary.json").exists());
+    }
+    let merged = dir.path().join("merged");
+    let mut args = vec!["sweep", "merge"];
+    args.extend(parts.iter().map(|p| p.to_str().unwrap()));
+    args.extend(["--out", merged.to_str().unwrap()]);
+    let out = ubf(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // …or all in one, merged in place.
+    let shared = dir.path().join("shared");
+    for k in 0..3 {
+        assert!(shard(&shared, &format!("{k}/3")).status.success());
+    }
+    let rerun = shard(&shared, "1/3");
+    assert_eq!(rerun.status.code(), Some(2), "a shard run twice is refused without --overwrite");
+    assert!(ubf(&["sweep", "merge", shared.to_str().unwrap()]).status.success());
+    for file in ["summary.csv", "summary.json"] {
+        let expected = std::fs::read(whole.join(file)).unwrap();
+        assert!(std::fs::read(merged.join(file)).unwrap() == expected, "{file}: 5 shards differ from one sweep");
+        assert!(std::fs::read(shared.join(file)).unwrap() == expected, "{file}: 3 shards differ from one sweep");
+    }
+    // A missing shard, or one from another sweep, is named, not guessed.
+    let out = ubf(&["sweep", "merge", parts[0].to_str().unwrap(), parts[2].to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing shards: 1/5, 3/5, 4/5"));
+    let out = ubf(&["sweep", "merge", parts[0].to_str().unwrap(), shared.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("belongs to another sweep"));
+    let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..3", "--out", "unused", "--shard", "3/3"]);
+    assert_eq!(out.status.code(), Some(2));
+}
