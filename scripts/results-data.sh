@@ -41,7 +41,7 @@ cp out/keyframes/summary.json out/keyframes.json
 rm -rf "$variants"
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
-    commits=(a7c19a4 383fdec 9bf8784 f752499)
+    commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec)
     scratch=$(mktemp -d)
     trap 'git worktree remove --force "$scratch/tree" 2>/dev/null || true; rm -rf "$scratch"' EXIT
     for k in "${!commits[@]}"; do

@@ -79,11 +79,11 @@ impl DecisionCosts {
 /// the thesis routes driven straight, with tracking, the scan and the
 /// zig-zag (seeds 100..110), fitting what stays in the end point; see
 /// `docs/results.md`.
-const STEP_SIGMA_PER_CV: f64 = 1.08;
-/// As above: the end points showed no growth with the angle turned.
-const HEADING_VAR_PER_RAD: f64 = 0.0;
-/// As above: 0.22° per turn on the spot.
-const HEADING_VAR_PER_TURN: f64 = 1.5e-5;
+const STEP_SIGMA_PER_CV: f64 = 0.90;
+/// As above: 0.17° per radian turned.
+const HEADING_VAR_PER_RAD: f64 = 9.3e-6;
+/// As above: 0.20° per turn on the spot.
+const HEADING_VAR_PER_TURN: f64 = 1.2e-5;
 
 impl Default for DecisionCosts {
     fn default() -> Self {
