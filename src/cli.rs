@@ -127,8 +127,16 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
-    /// List the behaviours this build can read from scenario files.
-    Behaviors,
+    /// List the behaviours this build can read from scenario files; with
+    /// `--describe`, their fields (kind, unit, default, range, meaning) as
+    /// Markdown tables.
+    Behaviors {
+        /// Print each behaviour's fields, not only its name.
+        #[arg(long)]
+        describe: bool,
+        /// Only these behaviours (with `--describe`).
+        names: Vec<String>,
+    },
     /// Print a scenario's (or robot file's) behaviour tree as Graphviz DOT
     /// (`| dot -Tpng > tree.png`), or as Mermaid for Markdown pages: each
     /// composite with its arbiter and vote override, each child with its
@@ -527,13 +535,35 @@ pub fn main_with(registry: Registry) -> ExitCode {
             pipeline_command(&dir, &options, json, plot.as_deref())
         }
         Command::Tree { file, mermaid } => tree_command(&registry, &file, mermaid),
-        Command::Behaviors => {
-            for name in registry.names() {
-                println!("{name}");
-            }
-            ExitCode::SUCCESS
+        Command::Behaviors { describe, names } => behaviors_command(&registry, describe, &names),
+    }
+}
+
+fn behaviors_command(registry: &Registry, describe: bool, names: &[String]) -> ExitCode {
+    if let Some(unknown) = names.iter().find(|n| !registry.contains(n)) {
+        let known: Vec<&str> = registry.names().collect();
+        eprintln!("error: unknown behaviour `{unknown}`; known behaviours: {}", known.join(", "));
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let chosen: Vec<&str> =
+        if names.is_empty() { registry.names().collect() } else { names.iter().map(String::as_str).collect() };
+    for (i, name) in chosen.iter().enumerate() {
+        if !describe {
+            println!("{name}");
+            continue;
+        }
+        let fields = registry.fields(name).unwrap_or_default();
+        if i > 0 {
+            println!();
+        }
+        println!("### `{name}`\n");
+        if fields.is_empty() {
+            println!("No settings: `{name}()`.");
+        } else {
+            print!("{}", ubf_core::markdown_table(fields));
         }
     }
+    ExitCode::SUCCESS
 }
 
 /// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by

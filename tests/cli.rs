@@ -614,3 +614,17 @@ fn the_error_model_heat_map_is_drawn_with_its_colour_bar() {
     assert!(top[0] > 200 && top[2] < 100, "top of the bar {top:?}");
     assert!(bottom[2] > 200 && bottom[0] < 100, "bottom of the bar {bottom:?}");
 }
+
+#[test]
+fn behaviours_describe_their_fields() {
+    let out = ubf(&["behaviors", "--describe", "GoTo"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let described = text(&out.stdout);
+    assert!(described.starts_with("### `GoTo`"), "{described}");
+    assert!(described.contains("| `cruise_speed` | number | m/s | `0.5` | > 0 |"), "{described}");
+    let names = text(&ubf(&["behaviors"]).stdout);
+    assert!(names.lines().any(|l| l == "ActionAiding") && names.lines().any(|l| l == "Composite"), "{names}");
+    let unknown = ubf(&["behaviors", "--describe", "Teleport"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(text(&unknown.stderr).contains("unknown behaviour `Teleport`"), "{}", text(&unknown.stderr));
+}

@@ -339,3 +339,22 @@ fn the_shape_of_an_output_ignores_numbers_and_spacing_only() {
         vec![vec!["run".to_owned(), "a.ron".into(), "-vvv".into()]]
     );
 }
+
+#[test]
+fn the_behaviour_tables_are_the_behaviours_own_descriptions() {
+    let page = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scenario-format.md")).unwrap();
+    let registry = ubf::registry();
+    for name in registry.names() {
+        let heading = format!("### `{name}`\n");
+        let at = page.find(&heading).unwrap_or_else(|| panic!("docs/scenario-format.md has no section {heading}"));
+        let table_start = at + page[at..].find("\n| field").expect("a table under the heading") + 1;
+        let table: String =
+            page[table_start..].lines().take_while(|l| l.starts_with('|')).map(|l| format!("{l}\n")).collect();
+        let expected = ubf_core::markdown_table(registry.fields(name).unwrap());
+        assert!(
+            table == expected,
+            "docs/scenario-format.md, `{name}`: the table differs from the behaviour's description \
+             (`ubf behaviors --describe {name}`); it should read:\n{expected}"
+        );
+    }
+}

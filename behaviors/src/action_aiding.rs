@@ -604,6 +604,123 @@ impl Behavior for ActionAiding {
     }
 }
 
+impl ubf_core::Describe for ActionAidingConfig {
+    fn fields() -> Vec<ubf_core::Field> {
+        use ubf_core::Field;
+        vec![
+            Field::new(
+                "technique",
+                "technique",
+                "",
+                "required",
+                "",
+                "`None` (straight at the goal), `ZigZag`, `Scan` (physical scan before every step), `Tracking` \
+                 (evaluation over the landmark tracking list)",
+            ),
+            Field::new("step_m", "number", "m", "1.0", "> 0", "step between decisions (the error model's step)"),
+            Field::new(
+                "max_angle_deg",
+                "number",
+                "°",
+                "45",
+                "> 0",
+                "permitted headings either side of the goal's bearing",
+            ),
+            Field::new("angle_step_deg", "number", "°", "2.5", "> 0", "spacing of the candidate headings"),
+            Field::new(
+                "zigzag_angle_deg",
+                "number",
+                "°",
+                "20",
+                "> 0",
+                "zig-zag angle off the centre line (the thesis's)",
+            ),
+            Field::new(
+                "zigzag_max_offset_m",
+                "number",
+                "m",
+                "2.0",
+                "> 0",
+                "largest offset from the centre line; each leg turns at a random 50–100 % of it",
+            ),
+            Field::new(
+                "min_slant_m",
+                "number",
+                "m",
+                "0.5",
+                "≥ 0",
+                "a landmark nearer than this to the projected position rejects the heading (§3.5.2.2)",
+            ),
+            Field::new("max_range_m", "number", "m", "80", "> 0", "landmarks farther than this are not counted"),
+            Field::new(
+                "clearance_m",
+                "number",
+                "m",
+                "2.0",
+                "≥ 0",
+                "a heading's swept strip must be clear of sonar echoes this far (§4.4.10.5); 0 turns the check off",
+            ),
+            Field::new("path_half_width", "number", "m", "0.5", "> 0", "half that strip"),
+            Field::new("speed", "number", "m/s", "0.6", "> 0", "forward speed during a step"),
+            Field::new("scan_rate_deg", "number", "°/s", "30", "> 0", "turn rate during a physical scan"),
+            Field::new("heading_tolerance_deg", "number", "°", "2", "> 0", "a turn counts as done within this"),
+            Field::new("turn_gain", "number", "1/s", "2.0", "> 0", "turn rate per radian of heading error"),
+            Field::new("max_turn_deg", "number", "°/s", "20", "> 0", "largest turn rate: at 2 Hz, 10° between frames"),
+            Field::new(
+                "objective",
+                "objective",
+                "",
+                "EndPoint",
+                "",
+                "what the evaluative techniques minimise: `EndPoint`, the predicted end-point variance (the step's \
+                 translation variance plus the heading variance of the turn now and back to the goal bearing, times \
+                 the remaining distance squared; the goal bearing is always a candidate, so the robot drives straight \
+                 unless turning pays), or `Cv`, the thesis's step CV with turns free",
+            ),
+            Field::new(
+                "costs",
+                "costs",
+                "",
+                "(step_sigma_per_cv: 0.90, heading_var_per_rad: 9.3e-6, heading_var_per_turn: 1.2e-5)",
+                "each ≥ 0",
+                "the end-point objective's coefficients, measured: as `ubf model fit-costs` fits them from run logs \
+                 (`scripts/fit-costs.sh`); a turn within `heading_tolerance_deg` is steered while driving and costs no \
+                 turn",
+            ),
+            Field::new(
+                "min_landmarks",
+                "whole number",
+                "",
+                "4",
+                "",
+                "a heading must keep at least this many landmarks predicted in both images, within range and beyond \
+                 the stereo-matching distance; fewer and egomotion would fail",
+            ),
+            Field::new(
+                "max_stereo_viewpoint_deg",
+                "number",
+                "°",
+                "30",
+                "> 0",
+                "nearer than where the two cameras' lines of sight differ by this, a landmark is not counted \
+                 (§4.4.10.3)",
+            ),
+            Field::new("model", "error model", "", "Geometric", "", "error model for evaluating headings"),
+            Field::new(
+                "tracking",
+                "tracking list",
+                "",
+                "(matching: (max_distance: 64, ratio: 0.8), gate_m: 0.5, gate_per_m: 0.05, drop_viewpoint_deg: 20)",
+                "",
+                "the landmark tracking list, below",
+            ),
+            Field::new("vote_min", "number", "", "0.3", "≥ 0", "vote with egomotion certain (step CV near 0)"),
+            Field::new("vote_max", "number", "", "1.0", "≥ 0", "vote as the step CV grows without bound"),
+            Field::new("vote_half_cv", "number", "", "0.5", "> 0", "the step CV at which the vote is halfway between"),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -194,6 +194,43 @@ impl Behavior for AvoidCollision {
     }
 }
 
+impl ubf_core::Describe for AvoidCollisionConfig {
+    fn fields() -> Vec<ubf_core::Field> {
+        use ubf_core::Field;
+        vec![
+            Field::new("slow_distance", "number", "m", "1.2", "> 0", "clearance ahead below which it acts"),
+            Field::new(
+                "stop_distance",
+                "number",
+                "m",
+                "0.25",
+                "≥ 0, < `slow_distance`",
+                "clearance ahead at which forward speed is 0",
+            ),
+            Field::new(
+                "speed_per_metre",
+                "number",
+                "1/s",
+                "0.5",
+                "> 0",
+                "speed allowed per metre of clearance beyond `stop_distance`",
+            ),
+            Field::new(
+                "path_half_width",
+                "number",
+                "m",
+                "0.5",
+                "> 0",
+                "half the swept strip: the Powerbot's 0.34 m and a margin",
+            ),
+            Field::new("body_front", "number", "m", "0.369", "≥ 0", "centre of rotation to the front of the robot"),
+            Field::new("turn_gain", "number", "1/s", "1.5", "> 0", "turn rate per radian towards the chosen heading"),
+            Field::new("max_turn_deg", "number", "°/s", "45", "> 0", "largest turn rate it asks for"),
+            Field::new("vote", "number", "", "1.0", "≥ 0", "vote at `stop_distance`, falling to 0 at `slow_distance`"),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -50,3 +50,13 @@ impl Behavior for InjectFault {
         "InjectFault"
     }
 }
+
+impl ubf_core::Describe for InjectFaultConfig {
+    fn fields() -> Vec<ubf_core::Field> {
+        use ubf_core::Field;
+        vec![
+            Field::new("after_s", "number", "s", "required", "≥ 0", "when it starts to panic"),
+            Field::new("message", "text", "", "\"injected fault\"", "", "the panic's message"),
+        ]
+    }
+}

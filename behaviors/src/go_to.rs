@@ -96,6 +96,19 @@ impl Behavior for GoTo {
     }
 }
 
+impl ubf_core::Describe for GoToConfig {
+    fn fields() -> Vec<ubf_core::Field> {
+        use ubf_core::Field;
+        vec![
+            Field::new("cruise_speed", "number", "m/s", "0.5", "> 0", "speed far from the goal"),
+            Field::new("turn_gain", "number", "1/s", "1.5", "> 0", "turn rate per radian of heading error"),
+            Field::new("max_turn_deg", "number", "°/s", "45", "> 0", "largest turn rate it asks for"),
+            Field::new("slow_radius", "number", "m", "1.0", "≥ 0", "within this distance the speed ramps down"),
+            Field::new("vote", "number", "", "0.5", "≥ 0", "vote while driving"),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

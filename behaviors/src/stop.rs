@@ -67,6 +67,23 @@ impl Behavior for Stop {
     }
 }
 
+impl ubf_core::Describe for StopConfig {
+    fn fields() -> Vec<ubf_core::Field> {
+        use ubf_core::Field;
+        vec![
+            Field::new(
+                "when",
+                "condition",
+                "",
+                "Any([GoalReached, Bumped, Stalled, EStop, SensorsOlderThan(seconds: 0.5)])",
+                "",
+                "the [condition](arbiters.md#conditions) under which it asks for a stop",
+            ),
+            Field::new("vote", "number", "", "1.0", "≥ 0", "vote of the stop request"),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

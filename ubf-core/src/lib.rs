@@ -11,7 +11,7 @@
 //!
 //! ```
 //! use serde::Deserialize;
-//! use ubf_core::{Action, Behavior, BehaviorSpec, BuildContext, Registry, State};
+//! use ubf_core::{Action, Behavior, BehaviorSpec, BuildContext, Describe, Field, Registry, State};
 //!
 //! /// Drives forward, turning away from anything closer than `clearance`.
 //! struct Shy { speed: f64, clearance: f64 }
@@ -29,11 +29,22 @@
 //! #[serde(deny_unknown_fields)]
 //! struct ShyConfig { speed: f64, clearance: f64 }
 //!
+//! // What `ubf behaviors --describe` prints for it.
+//! impl Describe for ShyConfig {
+//!     fn fields() -> Vec<Field> {
+//!         vec![
+//!             Field::new("speed", "number", "m/s", "required", "", "forward speed"),
+//!             Field::new("clearance", "number", "m", "required", "", "turns away from anything nearer"),
+//!         ]
+//!     }
+//! }
+//!
 //! let mut registry = Registry::new();
 //! registry.register("Shy", |c: &ShyConfig, _: &BuildContext| Shy { speed: c.speed, clearance: c.clearance });
 //! let spec: BehaviorSpec = registry.from_ron("Shy(speed: 0.4, clearance: 0.5)").unwrap();
 //! let mut shy = spec.build(&BuildContext::new(7));
 //! assert_eq!(shy.gen_action(&State::default()).motion.velocity, Some(0.4));
+//! assert_eq!(registry.fields("Shy").unwrap()[1].unit, "m");
 //! ```
 //!
 //! Units are SI throughout (metres, seconds, radians); angles are
@@ -51,6 +62,7 @@ mod composite;
 mod condition;
 pub mod config;
 mod controller;
+mod describe;
 mod geometry;
 mod landmark;
 mod registry;
@@ -69,6 +81,7 @@ pub use controller::{
     Controller, ControllerError, NodeInfo, NodeOutcome, OnBehaviorPanic, StateSummary, TickRecord, TickSink,
     TracingSink, TreeLayout,
 };
+pub use describe::{markdown_table, Describe, Field};
 pub use geometry::{angle_difference, wrap_angle, Pose2};
 pub use landmark::{Descriptor, LandmarkObservation, StereoCalibration, StereoFrame, StereoPixels};
 pub use registry::{BehaviorSpec, BuildContext, Registry};

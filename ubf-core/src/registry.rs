@@ -8,6 +8,7 @@
 
 use crate::arbiter::ArbiterSpec;
 use crate::config::{self, RonError};
+use crate::describe::{Describe, Field};
 use crate::{Behavior, Composite};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -97,7 +98,14 @@ impl fmt::Debug for BehaviorSpec {
 /// earlier entry, so a user's crate may override a stock behaviour.
 #[derive(Clone)]
 pub struct Registry {
-    entries: BTreeMap<String, Arc<Parser>>,
+    entries: BTreeMap<String, Entry>,
+}
+
+/// A registered behaviour: how to read its config, and what its fields are.
+#[derive(Clone)]
+struct Entry {
+    parser: Arc<Parser>,
+    fields: Arc<Vec<Field>>,
 }
 
 impl Default for Registry {
@@ -110,16 +118,18 @@ impl Registry {
     /// A registry that knows only `Composite`.
     pub fn new() -> Self {
         let mut registry = Registry { entries: BTreeMap::new() };
-        registry.entries.insert("Composite".to_owned(), Arc::new(parse_composite));
+        let composite = Entry { parser: Arc::new(parse_composite), fields: Arc::new(composite_fields()) };
+        registry.entries.insert("Composite".to_owned(), composite);
         registry
     }
 
     /// Registers a behaviour under `name`: its config type `C` (use
     /// `#[serde(deny_unknown_fields)]` and the checkers of
-    /// [`crate::config`]) and a constructor from the config.
+    /// [`crate::config`]; its [`Describe`] says what the fields are) and a
+    /// constructor from the config.
     pub fn register<C, B, F>(&mut self, name: &str, build: F) -> &mut Self
     where
-        C: DeserializeOwned + Send + Sync + 'static,
+        C: DeserializeOwned + Describe + Send + Sync + 'static,
         B: Behavior + 'static,
         F: Fn(&C, &BuildContext) -> B + Send + Sync + 'static,
     {
@@ -131,8 +141,14 @@ impl Registry {
                 Arc::new(move |ctx: &BuildContext| Box::new(build(&config, ctx)) as Box<dyn Behavior>);
             Ok(factory)
         };
-        self.entries.insert(name.to_owned(), Arc::new(parser));
+        self.entries.insert(name.to_owned(), Entry { parser: Arc::new(parser), fields: Arc::new(C::fields()) });
         self
+    }
+
+    /// The fields of the behaviour registered as `name`, as its config
+    /// describes them.
+    pub fn fields(&self, name: &str) -> Option<&[Field]> {
+        self.entries.get(name).map(|e| e.fields.as_slice())
     }
 
     /// The registered names, sorted.
@@ -193,7 +209,7 @@ impl<'de> Visitor<'de> for SpecVisitor {
         let (Identifier(kind), variant) = data.variant::<Identifier>()?;
         let parser = ACTIVE.with(|active| match active.borrow().as_ref() {
             None => Err(de::Error::custom("behaviour trees must be read through Registry::from_ron")),
-            Some(registry) => registry.entries.get(&kind).cloned().ok_or_else(|| {
+            Some(registry) => registry.entries.get(&kind).map(|e| Arc::clone(&e.parser)).ok_or_else(|| {
                 let known: Vec<&str> = registry.names().collect();
                 de::Error::custom(format!("unknown behaviour `{kind}`; known behaviours: {}", known.join(", ")))
             }),
@@ -257,6 +273,37 @@ struct CompositeConfig {
     #[serde(default, deserialize_with = "config::optional_non_negative")]
     vote: Option<f64>,
     children: Vec<ChildSpec>,
+}
+
+/// `Composite`'s fields, as [`Describe`] gives a registered behaviour's.
+fn composite_fields() -> Vec<Field> {
+    vec![
+        Field::new(
+            "name",
+            "text",
+            "",
+            "\"root\"",
+            "",
+            "the node's name (for the root; children are named by their entry)",
+        ),
+        Field::new("arbiter", "arbiter", "", "required", "", "how children combine: see [arbiters](arbiters.md)"),
+        Field::new(
+            "vote",
+            "number",
+            "",
+            "None",
+            "≥ 0",
+            "a vote this composite bids to its parent in place of the one its arbiter gives",
+        ),
+        Field::new(
+            "children",
+            "list",
+            "",
+            "required",
+            "",
+            "`[(behavior: .., weight: .., name: ..), ..]`: each child, its weight (≥ 0, normalised over the children; 1 by default) and its name in records (the behaviour's by default; repeats get `_2`, `_3`…)",
+        ),
+    ]
 }
 
 fn parse_composite(d: &mut dyn erased_serde::Deserializer) -> Result<Arc<Factory>, erased_serde::Error> {

@@ -4,13 +4,19 @@
 use rand::Rng;
 use serde::Deserialize;
 use ubf_core::config::positive;
-use ubf_core::{Action, Behavior, BehaviorSpec, BuildContext, Registry, State};
+use ubf_core::{Action, Behavior, BehaviorSpec, BuildContext, Describe, Field, Registry, State};
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CruiseConfig {
     #[serde(deserialize_with = "positive")]
     speed: f64,
+}
+
+impl Describe for CruiseConfig {
+    fn fields() -> Vec<Field> {
+        vec![Field::new("speed", "number", "m/s", "required", "> 0", "forward speed")]
+    }
 }
 
 struct Cruise(f64);

@@ -9,7 +9,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::positive;
-use ubf_core::{Action, Behavior, BuildContext, State};
+use ubf_core::{Action, Behavior, BuildContext, Describe, Field, State};
 
 /// Settings of `Wander(..)` in a scenario file.
 #[derive(Clone, Debug, Deserialize)]
@@ -24,6 +24,17 @@ struct WanderConfig {
     /// Largest turn rate chosen, °/s.
     #[serde(default = "default_turn", deserialize_with = "positive")]
     max_turn_deg: f64,
+}
+
+/// What `ubf behaviors --describe` prints for `Wander`.
+impl Describe for WanderConfig {
+    fn fields() -> Vec<Field> {
+        vec![
+            Field::new("speed", "number", "m/s", "required", "> 0", "forward speed"),
+            Field::new("every_s", "number", "s", "2.0", "> 0", "time between changes of mind"),
+            Field::new("max_turn_deg", "number", "°/s", "30", "> 0", "largest turn rate chosen"),
+        ]
+    }
 }
 
 fn default_every() -> f64 {
