@@ -8,18 +8,24 @@ fn ubf(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ubf")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
 }
 
-fn sweep(out: &Path, jobs: &str) -> Output {
-    ubf(&[
+/// The test sweep (two scenarios, seeds 3..=14) into `out`, with `extra`
+/// arguments.
+fn sweep_with(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
         "sweep",
         "scenarios/corridor-box.ron",
         "scenarios/goto-open-floor.ron",
         "--seeds",
         "3..=14",
-        "--jobs",
-        jobs,
         "--out",
         out.to_str().unwrap(),
-    ])
+    ];
+    args.extend(extra);
+    ubf(&args)
+}
+
+fn sweep(out: &Path, jobs: &str) -> Output {
+    sweep_with(out, &["--jobs", jobs])
 }
 
 #[test]
@@ -104,17 +110,7 @@ fn a_sweep_never_leaves_old_runs_beside_a_new_summary() {
 }
 
 fn shard(out: &Path, shard: &str) -> Output {
-    ubf(&[
-        "sweep",
-        "scenarios/corridor-box.ron",
-        "scenarios/goto-open-floor.ron",
-        "--seeds",
-        "3..=14",
-        "--out",
-        out.to_str().unwrap(),
-        "--shard",
-        shard,
-    ])
+    sweep_with(out, &["--shard", shard])
 }
 
 #[test]
