@@ -18,11 +18,44 @@ pub struct RunPlot<'a> {
     pub true_path: &'a [(f64, f64)],
     /// Where it believed it went.
     pub estimated_path: &'a [(f64, f64)],
-    /// Where the winning behaviour changed, on the true path.
-    pub decisions: &'a [(f64, f64)],
+    /// Where the winning behaviour changed, on the true path, and the
+    /// behaviour that won there.
+    pub decisions: &'a [Decision],
+    /// Where the robot touched something, on the true path.
+    pub collisions: &'a [(f64, f64)],
+    /// The robot's pose at its start, and its outline there.
+    pub start: Option<(ubf_core::Pose2, [(f64, f64); 4])>,
     /// The goal.
     pub goal: Option<Goal>,
+    /// Speed, turn rate and votes over time, for the panel under the map.
+    pub timeline: Option<&'a Timeline>,
 }
+
+/// A point where the winning behaviour changed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decision {
+    /// Where, m.
+    pub at: (f64, f64),
+    /// The behaviour that won from there (its node name).
+    pub winner: String,
+}
+
+/// What the tree asked for, tick by tick.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Timeline {
+    /// Seconds since the start.
+    pub time: Vec<f64>,
+    /// Commanded forward speed, m/s.
+    pub speed: Vec<f64>,
+    /// Commanded turn rate, °/s (NaN where the command gave a heading).
+    pub turn_deg: Vec<f64>,
+    /// Each behaviour's (leaf's) name and its vote per tick.
+    pub votes: Vec<(String, Vec<f64>)>,
+}
+
+/// Decision points labelled on the map at most; beyond, the crosses speak
+/// for themselves (a scan decides hundreds of times).
+const MOST_LABELS: usize = 40;
 
 /// Why a plot could not be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -67,18 +100,60 @@ fn bounds(plot: &RunPlot) -> (f64, f64, f64, f64) {
     (x0 - margin, x1 + margin, y0 - margin, y1 + margin)
 }
 
-/// Draws the plot into a PNG at `path`.
+/// How a legend entry is drawn.
+#[derive(Clone, Copy)]
+enum Mark {
+    Dot(RGBColor, i32),
+    Ring(RGBColor, i32),
+    Line(RGBColor, u32),
+    Cross(RGBColor),
+    Triangle(RGBColor),
+    Outline(RGBColor),
+    Band(RGBColor),
+}
+
+/// The legend, in its own column beside the map so it never hides any of
+/// the world.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    entries: &[(String, Mark)],
+) -> Result<(), String> {
+    let err = |e: &dyn std::fmt::Display| e.to_string();
+    for (i, (label, mark)) in entries.iter().enumerate() {
+        let y = 60 + 28 * i as i32;
+        let (x, c) = (22, (22, y));
+        match *mark {
+            Mark::Dot(color, r) => area.draw(&Circle::new(c, r, color.filled())),
+            Mark::Ring(color, r) => area.draw(&Circle::new(c, r, color.stroke_width(2))),
+            Mark::Line(color, w) => area.draw(&PathElement::new(vec![(x - 12, y), (x + 12, y)], color.stroke_width(w))),
+            Mark::Cross(color) => area.draw(&Cross::new(c, 5, color.stroke_width(2))),
+            Mark::Triangle(color) => area.draw(&TriangleMarker::new(c, 8, color.stroke_width(2))),
+            Mark::Outline(color) => area.draw(&Rectangle::new([(x - 9, y - 6), (x + 9, y + 6)], color.stroke_width(2))),
+            Mark::Band(color) => area.draw(&Rectangle::new([(x - 12, y - 3), (x + 12, y + 3)], color.filled())),
+        }
+        .map_err(|e| err(&e))?;
+        area.draw(&Text::new(label.clone(), (x + 22, y - 8), ("sans-serif", 16))).map_err(|e| err(&e))?;
+    }
+    Ok(())
+}
+
+/// Draws the plot into a PNG at `path`: the world from above with the
+/// legend beside it and, with a timeline, speed, turn rate and votes over
+/// time underneath.
 pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError { path: path.display().to_string(), message: e.to_string() };
     register_font();
     let (x0, x1, y0, y1) = bounds(plot);
     // Equal scales on both axes, so a corridor looks like one.
-    let width = 1400u32;
-    let plot_width = f64::from(width - 90);
-    let height = ((plot_width * (y1 - y0) / (x1 - x0)) as u32 + 110).clamp(260, 1400);
-    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+    let (width, legend_width) = (1400u32, 230u32);
+    let plot_width = f64::from(width - legend_width - 90);
+    let map_height = ((plot_width * (y1 - y0) / (x1 - x0)) as u32 + 110).clamp(300, 1400);
+    let panel_height = if plot.timeline.is_some() { 420 } else { 0 };
+    let root = BitMapBackend::new(path, (width, map_height + panel_height)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
-    let mut chart = ChartBuilder::on(&root)
+    let (top, panel) = root.split_vertically(map_height);
+    let (map_area, legend_area) = top.split_horizontally(width - legend_width);
+    let mut chart = ChartBuilder::on(&map_area)
         .caption(plot.title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(36)
@@ -86,13 +161,29 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(|e| fail(&e))?;
     chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").light_line_style(WHITE).draw().map_err(|e| fail(&e))?;
+    let mut legend: Vec<(String, Mark)> = Vec::new();
 
     let wall = ShapeStyle::from(&BLACK).stroke_width(2);
     chart
         .draw_series(plot.world.segments.iter().map(|s| PathElement::new(vec![s.a, s.b], wall)))
         .map_err(|e| fail(&e))?;
+    // Featureless stretches of the corridor's side walls, drawn along them.
+    let bare = RGBColor(170, 170, 170);
+    if let (Some(corridor), false) = (&plot.world.corridor, plot.world.featureless.is_empty()) {
+        let half = corridor.width / 2.0;
+        chart
+            .draw_series(plot.world.featureless.iter().map(|f| {
+                let y = match f.side {
+                    ubf_robots::sim::Side::Left => half,
+                    ubf_robots::sim::Side::Right => -half,
+                };
+                PathElement::new(vec![(f.from, y), (f.to, y)], bare.stroke_width(7))
+            }))
+            .map_err(|e| fail(&e))?;
+        legend.push(("featureless wall".into(), Mark::Band(bare)));
+    }
     // Only what the plot shows goes in the legend.
-    let landmark_style = ShapeStyle::from(&RED).filled();
+    let landmark = RED;
     let fixed: Vec<(f64, f64)> = plot
         .world
         .landmarks
@@ -103,62 +194,149 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
         })
         .collect();
     if !fixed.is_empty() {
-        chart
-            .draw_series(fixed.iter().map(|&p| Circle::new(p, 4, landmark_style)))
-            .map_err(|e| fail(&e))?
-            .label("landmark")
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, landmark_style));
+        chart.draw_series(fixed.iter().map(|&p| Circle::new(p, 4, landmark.filled()))).map_err(|e| fail(&e))?;
+        legend.push(("landmark".into(), Mark::Dot(landmark, 4)));
     }
-    let person_style = ShapeStyle::from(&RGBColor(230, 140, 0)).stroke_width(2);
+    let person = RGBColor(230, 140, 0);
     if !plot.world.people.is_empty() {
         chart
             .draw_series(
-                (0..plot.world.people.len()).map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person_style)),
+                (0..plot.world.people.len())
+                    .map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person.stroke_width(2))),
             )
-            .map_err(|e| fail(&e))?
-            .label("person (at the start)")
-            .legend(move |(x, y)| Circle::new((x + 10, y), 6, person_style));
+            .map_err(|e| fail(&e))?;
+        legend.push(("person (at the start)".into(), Mark::Ring(person, 6)));
     }
-
     let truth = RGBColor(30, 80, 200);
     let estimate = RGBColor(20, 150, 60);
+    if let Some((pose, outline)) = plot.start {
+        let mut closed = outline.to_vec();
+        closed.push(outline[0]);
+        chart.draw_series([PathElement::new(closed, BLACK.stroke_width(2))]).map_err(|e| fail(&e))?;
+        // The heading: from the centre of rotation to the outline's front.
+        let reach = outline
+            .iter()
+            .map(|p| (p.0 - pose.x) * pose.theta.cos() + (p.1 - pose.y) * pose.theta.sin())
+            .fold(0.0, f64::max);
+        let front = (pose.x + reach * pose.theta.cos(), pose.y + reach * pose.theta.sin());
+        chart
+            .draw_series([PathElement::new(vec![(pose.x, pose.y), front], BLACK.stroke_width(3))])
+            .map_err(|e| fail(&e))?;
+        legend.push(("robot at the start".into(), Mark::Outline(BLACK)));
+    }
     if !plot.true_path.is_empty() {
         chart
             .draw_series(LineSeries::new(plot.true_path.iter().copied(), truth.stroke_width(2)))
-            .map_err(|e| fail(&e))?
-            .label("true path")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], truth.stroke_width(2)));
+            .map_err(|e| fail(&e))?;
+        legend.push(("true path".into(), Mark::Line(truth, 2)));
     }
     if !plot.estimated_path.is_empty() {
         chart
             .draw_series(LineSeries::new(plot.estimated_path.iter().copied(), estimate.stroke_width(1)))
-            .map_err(|e| fail(&e))?
-            .label("estimated path")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], estimate.stroke_width(1)));
+            .map_err(|e| fail(&e))?;
+        legend.push(("estimated path".into(), Mark::Line(estimate, 1)));
     }
     if !plot.decisions.is_empty() {
         chart
-            .draw_series(plot.decisions.iter().map(|&p| Cross::new(p, 5, truth.stroke_width(2))))
-            .map_err(|e| fail(&e))?
-            .label("decision point")
-            .legend(move |(x, y)| Cross::new((x + 10, y), 5, truth.stroke_width(2)));
+            .draw_series(plot.decisions.iter().map(|d| Cross::new(d.at, 5, truth.stroke_width(2))))
+            .map_err(|e| fail(&e))?;
+        if plot.decisions.len() <= MOST_LABELS {
+            // A label each, but not on top of the last one drawn.
+            let apart = 0.04 * (x1 - x0).max(y1 - y0);
+            let mut labelled: Vec<&Decision> = Vec::new();
+            for d in plot.decisions {
+                if labelled.last().is_none_or(|l| (l.at.0 - d.at.0).hypot(l.at.1 - d.at.1) > apart) {
+                    labelled.push(d);
+                }
+            }
+            chart
+                .draw_series(
+                    labelled
+                        .iter()
+                        .map(|d| Text::new(d.winner.clone(), d.at, ("sans-serif", 13).into_font().color(&truth))),
+                )
+                .map_err(|e| fail(&e))?;
+            legend.push(("decision: the new winner".into(), Mark::Cross(truth)));
+        } else {
+            legend.push((format!("decision ({})", plot.decisions.len()), Mark::Cross(truth)));
+        }
+    }
+    let contact = RGBColor(200, 0, 0);
+    if !plot.collisions.is_empty() {
+        chart
+            .draw_series(plot.collisions.iter().map(|&p| Cross::new(p, 9, contact.stroke_width(3))))
+            .map_err(|e| fail(&e))?;
+        legend.push((format!("collision ({})", plot.collisions.len()), Mark::Cross(contact)));
     }
     if let Some(g) = plot.goal {
-        let goal_style = ShapeStyle::from(&BLACK).stroke_width(2);
-        chart
-            .draw_series([TriangleMarker::new((g.x, g.y), 8, goal_style)])
-            .map_err(|e| fail(&e))?
-            .label("goal")
-            .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 8, goal_style));
+        chart.draw_series([TriangleMarker::new((g.x, g.y), 8, BLACK.stroke_width(2))]).map_err(|e| fail(&e))?;
+        legend.push(("goal".into(), Mark::Triangle(BLACK)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.85))
-        .draw()
-        .map_err(|e| fail(&e))?;
+    draw_legend(&legend_area, &legend).map_err(|e| fail(&e))?;
+    if let Some(timeline) = plot.timeline {
+        draw_timeline(&panel, timeline).map_err(|e| fail(&e))?;
+    }
     root.present().map_err(|e| fail(&e))?;
+    Ok(())
+}
+
+/// Speed, turn rate and every behaviour's vote against time, one above the
+/// other, sharing the time axis.
+fn draw_timeline<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    timeline: &Timeline,
+) -> Result<(), String> {
+    let err = |e: &dyn std::fmt::Display| e.to_string();
+    let end = timeline.time.last().copied().unwrap_or(1.0).max(1e-3);
+    let rows = area.split_evenly((3, 1));
+    let finite_range = |values: &[f64]| {
+        let (lo, hi) =
+            values.iter().filter(|v| v.is_finite()).fold((0.0f64, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+        let pad = 0.1 * (hi - lo).max(0.1);
+        (lo - pad)..(hi + pad)
+    };
+    let series: [(&str, &[f64], RGBColor); 2] = [
+        ("speed (m/s)", &timeline.speed, RGBColor(30, 80, 200)),
+        ("turn rate (°/s)", &timeline.turn_deg, RGBColor(200, 90, 0)),
+    ];
+    for (row, (label, values, color)) in rows.iter().zip(series) {
+        let mut chart = ChartBuilder::on(row)
+            .margin(8)
+            .x_label_area_size(24)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..end, finite_range(values))
+            .map_err(|e| err(&e))?;
+        chart.configure_mesh().y_desc(label).light_line_style(WHITE).draw().map_err(|e| err(&e))?;
+        let points = timeline.time.iter().zip(values).filter(|(_, v)| v.is_finite()).map(|(t, v)| (*t, *v));
+        chart.draw_series(LineSeries::new(points, color.stroke_width(1))).map_err(|e| err(&e))?;
+    }
+    let top =
+        timeline.votes.iter().flat_map(|(_, v)| v.iter()).copied().filter(|v| v.is_finite()).fold(1.0f64, f64::max);
+    let mut chart = ChartBuilder::on(&rows[2])
+        .margin(8)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..end, 0.0..top * 1.05)
+        .map_err(|e| err(&e))?;
+    chart.configure_mesh().x_desc("time (s)").y_desc("vote").light_line_style(WHITE).draw().map_err(|e| err(&e))?;
+    for (i, (name, votes)) in timeline.votes.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let points = timeline.time.iter().zip(votes).filter(|(_, v)| v.is_finite()).map(|(t, v)| (*t, *v));
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(1)))
+            .map_err(|e| err(&e))?
+            .label(name.clone())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    }
+    if !timeline.votes.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.85))
+            .draw()
+            .map_err(|e| err(&e))?;
+    }
     Ok(())
 }
 
@@ -186,7 +364,10 @@ pub fn draw_paths(
         true_path: &true_path,
         estimated_path: &estimated_path,
         decisions: &[],
+        collisions: &[],
+        start: None,
         goal: None,
+        timeline: None,
     };
     draw(&plot, path)
 }

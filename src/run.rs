@@ -1,7 +1,7 @@
 //! A scenario run headless on the simulated robot, and what it leaves
 //! behind: `report.json`, `trajectory.csv` and `plot.png`.
 
-use crate::plot::{self, PlotError, RunPlot};
+use crate::plot::{self, Decision, PlotError, RunPlot, Timeline};
 use crate::scenario::Scenario;
 use crate::trajectory::{Row, TrajectoryWriter};
 use serde::Serialize;
@@ -146,7 +146,18 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
     let mut true_path = Vec::new();
     let mut estimated_path = Vec::new();
     let mut decisions = Vec::new();
+    let mut collisions = Vec::new();
+    let mut timeline = Timeline::default();
+    // The behaviours (leaves) whose votes the timeline shows.
+    let leaves: Vec<usize> = {
+        let nodes = &controller.layout().nodes;
+        (1..nodes.len()).filter(|&i| !nodes[i].composite).collect()
+    };
+    timeline.votes = leaves.iter().map(|&i| (controller.layout().nodes[i].path.clone(), Vec::new())).collect();
+    let start_pose = controller.robot().inner().true_pose();
+    let start_outline = controller.robot().inner().footprint_at(&start_pose);
     let mut last_winner = None;
+    let mut touches = 0;
     // The true pose when the newest stereo frame was taken, to compare the
     // egomotion estimate made from that frame with.
     let mut truth_at_frame = None;
@@ -201,11 +212,30 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         if out.is_some() {
             true_path.push((truth.x, truth.y));
             estimated_path.push((odometry.x, odometry.y));
-            let winner = controller.layout().winning_leaf(controller.last_record());
-            if winner != last_winner && last_winner.is_some() {
-                decisions.push((truth.x, truth.y));
+            let record = controller.last_record();
+            let winner = controller.layout().winning_leaf(record);
+            if let (Some(w), true) = (winner, winner != last_winner && last_winner.is_some()) {
+                decisions.push(Decision { at: (truth.x, truth.y), winner: controller.layout().nodes[w].name.clone() });
             }
             last_winner = winner;
+            let now_touching = controller.robot().inner().collisions();
+            if now_touching > touches {
+                collisions.push((truth.x, truth.y));
+                touches = now_touching;
+            }
+            let (speed, turn) = match record.command {
+                ubf_core::Command::Stop => (0.0, 0.0),
+                ubf_core::Command::Drive { velocity, turn: ubf_core::Turn::Rate(rate) } => {
+                    (velocity, rate.to_degrees())
+                }
+                ubf_core::Command::Drive { velocity, turn: ubf_core::Turn::Heading { .. } } => (velocity, f64::NAN),
+            };
+            timeline.time.push(record.time);
+            timeline.speed.push(speed);
+            timeline.turn_deg.push(turn);
+            for ((_, votes), &i) in timeline.votes.iter_mut().zip(&leaves) {
+                votes.push(record.nodes[i].action.effective_vote());
+            }
         }
         if controller.state().goal_reached() {
             end = EndReason::GoalReached;
@@ -265,7 +295,10 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
             true_path: &true_path,
             estimated_path: &estimated_path,
             decisions: &decisions,
+            collisions: &collisions,
+            start: Some((start_pose, start_outline)),
             goal: scenario.goal,
+            timeline: Some(&timeline),
         };
         plot::draw(&picture, &dir.join("plot.png"))?;
     }

@@ -97,6 +97,14 @@ fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
 
     let png = std::fs::read(dir.path().join("plot.png")).unwrap();
     assert_eq!(&png[1..4], b"PNG");
+    // The map, with its legend in a column of its own at the right, and the
+    // panel of speed, turn rate and votes underneath (420 px).
+    let image = image::load_from_memory(&png).unwrap().into_rgb8();
+    assert_eq!(image.width(), 1400);
+    assert!(image.height() >= 300 + 420, "no room for the timeline: {}", image.height());
+    let legend_column = (1170..1400).flat_map(|x| (0..200).map(move |y| (x, y)));
+    let inked = legend_column.filter(|&(x, y)| image.get_pixel(x, y).0.iter().all(|&c| c < 100)).count();
+    assert!(inked > 100, "nothing written in the legend column");
 }
 
 #[test]
