@@ -137,6 +137,16 @@ enum Command {
         /// Only these behaviours (with `--describe`).
         names: Vec<String>,
     },
+    /// Read a run's log (`run.mcap`) back: print the run's summary and draw
+    /// its plot again from the log alone.
+    Replay {
+        /// The log, as `ubf run --out DIR` writes it (`DIR/run.mcap`).
+        file: PathBuf,
+        /// Where to draw the plot (default: beside the log, as
+        /// `<name>-replay.png`).
+        #[arg(long, value_name = "FILE.png")]
+        plot: Option<PathBuf>,
+    },
     /// Print a scenario's (or robot file's) behaviour tree as Graphviz DOT
     /// (`| dot -Tpng > tree.png`), or as Mermaid for Markdown pages: each
     /// composite with its arbiter and vote override, each child with its
@@ -535,8 +545,67 @@ pub fn main_with(registry: Registry) -> ExitCode {
             pipeline_command(&dir, &options, json, plot.as_deref())
         }
         Command::Tree { file, mermaid } => tree_command(&registry, &file, mermaid),
+        Command::Replay { file, plot } => replay_command(&file, plot),
         Command::Behaviors { describe, names } => behaviors_command(&registry, describe, &names),
     }
+}
+
+fn replay_command(file: &std::path::Path, plot: Option<PathBuf>) -> ExitCode {
+    let replayed = match crate::mcap_log::read(file) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let Some(run) = &replayed.run else {
+        eprintln!("error: {}: no /run message: not a ubf run log, or cut before its start", file.display());
+        return ExitCode::from(EXIT_BAD_INPUT);
+    };
+    println!("scenario        {} (seed {})", run.scenario, run.seed);
+    println!("ticks logged    {}", replayed.timeline.time.len());
+    let end_time = replayed.timeline.time.last().copied().unwrap_or(0.0);
+    println!("logged until    {end_time:.1} s");
+    println!("decisions       {}", replayed.decisions.len());
+    println!("collisions      {}", replayed.collisions.len());
+    match &replayed.report {
+        Some(report) => {
+            let number = |key: &str| report[key].as_f64().map_or("—".to_owned(), |v| format!("{v:.3}"));
+            println!("ended           {}", report["end"].as_str().unwrap_or("?"));
+            println!("distance        {} m", number("distance_m"));
+            println!("estimate error  {} m", number("estimate_error_m"));
+            if report["endpoint_error_m"].is_number() {
+                println!("egomotion error {} m at the last frame", number("endpoint_error_m"));
+            }
+        }
+        None => println!(
+            "ended           not recorded: the log stops early{}",
+            replayed.cut_short.as_ref().map_or(String::new(), |e| format!(" ({e})"))
+        ),
+    }
+    let plot = plot.unwrap_or_else(|| {
+        let stem = file.file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned());
+        file.with_file_name(format!("{stem}-replay.png"))
+    });
+    let start = ubf_core::Pose2::new(run.start[0], run.start[1], run.start[2]);
+    let title = format!("{} (seed {}), from its log", run.scenario, run.seed);
+    let picture = crate::plot::RunPlot {
+        title: &title,
+        world: &replayed.world,
+        true_path: &replayed.true_path,
+        estimated_path: &replayed.odometry_path,
+        decisions: &replayed.decisions,
+        collisions: &replayed.collisions,
+        start: Some((start, run.outline.map(|[x, y]| (x, y)))),
+        goal: run.goal.map(|[x, y, tolerance]| ubf_core::Goal { x, y, tolerance }),
+        timeline: Some(&replayed.timeline),
+    };
+    if let Err(e) = crate::plot::draw(&picture, &plot) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_FAILURE);
+    }
+    println!("plot            {}", plot.display());
+    ExitCode::SUCCESS
 }
 
 fn behaviors_command(registry: &Registry, describe: bool, names: &[String]) -> ExitCode {

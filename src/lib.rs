@@ -21,6 +21,7 @@ pub mod drive;
 pub mod environment_map;
 pub mod experiment;
 pub mod frames;
+pub mod mcap_log;
 pub mod plot;
 pub mod run;
 pub mod scenario;

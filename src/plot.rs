@@ -2,18 +2,19 @@
 //! figure 31: walls, landmarks, the true and the estimated paths, and the
 //! points where the robot changed its mind.
 
+use crate::mcap_log::WorldMessage;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 use ubf_core::Goal;
-use ubf_robots::sim::{Anchor, World};
 
 /// What a run plot shows.
 pub struct RunPlot<'a> {
     /// The caption.
     pub title: &'a str,
-    /// Walls, boxes, landmarks, people.
-    pub world: &'a World,
+    /// Walls (and boxes), landmarks, people at the start, featureless
+    /// stretches: as the run log carries them, so a log alone redraws it.
+    pub world: &'a WorldMessage,
     /// Where the robot really went.
     pub true_path: &'a [(f64, f64)],
     /// Where it believed it went.
@@ -78,13 +79,10 @@ fn register_font() {
 
 fn bounds(plot: &RunPlot) -> (f64, f64, f64, f64) {
     let mut points: Vec<(f64, f64)> = plot.true_path.iter().chain(plot.estimated_path).copied().collect();
-    for s in &plot.world.segments {
-        points.extend([s.a, s.b]);
+    for [a, b] in &plot.world.segments {
+        points.extend([(a[0], a[1]), (b[0], b[1])]);
     }
-    for lm in &plot.world.landmarks {
-        let (p, _) = plot.world.landmark_at(lm, 0.0);
-        points.push((p[0], p[1]));
-    }
+    points.extend(plot.world.landmarks.iter().map(|p| (p[0], p[1])));
     if let Some(g) = plot.goal {
         points.push((g.x, g.y));
     }
@@ -165,34 +163,24 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
 
     let wall = ShapeStyle::from(&BLACK).stroke_width(2);
     chart
-        .draw_series(plot.world.segments.iter().map(|s| PathElement::new(vec![s.a, s.b], wall)))
+        .draw_series(plot.world.segments.iter().map(|[a, b]| PathElement::new(vec![(a[0], a[1]), (b[0], b[1])], wall)))
         .map_err(|e| fail(&e))?;
     // Featureless stretches of the corridor's side walls, drawn along them.
     let bare = RGBColor(170, 170, 170);
-    if let (Some(corridor), false) = (&plot.world.corridor, plot.world.featureless.is_empty()) {
-        let half = corridor.width / 2.0;
+    if !plot.world.featureless.is_empty() {
         chart
-            .draw_series(plot.world.featureless.iter().map(|f| {
-                let y = match f.side {
-                    ubf_robots::sim::Side::Left => half,
-                    ubf_robots::sim::Side::Right => -half,
-                };
-                PathElement::new(vec![(f.from, y), (f.to, y)], bare.stroke_width(7))
-            }))
+            .draw_series(
+                plot.world
+                    .featureless
+                    .iter()
+                    .map(|[a, b]| PathElement::new(vec![(a[0], a[1]), (b[0], b[1])], bare.stroke_width(7))),
+            )
             .map_err(|e| fail(&e))?;
         legend.push(("featureless wall".into(), Mark::Band(bare)));
     }
     // Only what the plot shows goes in the legend.
     let landmark = RED;
-    let fixed: Vec<(f64, f64)> = plot
-        .world
-        .landmarks
-        .iter()
-        .filter_map(|lm| match lm.anchor {
-            Anchor::Fixed { position, .. } => Some((position[0], position[1])),
-            Anchor::Person { .. } => None,
-        })
-        .collect();
+    let fixed: Vec<(f64, f64)> = plot.world.landmarks.iter().map(|p| (p[0], p[1])).collect();
     if !fixed.is_empty() {
         chart.draw_series(fixed.iter().map(|&p| Circle::new(p, 4, landmark.filled()))).map_err(|e| fail(&e))?;
         legend.push(("landmark".into(), Mark::Dot(landmark, 4)));
@@ -200,10 +188,7 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     let person = RGBColor(230, 140, 0);
     if !plot.world.people.is_empty() {
         chart
-            .draw_series(
-                (0..plot.world.people.len())
-                    .map(|i| Circle::new(plot.world.person_position(i, 0.0), 6, person.stroke_width(2))),
-            )
+            .draw_series(plot.world.people.iter().map(|p| Circle::new((p[0], p[1]), 6, person.stroke_width(2))))
             .map_err(|e| fail(&e))?;
         legend.push(("person (at the start)".into(), Mark::Ring(person, 6)));
     }
@@ -347,13 +332,7 @@ pub fn draw_paths(
     truth: Option<&[ubf_core::Pose2]>,
     path: &Path,
 ) -> Result<(), PlotError> {
-    let world = World {
-        segments: Vec::new(),
-        landmarks: Vec::new(),
-        people: Vec::new(),
-        corridor: None,
-        featureless: Vec::new(),
-    };
+    let world = WorldMessage::default();
     let points = |poses: &[ubf_core::Pose2]| poses.iter().map(|p| (p.x, p.y)).collect::<Vec<_>>();
     let estimated_path = points(estimate);
     let true_path = truth.map(points).unwrap_or_default();

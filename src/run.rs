@@ -1,6 +1,7 @@
 //! A scenario run headless on the simulated robot, and what it leaves
 //! behind: `report.json`, `trajectory.csv` and `plot.png`.
 
+use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
 use crate::plot::{self, Decision, PlotError, RunPlot, Timeline};
 use crate::scenario::Scenario;
 use crate::trajectory::{Row, TrajectoryWriter};
@@ -106,6 +107,9 @@ pub enum RunError {
     /// The plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// The MCAP log could not be written.
+    #[error(transparent)]
+    Log(#[from] crate::mcap_log::LogError),
 }
 
 fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -143,6 +147,24 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         }
         None => None,
     };
+    let start_pose = controller.robot().inner().true_pose();
+    let start_outline = controller.robot().inner().footprint_at(&start_pose);
+    let world = WorldMessage::of(controller.robot().inner().world());
+    let mut log = match out {
+        Some(dir) => {
+            let mut log = McapLog::create(&dir.join("run.mcap"))?;
+            let run = RunMessage {
+                scenario: scenario.name.clone(),
+                seed,
+                start: [start_pose.x, start_pose.y, start_pose.theta],
+                outline: start_outline.map(|(x, y)| [x, y]),
+                goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
+            };
+            log.start(&run, &world)?;
+            Some(log)
+        }
+        None => None,
+    };
     let mut true_path = Vec::new();
     let mut estimated_path = Vec::new();
     let mut decisions = Vec::new();
@@ -154,8 +176,6 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         (1..nodes.len()).filter(|&i| !nodes[i].composite).collect()
     };
     timeline.votes = leaves.iter().map(|&i| (controller.layout().nodes[i].path.clone(), Vec::new())).collect();
-    let start_pose = controller.robot().inner().true_pose();
-    let start_outline = controller.robot().inner().footprint_at(&start_pose);
     let mut last_winner = None;
     let mut touches = 0;
     // The true pose when the newest stereo frame was taken, to compare the
@@ -209,6 +229,15 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
                 break;
             }
         }
+        if let Some(log) = &mut log {
+            let egomotion = controller.state().egomotion.pose;
+            let logged =
+                log.tick(controller.last_record(), controller.layout(), Some(&truth), &odometry, egomotion.as_ref());
+            if let Err(e) = logged {
+                failure = Some(e.into());
+                break;
+            }
+        }
         if out.is_some() {
             true_path.push((truth.x, truth.y));
             estimated_path.push((odometry.x, odometry.y));
@@ -222,6 +251,12 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
             if now_touching > touches {
                 collisions.push((truth.x, truth.y));
                 touches = now_touching;
+                if let Some(log) = &mut log {
+                    if let Err(e) = log.collision(controller.now(), (truth.x, truth.y)) {
+                        failure = Some(e.into());
+                        break;
+                    }
+                }
             }
             let (speed, turn) = match record.command {
                 ubf_core::Command::Stop => (0.0, 0.0),
@@ -248,9 +283,18 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         writer.finish().map_err(output_error(&path))?;
     }
     if let Some(e) = failure {
+        // What was logged stays readable; the failure is what is reported.
+        if let Some(log) = log {
+            let _ = log.close();
+        }
         return Err(e);
     }
-    shutdown?;
+    if let Err(e) = shutdown {
+        if let Some(log) = log {
+            let _ = log.close();
+        }
+        return Err(e.into());
+    }
 
     let robot = controller.robot().inner();
     let (truth, estimate) = (robot.true_pose(), robot.odometry_pose());
@@ -286,12 +330,21 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         time_overhead_pct: straight.map(|s| 100.0 * (controller.now() / (s / scenario.robot.max_velocity) - 1.0)),
         wall_time_s: stopwatch.elapsed_s(),
     };
+    if let Some(log) = log {
+        // Without the wall time, so that the log is the same for the same
+        // scenario and seed.
+        let mut logged = serde_json::to_value(&report).expect("a report always serialises");
+        if let Some(fields) = logged.as_object_mut() {
+            fields.remove("wall_time_s");
+        }
+        log.finish(report.sim_time_s, &logged)?;
+    }
     if let Some(dir) = out {
         write_report(&report, &dir.join("report.json"))?;
         let title = format!("{} (seed {seed})", scenario.name);
         let picture = RunPlot {
             title: &title,
-            world: robot.world(),
+            world: &world,
             true_path: &true_path,
             estimated_path: &estimated_path,
             decisions: &decisions,

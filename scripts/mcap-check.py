@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""Reads a run log (run.mcap) with the MCAP project's own Python reader.
+
+    python3 scripts/mcap-check.py out/run/run.mcap
+
+Installs the `mcap` package from PyPI into .venv-mcap on first use
+(scripts/script_env.py), then prints each topic with its schema, encoding
+and message count, the first and last true pose, and the report's end. It
+exits non-zero if a message's JSON does not parse, or if a topic the log
+must hold is missing: a check of our writer by a reader we did not write.
+"""
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import script_env  # noqa: E402  (scripts/script_env.py)
+
+REQUIRED = ["/pose/true", "/pose/odometry", "/tree", "/world", "/run", "/scene", "/report"]
+
+
+def main():
+    script_env.ensure(".venv-mcap", ["mcap"], ["mcap"])
+    from mcap.reader import make_reader
+
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    counts, schemas, first, last, report = {}, {}, None, None, None
+    with open(sys.argv[1], "rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            data = json.loads(message.data)
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+            schemas[channel.topic] = (schema.name if schema else "", schema.encoding if schema else "",
+                                      channel.message_encoding)
+            if channel.topic == "/pose/true":
+                position = data["pose"]["position"]
+                first = first or (position["x"], position["y"])
+                last = (position["x"], position["y"])
+            if channel.topic == "/report":
+                report = data
+    print("| topic | schema | schema encoding | message encoding | messages |")
+    print("| --- | --- | --- | --- | --- |")
+    for topic in sorted(counts):
+        name, encoding, message_encoding = schemas[topic]
+        print(f"| {topic} | {name} | {encoding} | {message_encoding} | {counts[topic]} |")
+    missing = [t for t in REQUIRED if t not in counts]
+    if missing:
+        sys.exit(f"missing topics: {', '.join(missing)}")
+    print(f"true pose from ({first[0]:.2f}, {first[1]:.2f}) to ({last[0]:.2f}, {last[1]:.2f}); "
+          f"the run ended: {report['end']}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,409 @@
+//! `run.mcap`: a run's log in MCAP, the format Foxglove and the ROS 2 tools
+//! read. Poses use Foxglove's well-known schemas (JSON-encoded), so the 3D
+//! and Plot panels show them with no plug-in; the tree's actions, votes and
+//! winners, the world and the report are JSON too, under `ubf.*` schemas.
+//!
+//! The log is written as the run goes and a chunk is closed every second of
+//! controller time, so a killed process leaves a file readable up to its
+//! last chunk. Chunk boundaries follow controller time, not the wall clock,
+//! so the same scenario and seed give the same bytes.
+//!
+//! Topics:
+//! - `/pose/true`, `/pose/odometry`, `/pose/egomotion`
+//!   (`foxglove.PoseInFrame`, frame `world`): every tick;
+//! - `/goal` (`foxglove.PoseInFrame`) and `/scene` (`foxglove.SceneUpdate`:
+//!   walls as lines, landmarks as spheres), once at the start;
+//! - `/world` (`ubf.World`) and `/run` (`ubf.Run`: scenario, seed, start
+//!   pose and outline), once at the start, for `ubf replay`;
+//! - `/tree` (`ubf.Tick`): every tick, the command, the winning behaviour
+//!   and each node's vote and whether it won;
+//! - `/collision` (`ubf.Collision`): where the robot touched something;
+//! - `/report` (`ubf.Report`): the run's report, at the end.
+
+use mcap::records::MessageHeader;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use ubf_core::{Command, Pose2, TickRecord, TreeLayout, Turn};
+
+/// Why the log could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("writing {}: {message}", path.display())]
+pub struct LogError {
+    path: PathBuf,
+    message: String,
+}
+
+/// The world as `/world` carries it: what `ubf replay` needs to redraw the
+/// plot.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorldMessage {
+    /// Wall segments, `[[x0, y0], [x1, y1]]`, m.
+    pub segments: Vec<[[f64; 2]; 2]>,
+    /// Fixed landmarks, `[x, y, z]`, m.
+    pub landmarks: Vec<[f64; 3]>,
+    /// People at the start, `[x, y]`, m.
+    pub people: Vec<[f64; 2]>,
+    /// Featureless stretches of wall, `[[x0, y0], [x1, y1]]`, m.
+    pub featureless: Vec<[[f64; 2]; 2]>,
+}
+
+impl WorldMessage {
+    /// The simulator's world as `/world` carries it.
+    pub fn of(world: &ubf_robots::sim::World) -> WorldMessage {
+        let landmarks = world
+            .landmarks
+            .iter()
+            .filter_map(|lm| match lm.anchor {
+                ubf_robots::sim::Anchor::Fixed { position, .. } => Some(position),
+                ubf_robots::sim::Anchor::Person { .. } => None,
+            })
+            .collect();
+        let half = world.corridor.as_ref().map_or(0.0, |c| c.width / 2.0);
+        WorldMessage {
+            segments: world.segments.iter().map(|s| [[s.a.0, s.a.1], [s.b.0, s.b.1]]).collect(),
+            landmarks,
+            people: (0..world.people.len()).map(|i| world.person_position(i, 0.0)).map(|(x, y)| [x, y]).collect(),
+            featureless: world
+                .featureless
+                .iter()
+                .map(|f| {
+                    let y = match f.side {
+                        ubf_robots::sim::Side::Left => half,
+                        ubf_robots::sim::Side::Right => -half,
+                    };
+                    [[f.from, y], [f.to, y]]
+                })
+                .collect(),
+        }
+    }
+}
+
+/// What `/run` carries.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunMessage {
+    /// The scenario's name.
+    pub scenario: String,
+    /// The run's seed.
+    pub seed: u64,
+    /// The robot's pose at the start.
+    pub start: [f64; 3],
+    /// Its outline there, counter-clockwise, m.
+    pub outline: [[f64; 2]; 4],
+    /// The goal, if there is one: `[x, y, tolerance]`.
+    pub goal: Option<[f64; 3]>,
+}
+
+/// What `/tree` carries each tick.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TickMessage {
+    /// Controller time, s.
+    pub time: f64,
+    /// Commanded forward speed, m/s.
+    pub velocity: f64,
+    /// Commanded turn rate, rad/s; `null` where the command gave a heading.
+    pub rot_velocity: Option<f64>,
+    /// The winning behaviour's path in the tree, if one won.
+    pub winner: Option<String>,
+    /// Every node's path, effective vote and whether it won, in pre-order.
+    pub nodes: Vec<NodeVote>,
+}
+
+/// One node's part in a tick.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NodeVote {
+    /// Its path in the tree.
+    pub path: String,
+    /// Its effective vote.
+    pub vote: f64,
+    /// Whether its action won at its parent.
+    pub won: bool,
+    /// Whether it is a composite.
+    pub composite: bool,
+}
+
+/// A run log being written.
+pub struct McapLog {
+    writer: mcap::Writer<BufWriter<File>>,
+    path: PathBuf,
+    channels: BTreeMap<&'static str, u16>,
+    sequence: u32,
+    /// Controller time of the last closed chunk, s.
+    flushed_at: f64,
+}
+
+/// Seconds of controller time between closed chunks.
+const CHUNK_EVERY_S: f64 = 1.0;
+
+const POSE_SCHEMA: &str = r#"{"title":"foxglove.PoseInFrame","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"pose":{"type":"object","properties":{"position":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}}}"#;
+const SCENE_SCHEMA: &str = r#"{"title":"foxglove.SceneUpdate","type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
+const OBJECT_SCHEMA: &str = r#"{"type":"object"}"#;
+
+/// Nanoseconds of controller time, as MCAP and Foxglove count.
+fn nanos(time: f64) -> u64 {
+    (time.max(0.0) * 1e9).round() as u64
+}
+
+fn stamp(time: f64) -> serde_json::Value {
+    let ns = nanos(time);
+    json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000})
+}
+
+fn pose_json(time: f64, pose: &Pose2) -> serde_json::Value {
+    let half = pose.theta / 2.0;
+    json!({
+        "timestamp": stamp(time),
+        "frame_id": "world",
+        "pose": {
+            "position": {"x": pose.x, "y": pose.y, "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": half.sin(), "w": half.cos()},
+        },
+    })
+}
+
+impl McapLog {
+    /// Creates (or replaces) the log at `path` and declares its topics.
+    pub fn create(path: &Path) -> Result<McapLog, LogError> {
+        let fail = |e: &dyn std::fmt::Display| LogError { path: path.to_owned(), message: e.to_string() };
+        let file = File::create(path).map_err(|e| fail(&e))?;
+        let options = mcap::WriteOptions::new().profile("").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
+        let mut writer = options.create(BufWriter::new(file)).map_err(|e| fail(&e))?;
+        let mut channels = BTreeMap::new();
+        let no_metadata = BTreeMap::new();
+        let pose =
+            writer.add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
+        let scene =
+            writer.add_schema("foxglove.SceneUpdate", "jsonschema", SCENE_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
+        for (topic, schema) in [
+            ("/pose/true", pose),
+            ("/pose/odometry", pose),
+            ("/pose/egomotion", pose),
+            ("/goal", pose),
+            ("/scene", scene),
+        ] {
+            let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
+            channels.insert(topic, id);
+        }
+        for (topic, name) in [
+            ("/world", "ubf.World"),
+            ("/run", "ubf.Run"),
+            ("/tree", "ubf.Tick"),
+            ("/collision", "ubf.Collision"),
+            ("/report", "ubf.Report"),
+        ] {
+            let schema = writer.add_schema(name, "jsonschema", OBJECT_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
+            let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
+            channels.insert(topic, id);
+        }
+        Ok(McapLog { writer, path: path.to_owned(), channels, sequence: 0, flushed_at: 0.0 })
+    }
+
+    fn fail(&self, e: &dyn std::fmt::Display) -> LogError {
+        LogError { path: self.path.clone(), message: e.to_string() }
+    }
+
+    /// Writes one message on `topic` at controller time `time`.
+    fn write(&mut self, topic: &'static str, time: f64, message: &impl Serialize) -> Result<(), LogError> {
+        let data = serde_json::to_vec(message).expect("messages always serialise");
+        let channel_id = self.channels[topic];
+        self.sequence += 1;
+        let header =
+            MessageHeader { channel_id, sequence: self.sequence, log_time: nanos(time), publish_time: nanos(time) };
+        self.writer.write_to_known_channel(&header, &data).map_err(|e| self.fail(&e))
+    }
+
+    /// The run's start: what it is, its world, goal and the scene Foxglove
+    /// draws.
+    pub fn start(&mut self, run: &RunMessage, world: &WorldMessage) -> Result<(), LogError> {
+        self.write("/run", 0.0, run)?;
+        self.write("/world", 0.0, world)?;
+        if let Some([x, y, _]) = run.goal {
+            self.write("/goal", 0.0, &pose_json(0.0, &Pose2::new(x, y, 0.0)))?;
+        }
+        let point = |x: f64, y: f64, z: f64| json!({"x": x, "y": y, "z": z});
+        let identity =
+            json!({"position": point(0.0, 0.0, 0.0), "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}});
+        let walls: Vec<serde_json::Value> =
+            world.segments.iter().flat_map(|[a, b]| [point(a[0], a[1], 0.0), point(b[0], b[1], 0.0)]).collect();
+        let spheres: Vec<serde_json::Value> = world
+            .landmarks
+            .iter()
+            .map(|[x, y, z]| {
+                json!({
+                    "pose": {"position": point(*x, *y, *z), "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                    "size": point(0.15, 0.15, 0.15),
+                    "color": {"r": 0.9, "g": 0.1, "b": 0.1, "a": 1.0},
+                })
+            })
+            .collect();
+        let scene = json!({
+            "deletions": [],
+            "entities": [{
+                "timestamp": stamp(0.0), "frame_id": "world", "id": "world",
+                "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+                "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [],
+                "lines": [{
+                    "type": 2, "pose": identity, "thickness": 0.05, "scale_invariant": false,
+                    "points": walls, "color": {"r": 0.1, "g": 0.1, "b": 0.1, "a": 1.0}, "colors": [], "indices": [],
+                }],
+                "triangles": [], "texts": [], "models": [],
+            }],
+        });
+        self.write("/scene", 0.0, &scene)
+    }
+
+    /// One tick: the poses (the truth where the robot has one, the
+    /// egomotion estimate where it runs one) and the tree's part.
+    pub fn tick(
+        &mut self,
+        record: &TickRecord,
+        layout: &TreeLayout,
+        truth: Option<&Pose2>,
+        odometry: &Pose2,
+        egomotion: Option<&Pose2>,
+    ) -> Result<(), LogError> {
+        let time = record.time;
+        if let Some(t) = truth {
+            self.write("/pose/true", time, &pose_json(time, t))?;
+        }
+        self.write("/pose/odometry", time, &pose_json(time, odometry))?;
+        if let Some(e) = egomotion {
+            self.write("/pose/egomotion", time, &pose_json(time, e))?;
+        }
+        let (velocity, rot_velocity) = match record.command {
+            Command::Stop => (0.0, Some(0.0)),
+            Command::Drive { velocity, turn: Turn::Rate(rate) } => (velocity, Some(rate)),
+            Command::Drive { velocity, turn: Turn::Heading { .. } } => (velocity, None),
+        };
+        let tick = TickMessage {
+            time,
+            velocity,
+            rot_velocity,
+            winner: layout.winning_leaf(record).map(|i| layout.nodes[i].path.clone()),
+            nodes: layout
+                .nodes
+                .iter()
+                .zip(&record.nodes)
+                .map(|(info, node)| NodeVote {
+                    path: info.path.clone(),
+                    vote: node.action.effective_vote(),
+                    won: node.won,
+                    composite: info.composite,
+                })
+                .collect(),
+        };
+        self.write("/tree", time, &tick)?;
+        if time - self.flushed_at >= CHUNK_EVERY_S {
+            self.writer.flush().map_err(|e| self.fail(&e))?;
+            self.flushed_at = time;
+        }
+        Ok(())
+    }
+
+    /// Where the robot touched something, at controller time `time`.
+    pub fn collision(&mut self, time: f64, at: (f64, f64)) -> Result<(), LogError> {
+        self.write("/collision", time, &json!({"x": at.0, "y": at.1}))
+    }
+
+    /// Writes the report and closes the log (its summary and footer).
+    pub fn finish(mut self, time: f64, report: &impl Serialize) -> Result<(), LogError> {
+        self.write("/report", time, report)?;
+        self.close()
+    }
+
+    /// Closes the log without a report (a run that failed): what was
+    /// written stays readable.
+    pub fn close(mut self) -> Result<(), LogError> {
+        self.writer.finish().map_err(|e| self.fail(&e))?;
+        Ok(())
+    }
+}
+
+/// A run read back from its log.
+#[derive(Clone, Debug, Default)]
+pub struct ReplayedRun {
+    /// What `/run` said, if the log got that far.
+    pub run: Option<RunMessage>,
+    /// The world.
+    pub world: WorldMessage,
+    /// The true path, the odometric one, and the egomotion one.
+    pub true_path: Vec<(f64, f64)>,
+    /// The robot's own (odometric) path.
+    pub odometry_path: Vec<(f64, f64)>,
+    /// Where the winning behaviour changed, and the new winner's name.
+    pub decisions: Vec<crate::plot::Decision>,
+    /// Where the robot touched something.
+    pub collisions: Vec<(f64, f64)>,
+    /// Speed, turn rate and votes over time.
+    pub timeline: crate::plot::Timeline,
+    /// The report, if the run finished.
+    pub report: Option<serde_json::Value>,
+    /// Why reading stopped early: a log cut short by a killed process.
+    pub cut_short: Option<String>,
+}
+
+/// Reads the log at `path` back: everything up to its end, or, for a log
+/// a killed process left, up to its last whole chunk.
+pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
+    let fail = |message: String| LogError { path: path.to_owned(), message };
+    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+        .map_err(|e| fail(format!("not an MCAP file: {e}")))?;
+    let mut out = ReplayedRun::default();
+    let mut leaves: Vec<usize> = Vec::new();
+    let mut last_winner: Option<String> = None;
+    for message in stream {
+        let message = match message {
+            Ok(m) => m,
+            Err(e) => {
+                out.cut_short = Some(e.to_string());
+                break;
+            }
+        };
+        let topic = message.channel.topic.as_str();
+        let parse = |what: &str| -> Result<serde_json::Value, LogError> {
+            serde_json::from_slice(&message.data).map_err(|e| fail(format!("{topic} ({what}): {e}")))
+        };
+        let position = |v: &serde_json::Value| {
+            let p = &v["pose"]["position"];
+            (p["x"].as_f64().unwrap_or(f64::NAN), p["y"].as_f64().unwrap_or(f64::NAN))
+        };
+        match topic {
+            "/run" => out.run = Some(serde_json::from_slice(&message.data).map_err(|e| fail(format!("/run: {e}")))?),
+            "/world" => out.world = serde_json::from_slice(&message.data).map_err(|e| fail(format!("/world: {e}")))?,
+            "/pose/true" => out.true_path.push(position(&parse("pose")?)),
+            "/pose/odometry" => out.odometry_path.push(position(&parse("pose")?)),
+            "/report" => out.report = Some(parse("report")?),
+            "/collision" => {
+                let at = parse("collision")?;
+                out.collisions.push((at["x"].as_f64().unwrap_or(f64::NAN), at["y"].as_f64().unwrap_or(f64::NAN)));
+            }
+            "/tree" => {
+                let tick: TickMessage =
+                    serde_json::from_slice(&message.data).map_err(|e| fail(format!("/tree: {e}")))?;
+                if out.timeline.votes.is_empty() {
+                    leaves = (0..tick.nodes.len()).filter(|&i| i > 0 && !tick.nodes[i].composite).collect();
+                    out.timeline.votes = leaves.iter().map(|&i| (tick.nodes[i].path.clone(), Vec::new())).collect();
+                }
+                out.timeline.time.push(tick.time);
+                out.timeline.speed.push(tick.velocity);
+                out.timeline.turn_deg.push(tick.rot_velocity.map_or(f64::NAN, f64::to_degrees));
+                for ((_, votes), &i) in out.timeline.votes.iter_mut().zip(&leaves) {
+                    votes.push(tick.nodes.get(i).map_or(f64::NAN, |n| n.vote));
+                }
+                if tick.winner != last_winner && last_winner.is_some() {
+                    if let (Some(winner), Some(&at)) = (&tick.winner, out.true_path.last()) {
+                        let name = winner.rsplit('/').next().unwrap_or(winner).to_owned();
+                        out.decisions.push(crate::plot::Decision { at, winner: name });
+                    }
+                }
+                last_winner = tick.winner;
+            }
+            _ => {}
+        }
+    }
+    Ok(out)
+}

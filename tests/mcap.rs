@@ -1,0 +1,113 @@
+//! `run.mcap`, read back with the MCAP project's own Rust reader: every
+//! topic there, the poses where the report says, the same bytes for the
+//! same seed, and a log cut short still readable up to its last chunk.
+//! (`scripts/mcap-check.py` does the same with its Python reader.)
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use ubf::run::run;
+use ubf::scenario::Scenario;
+
+fn scenario() -> Scenario {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
+    let text = std::fs::read_to_string(path).unwrap().replace("technique: None", "technique: Tracking");
+    Scenario::from_ron(&ubf::registry(), &text).unwrap()
+}
+
+/// What a log holds: messages per topic, each topic's schema name, and the
+/// error reading stopped at, if any.
+struct Read {
+    topics: BTreeMap<String, Vec<serde_json::Value>>,
+    schemas: BTreeMap<String, String>,
+    error: Option<String>,
+}
+
+/// Reads a log's bytes.
+fn read(bytes: &[u8], options: enumset::EnumSet<mcap::read::Options>) -> Read {
+    let (mut topics, mut schemas) = (BTreeMap::<String, Vec<serde_json::Value>>::new(), BTreeMap::new());
+    let mut error = None;
+    for message in mcap::MessageStream::new_with_options(bytes, options).unwrap() {
+        match message {
+            Ok(m) => {
+                let value: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+                schemas.insert(
+                    m.channel.topic.clone(),
+                    m.channel.schema.as_ref().map_or(String::new(), |s| s.name.clone()),
+                );
+                topics.entry(m.channel.topic.clone()).or_default().push(value);
+            }
+            Err(e) => {
+                error = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    Read { topics, schemas, error }
+}
+
+#[test]
+fn a_run_log_reads_back_and_a_cut_one_up_to_its_last_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&scenario(), 4, Some(dir.path())).unwrap();
+    let bytes = std::fs::read(dir.path().join("run.mcap")).unwrap();
+    let Read { topics, schemas, error } = read(&bytes, enumset::EnumSet::empty());
+    assert_eq!(error, None);
+    for topic in ["/pose/true", "/pose/odometry", "/pose/egomotion", "/tree"] {
+        assert_eq!(topics[topic].len() as u64, report.ticks, "{topic}: one message a tick");
+    }
+    for topic in ["/goal", "/scene", "/world", "/run", "/report"] {
+        assert_eq!(topics[topic].len(), 1, "{topic}");
+    }
+    assert_eq!(schemas["/pose/true"], "foxglove.PoseInFrame");
+    assert_eq!(schemas["/scene"], "foxglove.SceneUpdate");
+    // The last true pose is the report's, less the last tick's motion (the
+    // log has the pose the tick sensed).
+    let last = &topics["/pose/true"].last().unwrap()["pose"]["position"];
+    let (x, y) = (last["x"].as_f64().unwrap(), last["y"].as_f64().unwrap());
+    assert!(report.final_true_pose.distance_to(x, y) < 0.1, "({x}, {y}) against {:?}", report.final_true_pose);
+    assert_eq!(topics["/report"][0]["end"], "goal_reached");
+    let tick = &topics["/tree"][10];
+    assert!(tick["nodes"].as_array().unwrap().iter().any(|n| n["path"] == "root/ActionAiding"), "{tick}");
+
+    // Same seed, same bytes.
+    let again = tempfile::tempdir().unwrap();
+    run(&scenario(), 4, Some(again.path())).unwrap();
+    assert!(std::fs::read(again.path().join("run.mcap")).unwrap() == bytes, "run.mcap differs for the same seed");
+
+    // A log cut short, as a killed process leaves it: read up to the cut.
+    let cut = &bytes[..bytes.len() * 6 / 10];
+    let topics = read(cut, mcap::read::Options::IgnoreEndMagic.into()).topics;
+    let kept = topics.get("/tree").map_or(0, Vec::len) as u64;
+    assert!(kept > report.ticks / 3 && kept < report.ticks, "{kept} of {} ticks read from the cut log", report.ticks);
+}
+
+#[test]
+fn ubf_replay_redraws_the_plot_from_the_log_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&scenario(), 5, Some(dir.path())).unwrap();
+    let log = dir.path().join("run.mcap");
+    let redrawn = dir.path().join("again.png");
+    let ubf = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_ubf")).args(args).output().unwrap();
+    let out = ubf(&["replay", log.to_str().unwrap(), "--plot", redrawn.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains(&format!("ticks logged    {}", report.ticks)), "{summary}");
+    assert!(summary.contains("ended           goal_reached"), "{summary}");
+    // The same picture as the run drew, but for the caption.
+    let (original, again) =
+        (image::open(dir.path().join("plot.png")).unwrap().into_rgb8(), image::open(&redrawn).unwrap().into_rgb8());
+    assert_eq!(original.dimensions(), again.dimensions());
+    let differing = original.enumerate_pixels().filter(|(x, y, p)| *y >= 40 && again.get_pixel(*x, *y) != *p).count();
+    assert_eq!(differing, 0, "the redrawn plot differs below the caption");
+    // A log a killed run left: replayed as far as it goes.
+    let bytes = std::fs::read(&log).unwrap();
+    let cut = dir.path().join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let out = ubf(&["replay", cut.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("not recorded: the log stops early"));
+    assert!(dir.path().join("cut-replay.png").is_file());
+    // Not a log at all.
+    let out = ubf(&["replay", dir.path().join("plot.png").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+}
