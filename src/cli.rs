@@ -742,7 +742,7 @@ fn drive_command(
         [one] => eprintln!("log in {}", one.display()),
         many => {
             let names: Vec<String> = many.iter().map(|p| p.display().to_string()).collect();
-            eprintln!("logs, one per session: {}", names.join(", "));
+            eprintln!("logs (CSV and MCAP), per session: {}", names.join(", "));
         }
     }
     match outcome.end {

@@ -503,14 +503,25 @@ fn drive_sessions(
             Ok((mut log, path)) => {
                 eprintln!("logging to {}", path.display());
                 logs.push(path.clone());
+                let mut mcap = open_session_mcap(&path, model, controller.state().pose, config.goal);
+                if let Some((_, mcap_path)) = &mcap {
+                    eprintln!("and to {}", mcap_path.display());
+                    logs.push(mcap_path.clone());
+                }
                 let ended = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    run_session(&mut controller, &mut log, stop, &out_of_time, config.until_goal, status)
+                    let mcap = mcap.as_mut().map(|(log, _)| log);
+                    run_session(&mut controller, &mut log, mcap, stop, &out_of_time, config.until_goal, status)
                 }))
                 .unwrap_or_else(|panic| {
                     SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
                 });
                 if let Err(e) = log.finish() {
                     tracing::warn!("{}: {e}", path.display());
+                }
+                if let Some((mcap, _)) = mcap {
+                    if let Err(e) = mcap.close() {
+                        tracing::warn!("{e}");
+                    }
                 }
                 ended
             }
@@ -537,11 +548,49 @@ fn drive_sessions(
     }
 }
 
+/// The session's MCAP log beside its CSV one (same name, `.mcap`), or
+/// `None` with a warning if it cannot be made: the CSV log is the one a
+/// session cannot do without.
+fn open_session_mcap(
+    csv: &Path,
+    model: &RobotModel,
+    pose: Pose2,
+    goal: Option<ubf_core::Goal>,
+) -> Option<(crate::mcap_log::McapLog, PathBuf)> {
+    let path = csv.with_extension("mcap");
+    if path.exists() {
+        tracing::warn!("{} exists; this session has only its CSV log", path.display());
+        return None;
+    }
+    let opened = crate::mcap_log::McapLog::create(&path).and_then(|mut log| {
+        let run = crate::mcap_log::RunMessage {
+            scenario: format!("drive ({})", model.name),
+            seed: 0,
+            start: [pose.x, pose.y, pose.theta],
+            outline: model.footprint.corners().map(|(x, y)| {
+                let (wx, wy) = pose.transform_point(x, y);
+                [wx, wy]
+            }),
+            goal: goal.map(|g| [g.x, g.y, g.tolerance]),
+        };
+        log.start(&run, &crate::mcap_log::WorldMessage::default())?;
+        Ok(log)
+    });
+    match opened {
+        Ok(log) => Some((log, path)),
+        Err(e) => {
+            tracing::warn!("{e}; this session has only its CSV log");
+            None
+        }
+    }
+}
+
 /// Ticks until stopped, the link is lost, or something fails. The safety
 /// guard around the robot holds it on stale data and declares a lost link.
 fn run_session<R: Robot>(
     controller: &mut Controller<SafetyGuard<R>>,
     log: &mut TrajectoryWriter,
+    mut mcap: Option<&mut crate::mcap_log::McapLog>,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
     until_goal: bool,
@@ -568,6 +617,13 @@ fn run_session<R: Robot>(
         };
         if let Err(e) = log.write(controller.last_record(), controller.layout(), &row) {
             tracing::warn!("writing the log: {e}");
+        }
+        if let Some(m) = mcap.as_deref_mut() {
+            let egomotion = state.egomotion.pose;
+            if let Err(e) = m.tick(controller.last_record(), controller.layout(), None, &state.pose, egomotion.as_ref())
+            {
+                tracing::warn!("{e}");
+            }
         }
         if until_goal && state.goal_reached() {
             break SessionEnd::GoalReached;

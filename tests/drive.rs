@@ -339,8 +339,14 @@ fn the_goal_keeps_its_place_across_a_reconnect() {
         "drove {travelled:.3} m in {sessions} sessions toward a 3 m goal: {stderr}"
     );
     // One log per session, each named once, none overwritten.
-    assert!(stderr.contains(&format!("logs, one per session: {}, ", log.display())), "{stderr}");
+    assert!(stderr.contains(&format!("logs (CSV and MCAP), per session: {}, ", log.display())), "{stderr}");
     assert!(log.with_extension("2.csv").exists());
+    // Each session's MCAP log beside its CSV one, readable and whole.
+    for mcap in [log.with_extension("mcap"), log.with_extension("2.mcap")] {
+        let replayed = ubf::mcap_log::read(&mcap).unwrap();
+        assert!(replayed.cut_short.is_none() && replayed.timeline.time.len() > 5, "{}", mcap.display());
+        assert!(replayed.run.unwrap().scenario.starts_with("drive"));
+    }
 }
 
 #[test]
