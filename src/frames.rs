@@ -40,6 +40,8 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let camera = scenario.robot.camera.as_mut().ok_or("the scenario's robot has no camera: add `camera: ()`")?;
     camera.images.get_or_insert_with(RenderConfig::default);
     let stereo = camera.stereo;
+    // At most this many pairs: the frames the run has time for, or fewer.
+    let bound = ((camera.rate_hz * scenario.max_time_s).ceil() as usize).min(max_frames);
     let mut writer = ImageDirectoryWriter::create(dir).map_err(|e| e.to_string())?;
     let calibration =
         ron::ser::to_string_pretty(&stereo, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())?;
@@ -51,6 +53,7 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let mut controller = Controller::new(sim, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
     let mut last_frame = 0;
+    let progress = crate::sweep::progress_bar(bound as u64, "pairs");
     for _ in 0..scenario.max_ticks() {
         controller.tick().map_err(|e| e.to_string())?;
         let frame = &controller.state().stereo;
@@ -59,12 +62,14 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
             if let Some((left, right)) = controller.robot().last_images() {
                 let pair = StereoPair { time: frame.time, left: left.clone(), right: right.clone() };
                 writer.push(&pair).map_err(|e| e.to_string())?;
+                progress.inc(1);
             }
         }
         if controller.state().goal_reached() || last_frame as usize >= max_frames {
             break;
         }
     }
+    progress.finish_and_clear();
     writer.finish().map_err(|e| e.to_string())
 }
 
