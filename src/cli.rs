@@ -559,7 +559,8 @@ fn replay_command(file: &std::path::Path, plot: Option<PathBuf>) -> ExitCode {
         }
     };
     let Some(run) = &replayed.run else {
-        eprintln!("error: {}: no /run message: not a ubf run log, or cut before its start", file.display());
+        let why = replayed.cut_short.as_ref().map_or(String::new(), |e| format!(" ({e})"));
+        eprintln!("error: {}: no /run message: not a ubf run log, or cut before its start{why}", file.display());
         return ExitCode::from(EXIT_BAD_INPUT);
     };
     println!("scenario        {} (seed {})", run.scenario, run.seed);

@@ -135,6 +135,10 @@ pub struct McapLog {
     flushed_at: f64,
 }
 
+/// The longest record (a chunk, compressed or not) [`read`] accepts: far
+/// beyond what the log writes (chunks of under a megabyte).
+const MOST_RECORD_BYTES: usize = 256 << 20;
+
 /// Seconds of controller time between closed chunks.
 const CHUNK_EVERY_S: f64 = 1.0;
 
@@ -350,8 +354,25 @@ pub struct ReplayedRun {
 pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
     let fail = |message: String| LogError { path: path.to_owned(), message };
     let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-    let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-        .map_err(|e| fail(format!("not an MCAP file: {e}")))?;
+    // A record's length comes from the file: one corrupted length must be
+    // an error, not an attempt to allocate exabytes.
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_skip_end_magic(true)
+        .with_record_length_limit(MOST_RECORD_BYTES);
+    let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
+    let mut remaining: &[u8] = &bytes;
+    let stream = std::iter::from_fn(|| loop {
+        match reader.next_event()? {
+            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
+                let n = need.min(remaining.len());
+                reader.insert(n).copy_from_slice(&remaining[..n]);
+                reader.notify_read(n);
+                remaining = &remaining[n..];
+            }
+            Ok(mcap::sans_io::MessageReadEvent::Message(message)) => return Some(Ok(message)),
+            Err(e) => return Some(Err(e)),
+        }
+    });
     let mut out = ReplayedRun::default();
     let mut leaves: Vec<usize> = Vec::new();
     let mut last_winner: Option<String> = None;
