@@ -619,9 +619,7 @@ fn run_session<R: Robot>(
             tracing::warn!("writing the log: {e}");
         }
         if let Some(m) = mcap.as_deref_mut() {
-            let egomotion = state.egomotion.pose;
-            if let Err(e) = m.tick(controller.last_record(), controller.layout(), None, &state.pose, egomotion.as_ref())
-            {
+            if let Err(e) = m.tick(controller.last_record(), controller.layout(), None, state) {
                 tracing::warn!("{e}");
             }
         }

@@ -17,6 +17,10 @@
 //!   pose and outline), once at the start, for `ubf replay`;
 //! - `/tree` (`ubf.Tick`): every tick, the command, the winning behaviour
 //!   and each node's vote and whether it won;
+//! - `/ranges` (`foxglove.SceneUpdate`): every tick, a line from each range
+//!   sensor to its echo;
+//! - `/observations` (`foxglove.SceneUpdate`): at each new stereo frame,
+//!   the landmarks it saw;
 //! - `/collision` (`ubf.Collision`): where the robot touched something;
 //! - `/report` (`ubf.Report`): the run's report, at the end.
 
@@ -27,7 +31,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use ubf_core::{Command, Pose2, TickRecord, TreeLayout, Turn};
+use ubf_core::{Command, Pose2, State, TickRecord, TreeLayout, Turn};
 
 /// Why the log could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -133,6 +137,8 @@ pub struct McapLog {
     sequence: u32,
     /// Controller time of the last closed chunk, s.
     flushed_at: f64,
+    /// The stereo frame whose observations were logged last.
+    frame: u64,
 }
 
 /// The longest record (a chunk, compressed or not) [`read`] accepts: far
@@ -168,6 +174,33 @@ fn pose_json(time: f64, pose: &Pose2) -> serde_json::Value {
     })
 }
 
+fn identity_orientation() -> serde_json::Value {
+    json!({"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0})
+}
+
+fn identity_pose() -> serde_json::Value {
+    json!({"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": identity_orientation()})
+}
+
+/// A `foxglove.SceneUpdate` replacing the entity `id` with these lines and
+/// spheres.
+fn scene_entity(
+    time: f64,
+    id: &str,
+    lines: Vec<serde_json::Value>,
+    spheres: Vec<serde_json::Value>,
+) -> serde_json::Value {
+    json!({
+        "deletions": [],
+        "entities": [{
+            "timestamp": stamp(time), "frame_id": "world", "id": id,
+            "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+            "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [], "lines": lines,
+            "triangles": [], "texts": [], "models": [],
+        }],
+    })
+}
+
 impl McapLog {
     /// Creates (or replaces) the log at `path` and declares its topics.
     pub fn create(path: &Path) -> Result<McapLog, LogError> {
@@ -187,6 +220,8 @@ impl McapLog {
             ("/pose/egomotion", pose),
             ("/goal", pose),
             ("/scene", scene),
+            ("/ranges", scene),
+            ("/observations", scene),
         ] {
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
             channels.insert(topic, id);
@@ -202,7 +237,7 @@ impl McapLog {
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
             channels.insert(topic, id);
         }
-        Ok(McapLog { writer, path: path.to_owned(), channels, sequence: 0, flushed_at: 0.0 })
+        Ok(McapLog { writer, path: path.to_owned(), channels, sequence: 0, flushed_at: 0.0, frame: 0 })
     }
 
     fn fail(&self, e: &dyn std::fmt::Display) -> LogError {
@@ -228,8 +263,6 @@ impl McapLog {
             self.write("/goal", 0.0, &pose_json(0.0, &Pose2::new(x, y, 0.0)))?;
         }
         let point = |x: f64, y: f64, z: f64| json!({"x": x, "y": y, "z": z});
-        let identity =
-            json!({"position": point(0.0, 0.0, 0.0), "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}});
         let walls: Vec<serde_json::Value> =
             world.segments.iter().flat_map(|[a, b]| [point(a[0], a[1], 0.0), point(b[0], b[1], 0.0)]).collect();
         let spheres: Vec<serde_json::Value> = world
@@ -237,39 +270,33 @@ impl McapLog {
             .iter()
             .map(|[x, y, z]| {
                 json!({
-                    "pose": {"position": point(*x, *y, *z), "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+                    "pose": {"position": point(*x, *y, *z), "orientation": identity_orientation()},
                     "size": point(0.15, 0.15, 0.15),
                     "color": {"r": 0.9, "g": 0.1, "b": 0.1, "a": 1.0},
                 })
             })
             .collect();
-        let scene = json!({
-            "deletions": [],
-            "entities": [{
-                "timestamp": stamp(0.0), "frame_id": "world", "id": "world",
-                "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
-                "arrows": [], "cubes": [], "spheres": spheres, "cylinders": [],
-                "lines": [{
-                    "type": 2, "pose": identity, "thickness": 0.05, "scale_invariant": false,
-                    "points": walls, "color": {"r": 0.1, "g": 0.1, "b": 0.1, "a": 1.0}, "colors": [], "indices": [],
-                }],
-                "triangles": [], "texts": [], "models": [],
-            }],
-        });
+        let lines = vec![json!({
+            "type": 2, "pose": identity_pose(), "thickness": 0.05, "scale_invariant": false,
+            "points": walls, "color": {"r": 0.1, "g": 0.1, "b": 0.1, "a": 1.0}, "colors": [], "indices": [],
+        })];
+        let scene = scene_entity(0.0, "world", lines, spheres);
         self.write("/scene", 0.0, &scene)
     }
 
     /// One tick: the poses (the truth where the robot has one, the
-    /// egomotion estimate where it runs one) and the tree's part.
+    /// egomotion estimate where it runs one), what the sensors saw, placed
+    /// by the robot's own pose, and the tree's part.
     pub fn tick(
         &mut self,
         record: &TickRecord,
         layout: &TreeLayout,
         truth: Option<&Pose2>,
-        odometry: &Pose2,
-        egomotion: Option<&Pose2>,
+        state: &State,
     ) -> Result<(), LogError> {
         let time = record.time;
+        let (odometry, egomotion) = (&state.pose, state.egomotion.pose.as_ref());
+        self.sensors(time, state)?;
         if let Some(t) = truth {
             self.write("/pose/true", time, &pose_json(time, t))?;
         }
@@ -303,6 +330,46 @@ impl McapLog {
         if time - self.flushed_at >= CHUNK_EVERY_S {
             self.writer.flush().map_err(|e| self.fail(&e))?;
             self.flushed_at = time;
+        }
+        Ok(())
+    }
+
+    /// The range sensors' echoes every tick, and a new stereo frame's
+    /// landmarks, in the world by the robot's own pose.
+    fn sensors(&mut self, time: f64, state: &State) -> Result<(), LogError> {
+        let pose = &state.pose;
+        let point = |(x, y): (f64, f64), z: f64| json!({"x": x, "y": y, "z": z});
+        let mut echoes = Vec::new();
+        for reading in &state.ranges {
+            let Some(range) = reading.range else { continue };
+            let sensor = pose.compose(&reading.pose_robot_sensor);
+            let hit = sensor.compose(&Pose2::new(range, 0.0, 0.0));
+            echoes.extend([point((sensor.x, sensor.y), 0.3), point((hit.x, hit.y), 0.3)]);
+        }
+        let lines = vec![json!({
+            "type": 2, "pose": identity_pose(), "thickness": 0.02, "scale_invariant": false,
+            "points": echoes, "color": {"r": 0.2, "g": 0.6, "b": 0.9, "a": 0.8}, "colors": [], "indices": [],
+        })];
+        self.write("/ranges", time, &scene_entity(time, "ranges", lines, Vec::new()))?;
+        let frame = &state.stereo;
+        if frame.number != self.frame && frame.number != 0 {
+            self.frame = frame.number;
+            let mount = frame.calibration.map_or([0.0, 0.0, 0.0], |c| c.mount);
+            let spheres: Vec<serde_json::Value> = frame
+                .landmarks
+                .iter()
+                .map(|l| {
+                    let [x, y, z] = l.point_cam;
+                    // The camera frame: x right, y ahead, z up.
+                    let (wx, wy) = pose.transform_point(y + mount[0], -x + mount[1]);
+                    json!({
+                        "pose": {"position": point((wx, wy), z + mount[2]), "orientation": identity_orientation()},
+                        "size": {"x": 0.12, "y": 0.12, "z": 0.12},
+                        "color": {"r": 0.1, "g": 0.4, "b": 1.0, "a": 0.9},
+                    })
+                })
+                .collect();
+            self.write("/observations", frame.time, &scene_entity(frame.time, "observations", Vec::new(), spheres))?;
         }
         Ok(())
     }

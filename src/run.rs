@@ -230,9 +230,7 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
             }
         }
         if let Some(log) = &mut log {
-            let egomotion = controller.state().egomotion.pose;
-            let logged =
-                log.tick(controller.last_record(), controller.layout(), Some(&truth), &odometry, egomotion.as_ref());
+            let logged = log.tick(controller.last_record(), controller.layout(), Some(&truth), controller.state());
             if let Err(e) = logged {
                 failure = Some(e.into());
                 break;

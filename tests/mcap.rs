@@ -52,7 +52,7 @@ fn a_run_log_reads_back_and_a_cut_one_up_to_its_last_chunk() {
     let bytes = std::fs::read(dir.path().join("run.mcap")).unwrap();
     let Read { topics, schemas, error } = read(&bytes, enumset::EnumSet::empty());
     assert_eq!(error, None);
-    for topic in ["/pose/true", "/pose/odometry", "/pose/egomotion", "/tree"] {
+    for topic in ["/pose/true", "/pose/odometry", "/pose/egomotion", "/tree", "/ranges"] {
         assert_eq!(topics[topic].len() as u64, report.ticks, "{topic}: one message a tick");
     }
     for topic in ["/goal", "/scene", "/world", "/run", "/report"] {
@@ -60,6 +60,9 @@ fn a_run_log_reads_back_and_a_cut_one_up_to_its_last_chunk() {
     }
     assert_eq!(schemas["/pose/true"], "foxglove.PoseInFrame");
     assert_eq!(schemas["/scene"], "foxglove.SceneUpdate");
+    // One set of observed landmarks per stereo frame (2 Hz over the run).
+    let frames = topics["/observations"].len() as f64;
+    assert!((frames - 2.0 * report.sim_time_s).abs() < 3.0, "{frames} frames in {} s", report.sim_time_s);
     // The last true pose is the report's, less the last tick's motion (the
     // log has the pose the tick sensed).
     let last = &topics["/pose/true"].last().unwrap()["pose"]["position"];
