@@ -588,20 +588,8 @@ fn replay_command(file: &std::path::Path, plot: Option<PathBuf>) -> ExitCode {
         let stem = file.file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned());
         file.with_file_name(format!("{stem}-replay.png"))
     });
-    let start = ubf_core::Pose2::new(run.start[0], run.start[1], run.start[2]);
     let title = format!("{} (seed {}), from its log", run.scenario, run.seed);
-    let picture = crate::plot::RunPlot {
-        title: &title,
-        world: &replayed.world,
-        true_path: &replayed.true_path,
-        estimated_path: &replayed.odometry_path,
-        decisions: &replayed.decisions,
-        collisions: &replayed.collisions,
-        start: Some((start, run.outline.map(|[x, y]| (x, y)))),
-        goal: run.goal.map(|[x, y, tolerance]| ubf_core::Goal { x, y, tolerance }),
-        timeline: Some(&replayed.timeline),
-    };
-    if let Err(e) = crate::plot::draw(&picture, &plot) {
+    if let Err(e) = crate::plot::draw_replayed(&replayed, &title, &plot) {
         eprintln!("error: {e}");
         return ExitCode::from(EXIT_FAILURE);
     }

@@ -31,7 +31,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use ubf_core::{Command, Pose2, State, TickRecord, TreeLayout, Turn};
+use ubf_core::{Pose2, State, TickRecord, TreeLayout};
 
 /// Why the log could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -304,15 +304,10 @@ impl McapLog {
         if let Some(e) = egomotion {
             self.write("/pose/egomotion", time, &pose_json(time, e))?;
         }
-        let (velocity, rot_velocity) = match record.command {
-            Command::Stop => (0.0, Some(0.0)),
-            Command::Drive { velocity, turn: Turn::Rate(rate) } => (velocity, Some(rate)),
-            Command::Drive { velocity, turn: Turn::Heading { .. } } => (velocity, None),
-        };
         let tick = TickMessage {
             time,
-            velocity,
-            rot_velocity,
+            velocity: record.command.velocity(),
+            rot_velocity: record.command.rot_velocity(),
             winner: layout.winning_leaf(record).map(|i| layout.nodes[i].path.clone()),
             nodes: layout
                 .nodes

@@ -325,6 +325,28 @@ fn draw_timeline<DB: DrawingBackend>(
     Ok(())
 }
 
+/// Draws a run as its log tells it (`ubf run` and `ubf replay` both draw
+/// this way, so the two pictures cannot differ).
+pub fn draw_replayed(run: &crate::mcap_log::ReplayedRun, title: &str, path: &Path) -> Result<(), PlotError> {
+    let start = run
+        .run
+        .as_ref()
+        .map(|r| (ubf_core::Pose2::new(r.start[0], r.start[1], r.start[2]), r.outline.map(|[x, y]| (x, y))));
+    let goal = run.run.as_ref().and_then(|r| r.goal).map(|[x, y, tolerance]| Goal { x, y, tolerance });
+    let picture = RunPlot {
+        title,
+        world: &run.world,
+        true_path: &run.true_path,
+        estimated_path: &run.odometry_path,
+        decisions: &run.decisions,
+        collisions: &run.collisions,
+        start,
+        goal,
+        timeline: Some(&run.timeline),
+    };
+    draw(&picture, path)
+}
+
 /// Draws a replayed sequence's egomotion path over the true one (when
 /// there is one), from above: x ahead of the first pose, y to its left.
 pub fn draw_paths(

@@ -2,7 +2,7 @@
 //! behind: `report.json`, `trajectory.csv` and `plot.png`.
 
 use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
-use crate::plot::{self, Decision, PlotError, RunPlot, Timeline};
+use crate::plot::{self, PlotError};
 use crate::scenario::Scenario;
 use crate::trajectory::{Row, TrajectoryWriter};
 use serde::Serialize;
@@ -147,12 +147,11 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         }
         None => None,
     };
-    let start_pose = controller.robot().inner().true_pose();
-    let start_outline = controller.robot().inner().footprint_at(&start_pose);
-    let world = WorldMessage::of(controller.robot().inner().world());
     let mut log = match out {
         Some(dir) => {
             let mut log = McapLog::create(&dir.join("run.mcap"))?;
+            let start_pose = controller.robot().inner().true_pose();
+            let start_outline = controller.robot().inner().footprint_at(&start_pose);
             let run = RunMessage {
                 scenario: scenario.name.clone(),
                 seed,
@@ -160,23 +159,11 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
                 outline: start_outline.map(|(x, y)| [x, y]),
                 goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
             };
-            log.start(&run, &world)?;
+            log.start(&run, &WorldMessage::of(controller.robot().inner().world()))?;
             Some(log)
         }
         None => None,
     };
-    let mut true_path = Vec::new();
-    let mut estimated_path = Vec::new();
-    let mut decisions = Vec::new();
-    let mut collisions = Vec::new();
-    let mut timeline = Timeline::default();
-    // The behaviours (leaves) whose votes the timeline shows.
-    let leaves: Vec<usize> = {
-        let nodes = &controller.layout().nodes;
-        (1..nodes.len()).filter(|&i| !nodes[i].composite).collect()
-    };
-    timeline.votes = leaves.iter().map(|&i| (controller.layout().nodes[i].path.clone(), Vec::new())).collect();
-    let mut last_winner = None;
     let mut touches = 0;
     // The true pose when the newest stereo frame was taken, to compare the
     // egomotion estimate made from that frame with.
@@ -230,44 +217,15 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
             }
         }
         if let Some(log) = &mut log {
-            let logged = log.tick(controller.last_record(), controller.layout(), Some(&truth), controller.state());
+            let mut logged = log.tick(controller.last_record(), controller.layout(), Some(&truth), controller.state());
+            let now_touching = controller.robot().inner().collisions();
+            if logged.is_ok() && now_touching > touches {
+                touches = now_touching;
+                logged = log.collision(controller.now(), (truth.x, truth.y));
+            }
             if let Err(e) = logged {
                 failure = Some(e.into());
                 break;
-            }
-        }
-        if out.is_some() {
-            true_path.push((truth.x, truth.y));
-            estimated_path.push((odometry.x, odometry.y));
-            let record = controller.last_record();
-            let winner = controller.layout().winning_leaf(record);
-            if let (Some(w), true) = (winner, winner != last_winner && last_winner.is_some()) {
-                decisions.push(Decision { at: (truth.x, truth.y), winner: controller.layout().nodes[w].name.clone() });
-            }
-            last_winner = winner;
-            let now_touching = controller.robot().inner().collisions();
-            if now_touching > touches {
-                collisions.push((truth.x, truth.y));
-                touches = now_touching;
-                if let Some(log) = &mut log {
-                    if let Err(e) = log.collision(controller.now(), (truth.x, truth.y)) {
-                        failure = Some(e.into());
-                        break;
-                    }
-                }
-            }
-            let (speed, turn) = match record.command {
-                ubf_core::Command::Stop => (0.0, 0.0),
-                ubf_core::Command::Drive { velocity, turn: ubf_core::Turn::Rate(rate) } => {
-                    (velocity, rate.to_degrees())
-                }
-                ubf_core::Command::Drive { velocity, turn: ubf_core::Turn::Heading { .. } } => (velocity, f64::NAN),
-            };
-            timeline.time.push(record.time);
-            timeline.speed.push(speed);
-            timeline.turn_deg.push(turn);
-            for ((_, votes), &i) in timeline.votes.iter_mut().zip(&leaves) {
-                votes.push(record.nodes[i].action.effective_vote());
             }
         }
         if controller.state().goal_reached() {
@@ -339,19 +297,10 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
     }
     if let Some(dir) = out {
         write_report(&report, &dir.join("report.json"))?;
-        let title = format!("{} (seed {seed})", scenario.name);
-        let picture = RunPlot {
-            title: &title,
-            world: &world,
-            true_path: &true_path,
-            estimated_path: &estimated_path,
-            decisions: &decisions,
-            collisions: &collisions,
-            start: Some((start_pose, start_outline)),
-            goal: scenario.goal,
-            timeline: Some(&timeline),
-        };
-        plot::draw(&picture, &dir.join("plot.png"))?;
+        // The plot is drawn from the log, as `ubf replay` draws it: one
+        // source for both.
+        let replayed = crate::mcap_log::read(&dir.join("run.mcap"))?;
+        plot::draw_replayed(&replayed, &format!("{} (seed {seed})", scenario.name), &dir.join("plot.png"))?;
     }
     Ok(report)
 }

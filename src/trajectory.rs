@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
-use ubf_core::{Command, EgomotionState, Hold, Pose2, TickRecord, TreeLayout, Turn};
+use ubf_core::{EgomotionState, Hold, Pose2, TickRecord, TreeLayout};
 
 /// Longest a written row waits in memory before it reaches the file.
 const FLUSH_EVERY: Duration = Duration::from_secs(1);
@@ -79,12 +79,8 @@ impl TrajectoryWriter {
     /// column says so, the robot was sent STOP instead.
     pub fn write(&mut self, record: &TickRecord, layout: &TreeLayout, row: &Row) -> io::Result<()> {
         let Row { truth, odometry, egomotion, frame, hold } = *row;
-        let (v, w) = match record.command {
-            Command::Stop => (0.0, 0.0),
-            Command::Drive { velocity, turn: Turn::Rate(rate) } => (velocity, rate),
-            // A heading command has no rate yet; the robot picks one.
-            Command::Drive { velocity, turn: Turn::Heading { .. } } => (velocity, f64::NAN),
-        };
+        // A heading command has no rate yet; the robot picks one.
+        let (v, w) = (record.command.velocity(), record.command.rot_velocity().unwrap_or(f64::NAN));
         let winner = layout.winning_leaf(record).map_or("", |i| layout.nodes[i].path.as_str());
         write!(self.out, "{:.3},", record.time)?;
         if self.columns.truth {

@@ -935,9 +935,7 @@ impl Tracker {
         if self.frame_to_frame() {
             order.sort_by(|&a, &b| self.keyframes[b].time.total_cmp(&self.keyframes[a].time));
         } else {
-            let reach = self.config.keyframe_range_m;
-            let spread =
-                |k: &Keyframe| k.covariance[(0, 0)] + k.covariance[(1, 1)] + reach * reach * k.covariance[(2, 2)];
+            let spread = |k: &Keyframe| self.predicted_error(&k.covariance);
             order.sort_by(|&a, &b| {
                 let (ka, kb) = (&self.keyframes[a], &self.keyframes[b]);
                 ka.bridges.cmp(&kb.bridges).then(spread(ka).total_cmp(&spread(kb))).then(ka.time.total_cmp(&kb.time))
@@ -964,15 +962,21 @@ impl Tracker {
         }
         let (Some(far_cov), Some(near_cov)) = (far.covariance, near.covariance) else { return best };
         let (kf, kn) = (&self.keyframes[*anchor], &self.keyframes[newest]);
-        let reach = self.config.keyframe_range_m;
-        let predicted = |c: Matrix3<f64>| c[(0, 0)] + c[(1, 1)] + reach * reach * c[(2, 2)];
-        let far_error = predicted(composed_covariance(&kf.pose, &kf.covariance, &far.motion, &far_cov));
-        let near_error = predicted(composed_covariance(&kn.pose, &kn.covariance, &near.motion, &near_cov));
+        let far_error = self.predicted_error(&composed_covariance(&kf.pose, &kf.covariance, &far.motion, &far_cov));
+        let near_error = self.predicted_error(&composed_covariance(&kn.pose, &kn.covariance, &near.motion, &near_cov));
         if near_error < far_error {
             Some((newest, near))
         } else {
             best
         }
+    }
+
+    /// The error a pose with covariance `c` (x, y, heading) predicts: its
+    /// position variance plus its heading variance over the keyframe reach,
+    /// where a heading error becomes a position error, m².
+    fn predicted_error(&self, c: &Matrix3<f64>) -> f64 {
+        let reach = self.config.keyframe_range_m;
+        c[(0, 0)] + c[(1, 1)] + reach * reach * c[(2, 2)]
     }
 
     /// The motion from keyframe `index` to `frame`, if the estimator finds

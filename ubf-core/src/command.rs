@@ -95,6 +95,16 @@ impl Command {
             Command::Drive { velocity, .. } => *velocity,
         }
     }
+
+    /// The turn rate commanded, rad/s (0 for a stop); `None` for a heading
+    /// command, whose rate the robot chooses.
+    pub fn rot_velocity(&self) -> Option<f64> {
+        match self {
+            Command::Stop => Some(0.0),
+            Command::Drive { turn: Turn::Rate(rate), .. } => Some(*rate),
+            Command::Drive { turn: Turn::Heading { .. }, .. } => None,
+        }
+    }
 }
 
 #[cfg(test)]
