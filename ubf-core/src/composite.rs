@@ -146,8 +146,12 @@ impl Behavior for Composite {
                 continue;
             }
             let behavior = &mut child.behavior;
-            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| behavior.gen_action(state))) {
-                Ok(action) => bid.action = action,
+            // The action is written straight into the bid, not passed back
+            // through the `Result`: one copy of it fewer every child, every tick.
+            let asked =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bid.action = behavior.gen_action(state)));
+            match asked {
+                Ok(()) => {}
                 Err(payload) => {
                     child.faulted = true;
                     bid.action = Action::none();
