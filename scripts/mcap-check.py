@@ -5,11 +5,14 @@
 
 Installs the `mcap` package from PyPI into .venv-mcap on first use
 (scripts/script_env.py), then prints each topic with its schema, encoding
-and message count, the first and last true pose, and the report's end. It
-exits non-zero if a message's JSON does not parse, or if a topic the log
-must hold is missing: a check of our writer by a reader we did not write.
+and message count, the first and last true pose, the camera images if the
+log holds them, and the report's end. It exits non-zero if a message's
+JSON does not parse, if an image is not a PNG, or if a topic the log must
+hold is missing: a check of our writer by a reader we did not write.
 """
+import base64
 import json
+import struct
 import os
 import sys
 
@@ -25,7 +28,7 @@ def main():
 
     if len(sys.argv) != 2:
         sys.exit(__doc__)
-    counts, schemas, first, last, report = {}, {}, None, None, None
+    counts, schemas, first, last, report, images = {}, {}, None, None, None, {}
     with open(sys.argv[1], "rb") as f:
         for schema, channel, message in make_reader(f).iter_messages():
             data = json.loads(message.data)
@@ -38,6 +41,12 @@ def main():
                 last = (position["x"], position["y"])
             if channel.topic == "/report":
                 report = data
+            if channel.topic.startswith("/camera/"):
+                png = base64.b64decode(data["data"], validate=True)
+                # The signature, then the IHDR chunk: width and height.
+                if png[:8] != b"\x89PNG\r\n\x1a\n" or png[12:16] != b"IHDR" or data["format"] != "png":
+                    sys.exit(f"{channel.topic}: message {counts[channel.topic]} is not a PNG")
+                images[channel.topic] = struct.unpack(">II", png[16:24])
     print("| topic | schema | schema encoding | message encoding | messages |")
     print("| --- | --- | --- | --- | --- |")
     for topic in sorted(counts):
@@ -46,6 +55,8 @@ def main():
     missing = [t for t in REQUIRED if t not in counts]
     if missing:
         sys.exit(f"missing topics: {', '.join(missing)}")
+    for topic, (width, height) in sorted(images.items()):
+        print(f"{topic}: {counts[topic]} PNG images of {width} x {height}")
     print(f"true pose from ({first[0]:.2f}, {first[1]:.2f}) to ({last[0]:.2f}, {last[1]:.2f}); "
           f"the run ended: {report['end']}")
 

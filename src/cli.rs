@@ -82,6 +82,10 @@ enum Command {
         /// Run it even beyond the bound on ticks (a deliberately huge run).
         #[arg(long)]
         huge: bool,
+        /// Put the camera's rendered stereo pairs in run.mcap (PNG; needs
+        /// `--out` and a camera that renders).
+        #[arg(long, requires = "out")]
+        log_images: bool,
     },
     /// Run every scenario with every seed in parallel and summarise; with
     /// `--shard K/N`, a share of the runs, for `ubf sweep merge` to combine.
@@ -451,7 +455,9 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     match cli.command {
-        Command::Run { file, seed, out, json, huge } => run_command(&registry, file, seed, out, json, huge),
+        Command::Run { file, seed, out, json, huge, log_images } => {
+            run_command(&registry, file, seed, out, json, huge, log_images)
+        }
         Command::Check { files } => check_command(&registry, &files),
         Command::Sweep { action: Some(SweepAction::Merge { dirs, out }), .. } => {
             let out = out.unwrap_or_else(|| dirs[0].clone());
@@ -651,6 +657,7 @@ fn run_command(
     out: Option<PathBuf>,
     json: bool,
     huge: bool,
+    log_images: bool,
 ) -> ExitCode {
     let loaded = if huge { Scenario::load_unbounded(registry, &file) } else { Scenario::load(registry, &file) };
     let scenario = match loaded {
@@ -668,7 +675,8 @@ fn run_command(
         EndReason::GoalReached | EndReason::TimeLimit => ExitCode::SUCCESS,
     };
     let stop = crate::drive::install_stop_flag();
-    match run_until(&scenario, seed, out.as_deref(), &stop) {
+    let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images });
+    match run_until(&scenario, seed, outputs, &stop) {
         Ok(summary) if json => match serde_json::to_string_pretty(&summary) {
             Ok(text) => {
                 println!("{text}");
@@ -682,7 +690,7 @@ fn run_command(
         Ok(summary) => {
             print_summary(&summary);
             if let Some(dir) = &out {
-                println!("outputs         {}/{{report.json, trajectory.csv, plot.png}}", dir.display());
+                println!("outputs         {}/{{report.json, trajectory.csv, run.mcap, plot.png}}", dir.display());
             }
             status(&summary)
         }

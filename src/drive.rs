@@ -1,7 +1,7 @@
 //! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
 //! speaking its protocol), stopped safely.
 
-use crate::trajectory::{Columns, Row, TrajectoryWriter};
+use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -9,8 +9,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{
-    BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2, Registry, Robot, RobotError,
-    SafetyGuard, SafetyPolicy, State, TracingSink, WallClock,
+    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2, Registry,
+    Robot, RobotError, SafetyGuard, SafetyPolicy, State, TracingSink, WallClock,
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
@@ -168,6 +168,10 @@ pub struct DriveConfig {
     /// Where the tick log goes, relative to the working directory.
     #[serde(default = "DriveConfig::default_log")]
     pub log: PathBuf,
+    /// Whether the session's MCAP log holds the camera's stereo pairs
+    /// (PNG, about 0.2 MB a 640 × 480 pair).
+    #[serde(default)]
+    pub log_images: bool,
     /// What to do when the robot stops answering.
     #[serde(default)]
     pub on_link_loss: OnLinkLoss,
@@ -389,6 +393,10 @@ fn create_fresh_log(base: &Path) -> std::io::Result<(std::fs::File, PathBuf)> {
     Err(std::io::Error::other(format!("{}: 10 000 logs already; move some away", base.display())))
 }
 
+/// Records a log writer may fall behind by before records are dropped: 25 s
+/// of ticks at 10 Hz.
+const LOG_QUEUE: usize = 256;
+
 /// How `ubf drive` shows its live state on stderr.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
@@ -415,7 +423,7 @@ fn status_line<R: Robot>(controller: &Controller<SafetyGuard<R>>) -> String {
     let state = controller.state();
     let layout = controller.layout();
     let winner = layout.winning_leaf(controller.last_record()).map_or("-", |i| layout.nodes[i].path.as_str());
-    let hold = match controller.robot().hold() {
+    let hold = match controller.last_record().hold {
         Some(ubf_core::Hold::StaleData) => "stale data",
         Some(ubf_core::Hold::Contact) => "contact",
         None => "-",
@@ -495,40 +503,44 @@ fn drive_sessions(
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
         controller.add_sink(Box::new(TracingSink));
-        let opened = create_fresh_log(&config.log).and_then(|(file, path)| {
-            let columns = Columns { truth: false, hold: true };
-            Ok((TrajectoryWriter::new(file, controller.layout(), columns)?, path))
-        });
-        let ended = match opened {
-            Ok((mut log, path)) => {
+        // The logs are written on threads of their own: a slow disk must not
+        // delay a tick, and a failed log must not stop the robot.
+        let ended = match create_fresh_log(&config.log) {
+            Ok((file, path)) => {
                 eprintln!("logging to {}", path.display());
                 logs.push(path.clone());
-                let mut mcap = open_session_mcap(&path, model, controller.state().pose, config.goal);
-                if let Some((_, mcap_path)) = &mcap {
-                    eprintln!("and to {}", mcap_path.display());
-                    logs.push(mcap_path.clone());
-                }
-                let ended = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    let mcap = mcap.as_mut().map(|(log, _)| log);
-                    run_session(&mut controller, &mut log, mcap, stop, &out_of_time, config.until_goal, status)
-                }))
-                .unwrap_or_else(|panic| {
-                    SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
-                });
-                if let Err(e) = log.finish() {
-                    tracing::warn!("{}: {e}", path.display());
-                }
-                if let Some((mcap, _)) = mcap {
-                    if let Err(e) = mcap.close() {
-                        tracing::warn!("{e}");
+                let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true });
+                let attached = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map(|sink| {
+                    controller.add_sink(Box::new(sink));
+                    if let Some((mut mcap, mcap_path)) =
+                        open_session_mcap(&path, model, controller.state().pose, config.goal)
+                    {
+                        mcap.log_images(config.log_images);
+                        match BackgroundSink::spawn("MCAP log", mcap, LOG_QUEUE) {
+                            Ok(sink) => {
+                                eprintln!("and to {}", mcap_path.display());
+                                logs.push(mcap_path);
+                                controller.add_sink(Box::new(sink));
+                            }
+                            Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
+                        }
                     }
+                });
+                match attached {
+                    Ok(()) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        run_session(&mut controller, stop, &out_of_time, config.until_goal, status)
+                    }))
+                    .unwrap_or_else(|panic| {
+                        SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
+                    }),
+                    Err(e) => SessionEnd::Failed(format!("starting the log writer: {e}")),
                 }
-                ended
             }
             Err(e) => SessionEnd::Failed(format!("{}: {e}", config.log.display())),
         };
         pose = controller.state().pose;
-        // Whatever happened: stop the robot and close the session.
+        // Whatever happened: stop the robot, close the session and flush
+        // the logs.
         if let Err(e) = controller.shutdown() {
             tracing::warn!("shutting down: {e}");
         }
@@ -562,20 +574,17 @@ fn open_session_mcap(
         tracing::warn!("{} exists; this session has only its CSV log", path.display());
         return None;
     }
-    let opened = crate::mcap_log::McapLog::create(&path).and_then(|mut log| {
-        let run = crate::mcap_log::RunMessage {
-            scenario: format!("drive ({})", model.name),
-            seed: 0,
-            start: [pose.x, pose.y, pose.theta],
-            outline: model.footprint.corners().map(|(x, y)| {
-                let (wx, wy) = pose.transform_point(x, y);
-                [wx, wy]
-            }),
-            goal: goal.map(|g| [g.x, g.y, g.tolerance]),
-        };
-        log.start(&run, &crate::mcap_log::WorldMessage::default())?;
-        Ok(log)
-    });
+    let run = crate::mcap_log::RunMessage {
+        scenario: format!("drive ({})", model.name),
+        seed: 0,
+        start: [pose.x, pose.y, pose.theta],
+        outline: model.footprint.corners().map(|(x, y)| {
+            let (wx, wy) = pose.transform_point(x, y);
+            [wx, wy]
+        }),
+        goal: goal.map(|g| [g.x, g.y, g.tolerance]),
+    };
+    let opened = crate::mcap_log::McapLog::create(&path, &run, &crate::mcap_log::WorldMessage::default());
     match opened {
         Ok(log) => Some((log, path)),
         Err(e) => {
@@ -586,11 +595,10 @@ fn open_session_mcap(
 }
 
 /// Ticks until stopped, the link is lost, or something fails. The safety
-/// guard around the robot holds it on stale data and declares a lost link.
+/// guard around the robot holds it on stale data and declares a lost link;
+/// the controller's sinks log every tick.
 fn run_session<R: Robot>(
     controller: &mut Controller<SafetyGuard<R>>,
-    log: &mut TrajectoryWriter,
-    mut mcap: Option<&mut crate::mcap_log::McapLog>,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
     until_goal: bool,
@@ -602,29 +610,11 @@ fn run_session<R: Robot>(
             break SessionEnd::Stopped;
         }
         match controller.tick() {
+            Ok(record) if until_goal && record.state.goal_reached() => break SessionEnd::GoalReached,
             Ok(_) => {}
             Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
             Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),
             Err(e) => break SessionEnd::Failed(e.to_string()),
-        }
-        let state: &State = controller.state();
-        let row = Row {
-            truth: None,
-            odometry: &state.pose,
-            egomotion: &state.egomotion,
-            frame: state.stereo.number,
-            hold: controller.robot().hold(),
-        };
-        if let Err(e) = log.write(controller.last_record(), controller.layout(), &row) {
-            tracing::warn!("writing the log: {e}");
-        }
-        if let Some(m) = mcap.as_deref_mut() {
-            if let Err(e) = m.tick(controller.last_record(), controller.layout(), None, state) {
-                tracing::warn!("{e}");
-            }
-        }
-        if until_goal && state.goal_reached() {
-            break SessionEnd::GoalReached;
         }
         if status != Status::Off && shown.elapsed() >= status.every() {
             shown = Instant::now();

@@ -9,8 +9,9 @@ use crate::scenario::Scenario;
 use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
-use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame};
+use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame, TickRecord, TickSink};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::kitti::{self, Accuracy};
@@ -42,7 +43,7 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let stereo = camera.stereo;
     // At most this many pairs: the frames the run has time for, or fewer.
     let bound = ((camera.rate_hz * scenario.max_time_s).ceil() as usize).min(max_frames);
-    let mut writer = ImageDirectoryWriter::create(dir).map_err(|e| e.to_string())?;
+    let writer = ImageDirectoryWriter::create(dir).map_err(|e| e.to_string())?;
     let calibration =
         ron::ser::to_string_pretty(&stereo, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())?;
     let path = dir.join(CAMERA_FILE);
@@ -52,25 +53,47 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let root = scenario.root.build(&BuildContext::new(seed));
     let mut controller = Controller::new(sim, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
-    let mut last_frame = 0;
     let progress = crate::sweep::progress_bar(bound as u64, "pairs");
-    for _ in 0..scenario.max_ticks() {
-        controller.tick().map_err(|e| e.to_string())?;
-        let frame = &controller.state().stereo;
-        if frame.number != last_frame {
-            last_frame = frame.number;
-            if let Some((left, right)) = controller.robot().last_images() {
-                let pair = StereoPair { time: frame.time, left: left.clone(), right: right.clone() };
-                writer.push(&pair).map_err(|e| e.to_string())?;
-                progress.inc(1);
-            }
-        }
-        if controller.state().goal_reached() || last_frame as usize >= max_frames {
+    let pairs = Arc::new(Mutex::new(PairRecorder { writer, frame: 0, progress }));
+    controller.add_sink(Box::new(pairs.clone()));
+    let max_ticks = scenario.max_ticks();
+    loop {
+        let record = controller.tick().map_err(|e| e.to_string())?;
+        let enough = record.state.stereo.number as usize >= max_frames;
+        if record.state.goal_reached() || enough || record.tick + 1 >= max_ticks {
             break;
         }
     }
-    progress.finish_and_clear();
-    writer.finish().map_err(|e| e.to_string())
+    controller.shutdown().map_err(|e| e.to_string())?;
+    drop(controller);
+    let recorder = Arc::into_inner(pairs).expect("the controller, the only other holder, is gone");
+    let recorder = recorder.into_inner().unwrap_or_else(PoisonError::into_inner);
+    recorder.progress.finish_and_clear();
+    recorder.writer.finish().map_err(|e| e.to_string())
+}
+
+/// A sink writing each new frame's pair of images into a recording.
+struct PairRecorder {
+    writer: ImageDirectoryWriter,
+    /// The last frame written.
+    frame: u64,
+    progress: indicatif::ProgressBar,
+}
+
+impl TickSink for PairRecorder {
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        let frame = &record.state.stereo;
+        if frame.number == self.frame {
+            return Ok(());
+        }
+        self.frame = frame.number;
+        let Some(pair) = frame.images.as_deref().and_then(|images| StereoPair::from_images(frame.time, images)) else {
+            return Ok(());
+        };
+        self.writer.push(&pair).map_err(std::io::Error::other)?;
+        self.progress.inc(1);
+        Ok(())
+    }
 }
 
 /// The most bytes [`record`] writes for `scenario` and at most
@@ -299,7 +322,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             }
         }
-        let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None };
+        let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None, images: None };
         let odometry = tracker.state().pose.unwrap_or_default();
         tracker.update(&frame, &odometry);
         let done = Instant::now();

@@ -21,6 +21,9 @@
 //!   sensor to its echo;
 //! - `/observations` (`foxglove.SceneUpdate`): at each new stereo frame,
 //!   the landmarks it saw;
+//! - `/camera/left`, `/camera/right` (`foxglove.CompressedImage`, PNG):
+//!   each stereo frame's rectified pair, when the camera keeps its images
+//!   and the log was asked for them ([`McapLog::log_images`]);
 //! - `/collision` (`ubf.Collision`): where the robot touched something;
 //! - `/report` (`ubf.Report`): the run's report, at the end.
 
@@ -31,7 +34,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use ubf_core::{Pose2, State, TickRecord, TreeLayout};
+use ubf_core::{Pose2, State, TickRecord, TickSink, TreeLayout};
 
 /// Why the log could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -129,7 +132,7 @@ pub struct NodeVote {
     pub composite: bool,
 }
 
-/// A run log being written.
+/// A run log being written: a [`TickSink`] that the controller feeds.
 pub struct McapLog {
     writer: mcap::Writer<BufWriter<File>>,
     path: PathBuf,
@@ -139,6 +142,12 @@ pub struct McapLog {
     flushed_at: f64,
     /// The stereo frame whose observations were logged last.
     frame: u64,
+    /// The tree, to name the nodes of each tick.
+    layout: TreeLayout,
+    /// Collisions logged so far.
+    collisions: u32,
+    /// Whether stereo pairs are logged.
+    images: bool,
 }
 
 /// The longest record (a chunk, compressed or not) [`read`] accepts: far
@@ -150,6 +159,7 @@ const CHUNK_EVERY_S: f64 = 1.0;
 
 const POSE_SCHEMA: &str = r#"{"title":"foxglove.PoseInFrame","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"pose":{"type":"object","properties":{"position":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}}}"#;
 const SCENE_SCHEMA: &str = r#"{"title":"foxglove.SceneUpdate","type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
+const IMAGE_SCHEMA: &str = r#"{"title":"foxglove.CompressedImage","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}}}"#;
 const OBJECT_SCHEMA: &str = r#"{"type":"object"}"#;
 
 /// Nanoseconds of controller time, as MCAP and Foxglove count.
@@ -202,8 +212,21 @@ fn scene_entity(
 }
 
 impl McapLog {
-    /// Creates (or replaces) the log at `path` and declares its topics.
-    pub fn create(path: &Path) -> Result<McapLog, LogError> {
+    /// Creates (or replaces) the log at `path`, declares its topics and
+    /// writes what the run is: its world, goal and the scene Foxglove draws.
+    pub fn create(path: &Path, run: &RunMessage, world: &WorldMessage) -> Result<McapLog, LogError> {
+        let mut log = McapLog::open(path)?;
+        log.describe(run, world)?;
+        Ok(log)
+    }
+
+    /// Logs each stereo frame's pair of images (PNG, about 0.2 MB a pair
+    /// of 640 × 480), where the camera keeps them; off by default.
+    pub fn log_images(&mut self, images: bool) {
+        self.images = images;
+    }
+
+    fn open(path: &Path) -> Result<McapLog, LogError> {
         let fail = |e: &dyn std::fmt::Display| LogError { path: path.to_owned(), message: e.to_string() };
         let file = File::create(path).map_err(|e| fail(&e))?;
         let options = mcap::WriteOptions::new().profile("").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
@@ -214,7 +237,12 @@ impl McapLog {
             writer.add_schema("foxglove.PoseInFrame", "jsonschema", POSE_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
         let scene =
             writer.add_schema("foxglove.SceneUpdate", "jsonschema", SCENE_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
+        let image = writer
+            .add_schema("foxglove.CompressedImage", "jsonschema", IMAGE_SCHEMA.as_bytes())
+            .map_err(|e| fail(&e))?;
         for (topic, schema) in [
+            ("/camera/left", image),
+            ("/camera/right", image),
             ("/pose/true", pose),
             ("/pose/odometry", pose),
             ("/pose/egomotion", pose),
@@ -237,7 +265,17 @@ impl McapLog {
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
             channels.insert(topic, id);
         }
-        Ok(McapLog { writer, path: path.to_owned(), channels, sequence: 0, flushed_at: 0.0, frame: 0 })
+        Ok(McapLog {
+            writer,
+            path: path.to_owned(),
+            channels,
+            sequence: 0,
+            flushed_at: 0.0,
+            frame: 0,
+            layout: TreeLayout::default(),
+            collisions: 0,
+            images: false,
+        })
     }
 
     fn fail(&self, e: &dyn std::fmt::Display) -> LogError {
@@ -256,7 +294,7 @@ impl McapLog {
 
     /// The run's start: what it is, its world, goal and the scene Foxglove
     /// draws.
-    pub fn start(&mut self, run: &RunMessage, world: &WorldMessage) -> Result<(), LogError> {
+    fn describe(&mut self, run: &RunMessage, world: &WorldMessage) -> Result<(), LogError> {
         self.write("/run", 0.0, run)?;
         self.write("/world", 0.0, world)?;
         if let Some([x, y, _]) = run.goal {
@@ -286,24 +324,18 @@ impl McapLog {
 
     /// One tick: the poses (the truth where the robot has one, the
     /// egomotion estimate where it runs one), what the sensors saw, placed
-    /// by the robot's own pose, and the tree's part.
-    pub fn tick(
-        &mut self,
-        record: &TickRecord,
-        layout: &TreeLayout,
-        truth: Option<&Pose2>,
-        state: &State,
-    ) -> Result<(), LogError> {
-        let time = record.time;
-        let (odometry, egomotion) = (&state.pose, state.egomotion.pose.as_ref());
+    /// by the robot's own pose, the tree's part, and any new collision.
+    fn tick(&mut self, record: &TickRecord) -> Result<(), LogError> {
+        let (time, state) = (record.time, &record.state);
         self.sensors(time, state)?;
-        if let Some(t) = truth {
-            self.write("/pose/true", time, &pose_json(time, t))?;
+        if let Some(truth) = &record.truth {
+            self.write("/pose/true", time, &pose_json(time, &truth.pose))?;
         }
-        self.write("/pose/odometry", time, &pose_json(time, odometry))?;
-        if let Some(e) = egomotion {
+        self.write("/pose/odometry", time, &pose_json(time, &state.pose))?;
+        if let Some(e) = &state.egomotion.pose {
             self.write("/pose/egomotion", time, &pose_json(time, e))?;
         }
+        let layout = &self.layout;
         let tick = TickMessage {
             time,
             velocity: record.command.velocity(),
@@ -322,6 +354,10 @@ impl McapLog {
                 .collect(),
         };
         self.write("/tree", time, &tick)?;
+        if let Some(truth) = record.truth.filter(|t| t.collisions > self.collisions) {
+            self.collisions = truth.collisions;
+            self.write("/collision", time, &json!({"x": truth.pose.x, "y": truth.pose.y}))?;
+        }
         if time - self.flushed_at >= CHUNK_EVERY_S {
             self.writer.flush().map_err(|e| self.fail(&e))?;
             self.flushed_at = time;
@@ -365,17 +401,37 @@ impl McapLog {
                 })
                 .collect();
             self.write("/observations", frame.time, &scene_entity(frame.time, "observations", Vec::new(), spheres))?;
+            if let Some(images) = frame.images.as_deref().filter(|_| self.images) {
+                self.stereo_pair(frame.time, images)?;
+            }
         }
         Ok(())
     }
 
-    /// Where the robot touched something, at controller time `time`.
-    pub fn collision(&mut self, time: f64, at: (f64, f64)) -> Result<(), LogError> {
-        self.write("/collision", time, &json!({"x": at.0, "y": at.1}))
+    /// A stereo pair as two `foxglove.CompressedImage` PNGs.
+    fn stereo_pair(&mut self, time: f64, images: &ubf_core::StereoImages) -> Result<(), LogError> {
+        use base64::Engine;
+        use image::ImageEncoder;
+        for (topic, frame_id, pixels) in
+            [("/camera/left", "camera_left", &images.left), ("/camera/right", "camera_right", &images.right)]
+        {
+            let mut png = Vec::new();
+            image::codecs::png::PngEncoder::new(&mut png)
+                .write_image(pixels, images.width, images.height, image::ExtendedColorType::L8)
+                .map_err(|e| self.fail(&e))?;
+            let message = json!({
+                "timestamp": stamp(time),
+                "frame_id": frame_id,
+                "data": base64::engine::general_purpose::STANDARD.encode(&png),
+                "format": "png",
+            });
+            self.write(topic, time, &message)?;
+        }
+        Ok(())
     }
 
     /// Writes the report and closes the log (its summary and footer).
-    pub fn finish(mut self, time: f64, report: &impl Serialize) -> Result<(), LogError> {
+    pub fn close_with_report(mut self, time: f64, report: &impl Serialize) -> Result<(), LogError> {
         self.write("/report", time, report)?;
         self.close()
     }
@@ -385,6 +441,23 @@ impl McapLog {
     pub fn close(mut self) -> Result<(), LogError> {
         self.writer.finish().map_err(|e| self.fail(&e))?;
         Ok(())
+    }
+}
+
+impl TickSink for McapLog {
+    fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.layout = layout.clone();
+        Ok(())
+    }
+
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        self.tick(record).map_err(std::io::Error::other)
+    }
+
+    /// Closes the chunk under way, so that everything logged is readable;
+    /// the summary is written when the log is closed (or dropped).
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.writer.flush().map_err(|e| std::io::Error::other(self.fail(&e)))
     }
 }
 

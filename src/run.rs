@@ -4,12 +4,13 @@
 use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
 use crate::plot::{self, PlotError};
 use crate::scenario::Scenario;
-use crate::trajectory::{Row, TrajectoryWriter};
+use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
-use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch, TracingSink};
+use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch, TickRecord, TracingSink};
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
@@ -118,156 +119,126 @@ fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 
 /// Runs `scenario` with `seed` on the simulator until the robot believes it
 /// is at the goal or time runs out. With `out`, writes `report.json`,
-/// `trajectory.csv` and `plot.png` there (creating the directory).
+/// `trajectory.csv`, `run.mcap` and `plot.png` there (creating the
+/// directory).
 pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunReport, RunError> {
-    run_until(scenario, seed, out, &AtomicBool::new(false))
+    let outputs = out.map(|dir| Outputs { dir, images: false });
+    run_until(scenario, seed, outputs, &AtomicBool::new(false))
 }
 
-/// [`run`], ended early (with its outputs, `end: interrupted`) once `stop`
-/// is set.
-pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &AtomicBool) -> Result<RunReport, RunError> {
+/// Where a run's files go, and what its log holds.
+#[derive(Clone, Copy, Debug)]
+pub struct Outputs<'a> {
+    /// The directory for `report.json`, `trajectory.csv`, `run.mcap` and
+    /// `plot.png`.
+    pub dir: &'a Path,
+    /// Whether `run.mcap` holds the camera's rendered pairs.
+    pub images: bool,
+}
+
+/// [`run`] with a choice of outputs, ended early (with its outputs, `end:
+/// interrupted`) once `stop` is set.
+pub fn run_until(
+    scenario: &Scenario,
+    seed: u64,
+    outputs: Option<Outputs>,
+    stop: &AtomicBool,
+) -> Result<RunReport, RunError> {
+    let out = outputs.map(|o| o.dir);
     let stopwatch = Stopwatch::start();
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
     let tracker = match (&scenario.robot.egomotion, &scenario.robot.camera) {
         (Some(config), Some(camera)) => Some(Tracker::new(*config, camera.stereo, sim.true_pose(), seed)),
         _ => None,
     };
+    let run_message = RunMessage {
+        scenario: scenario.name.clone(),
+        seed,
+        start: [sim.true_pose().x, sim.true_pose().y, sim.true_pose().theta],
+        outline: sim.footprint_at(&sim.true_pose()).map(|(x, y)| [x, y]),
+        goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
+    };
+    let world = WorldMessage::of(sim.world());
     let robot = EgomotionRobot::new(sim, tracker);
     let root = scenario.root.build(&BuildContext::new(seed));
     let mut controller = Controller::new(robot, root, Box::new(SimClock::new(scenario.period_s)));
     controller.set_goal(scenario.goal);
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
-
-    let mut trajectory = match out {
+    let log = match out {
         Some(dir) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;
             let path = dir.join("trajectory.csv");
-            Some((TrajectoryWriter::create(&path, controller.layout()).map_err(output_error(&path))?, path))
-        }
-        None => None,
-    };
-    let mut log = match out {
-        Some(dir) => {
-            let mut log = McapLog::create(&dir.join("run.mcap"))?;
-            let start_pose = controller.robot().inner().true_pose();
-            let start_outline = controller.robot().inner().footprint_at(&start_pose);
-            let run = RunMessage {
-                scenario: scenario.name.clone(),
-                seed,
-                start: [start_pose.x, start_pose.y, start_pose.theta],
-                outline: start_outline.map(|(x, y)| [x, y]),
-                goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
-            };
-            log.start(&run, &WorldMessage::of(controller.robot().inner().world()))?;
+            let columns = Columns { truth: true, hold: false };
+            controller.add_sink(Box::new(TrajectoryWriter::create(&path, columns).map_err(output_error(&path))?));
+            let mut log = McapLog::create(&dir.join("run.mcap"), &run_message, &world)?;
+            log.log_images(outputs.is_some_and(|o| o.images));
+            let log = Arc::new(Mutex::new(log));
+            controller.add_sink(Box::new(log.clone()));
             Some(log)
         }
         None => None,
     };
-    let mut touches = 0;
-    // The true pose when the newest stereo frame was taken, to compare the
-    // egomotion estimate made from that frame with.
-    let mut truth_at_frame = None;
-    let mut frame_number = 0;
-    let mut predictor = EndPointPredictor::new(DecisionCosts::default());
-    let mut odometry_at_frame = None;
 
     let max_ticks = scenario.max_ticks();
-    let mut end = EndReason::TimeLimit;
+    let mut end_point = EndPointWitness::default();
     let mut failure = None;
     let mut behavior_failure = None;
-    for _ in 0..max_ticks {
-        if stop.load(Ordering::Relaxed) {
-            end = EndReason::Interrupted;
-            break;
-        }
+    let end = loop {
         match controller.tick() {
-            Ok(_) => {}
+            Ok(record) => {
+                end_point.observe(record);
+                if record.state.goal_reached() {
+                    break EndReason::GoalReached;
+                }
+                if record.tick + 1 >= max_ticks {
+                    break EndReason::TimeLimit;
+                }
+                if stop.load(Ordering::Relaxed) {
+                    break EndReason::Interrupted;
+                }
+            }
             // The run still ends with its report, saying what failed.
             Err(ControllerError::BehaviorPanicked(panic)) => {
-                end = EndReason::BehaviorFailed;
                 behavior_failure = Some(panic.to_string());
-                break;
+                break EndReason::BehaviorFailed;
             }
             Err(e) => {
                 failure = Some(RunError::from(e));
-                break;
+                break EndReason::TimeLimit;
             }
         }
-        // The truth and odometry the tick's state was sensed at, which the
-        // egomotion estimate from its frame describes.
-        let (truth, odometry) = (controller.robot().inner().sensed_true_pose(), controller.state().pose);
-        if controller.state().stereo.number != frame_number {
-            frame_number = controller.state().stereo.number;
-            truth_at_frame = Some(truth);
-            odometry_at_frame = Some(odometry);
-            predictor.frame(&odometry, controller.state().egomotion.last_step_cv);
-        }
-        if let Some((writer, path)) = &mut trajectory {
-            let row = Row {
-                truth: Some(&truth),
-                odometry: &odometry,
-                egomotion: &controller.state().egomotion,
-                frame: controller.state().stereo.number,
-                hold: None,
-            };
-            if let Err(e) = writer.write(controller.last_record(), controller.layout(), &row) {
-                failure = Some(output_error(path)(e));
-                break;
-            }
-        }
-        if let Some(log) = &mut log {
-            let mut logged = log.tick(controller.last_record(), controller.layout(), Some(&truth), controller.state());
-            let now_touching = controller.robot().inner().collisions();
-            if logged.is_ok() && now_touching > touches {
-                touches = now_touching;
-                logged = log.collision(controller.now(), (truth.x, truth.y));
-            }
-            if let Err(e) = logged {
-                failure = Some(e.into());
-                break;
-            }
-        }
-        if controller.state().goal_reached() {
-            end = EndReason::GoalReached;
-            break;
-        }
-    }
+    };
     // Shut down and flush even after a failure: nothing is lost.
     let shutdown = controller.shutdown();
-    if let Some((writer, path)) = trajectory {
-        writer.finish().map_err(output_error(&path))?;
-    }
-    if let Some(e) = failure {
+    let (ticks, sim_time) = (controller.last_record().tick + 1, controller.now());
+    let (robot, _) = controller.into_parts();
+    // The controller, and with it its handle on the log, is gone.
+    let log = log.and_then(Arc::into_inner).map(|log| log.into_inner().unwrap_or_else(PoisonError::into_inner));
+    if let Some(e) = failure.or(shutdown.err().map(RunError::from)) {
         // What was logged stays readable; the failure is what is reported.
         if let Some(log) = log {
             let _ = log.close();
         }
         return Err(e);
     }
-    if let Err(e) = shutdown {
-        if let Some(log) = log {
-            let _ = log.close();
-        }
-        return Err(e.into());
-    }
 
-    let robot = controller.robot().inner();
-    let (truth, estimate) = (robot.true_pose(), robot.odometry_pose());
-    let egomotion = controller.robot().tracker().map(|t| t.state());
+    let egomotion = robot.tracker().map(|t| t.state());
+    let sim = robot.inner();
+    let (truth, estimate) = (sim.true_pose(), sim.odometry_pose());
     let endpoint_error =
-        egomotion.and_then(|e| e.pose).zip(truth_at_frame).map(|(p, truth)| truth.distance_to(p.x, p.y));
-    let distance = robot.distance_travelled();
+        egomotion.and_then(|e| e.pose).zip(end_point.truth_at_frame).map(|(p, truth)| truth.distance_to(p.x, p.y));
+    let distance = sim.distance_travelled();
     let start = scenario.robot.start.pose();
     let straight = scenario.goal.map(|g| start.distance_to(g.x, g.y)).filter(|d| *d > 0.0);
     let report = RunReport {
         scenario: scenario.name.clone(),
         seed,
-        ticks: controller.last_record().tick + 1,
-        sim_time_s: controller.now(),
+        ticks,
+        sim_time_s: sim_time,
         distance_m: distance,
         reached_goal: scenario.goal.is_some_and(|g| g.reached_by(&truth)),
-        collisions: robot.collisions(),
+        collisions: sim.collisions(),
         end,
         failure: behavior_failure,
         final_true_pose: truth,
@@ -276,14 +247,16 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         journey_cv: egomotion.map(|e| e.journey_cv),
         egomotion_steps: egomotion.map(|e| e.steps),
         egomotion_failures: egomotion.map(|e| e.failures),
-        predicted_endpoint_sigma_m: egomotion.and(odometry_at_frame).map(|p| predictor.sigma((p.x, p.y))),
+        predicted_endpoint_sigma_m: egomotion
+            .and(end_point.odometry_at_frame)
+            .map(|p| end_point.predictor.sigma((p.x, p.y))),
         outages: egomotion.map(|e| e.outages),
         outage_s: egomotion.map(|e| e.outage_s),
         outage_m: egomotion.map(|e| e.outage_m),
         endpoint_error_m: endpoint_error,
         endpoint_error_pct: endpoint_error.filter(|_| distance > 0.0).map(|e| 100.0 * e / distance),
         path_overhead_pct: straight.map(|s| 100.0 * (distance / s - 1.0)),
-        time_overhead_pct: straight.map(|s| 100.0 * (controller.now() / (s / scenario.robot.max_velocity) - 1.0)),
+        time_overhead_pct: straight.map(|s| 100.0 * (sim_time / (s / scenario.robot.max_velocity) - 1.0)),
         wall_time_s: stopwatch.elapsed_s(),
     };
     if let Some(log) = log {
@@ -293,7 +266,7 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         if let Some(fields) = logged.as_object_mut() {
             fields.remove("wall_time_s");
         }
-        log.finish(report.sim_time_s, &logged)?;
+        log.close_with_report(report.sim_time_s, &logged)?;
     }
     if let Some(dir) = out {
         write_report(&report, &dir.join("report.json"))?;
@@ -303,6 +276,40 @@ pub fn run_until(scenario: &Scenario, seed: u64, out: Option<&Path>, stop: &Atom
         plot::draw_replayed(&replayed, &format!("{} (seed {seed})", scenario.name), &dir.join("plot.png"))?;
     }
     Ok(report)
+}
+
+/// What the end-point error and its prediction need from the ticks: the
+/// true pose and odometry when the newest stereo frame was taken (the
+/// egomotion estimate describes that instant, not the last tick), and the
+/// predictor fed each frame's step.
+struct EndPointWitness {
+    frame: u64,
+    truth_at_frame: Option<Pose2>,
+    odometry_at_frame: Option<Pose2>,
+    predictor: EndPointPredictor,
+}
+
+impl Default for EndPointWitness {
+    fn default() -> Self {
+        EndPointWitness {
+            frame: 0,
+            truth_at_frame: None,
+            odometry_at_frame: None,
+            predictor: EndPointPredictor::new(DecisionCosts::default()),
+        }
+    }
+}
+
+impl EndPointWitness {
+    fn observe(&mut self, record: &TickRecord) {
+        let state = &record.state;
+        if state.stereo.number != self.frame {
+            self.frame = state.stereo.number;
+            self.truth_at_frame = record.truth.map(|t| t.pose);
+            self.odometry_at_frame = Some(state.pose);
+            self.predictor.frame(&state.pose, state.egomotion.last_step_cv);
+        }
+    }
 }
 
 /// Writes a report as pretty JSON.

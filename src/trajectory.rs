@@ -4,20 +4,22 @@
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use ubf_core::{EgomotionState, Hold, Pose2, TickRecord, TreeLayout};
+use ubf_core::{Hold, TickRecord, TickSink, TreeLayout};
 
 /// Longest a written row waits in memory before it reaches the file.
 const FLUSH_EVERY: Duration = Duration::from_secs(1);
 
-/// Writes one CSV row per tick: time, true pose (where the robot has a
-/// ground truth: a simulator's), odometric pose, the egomotion pose with its
-/// failures and latest step CV, the stereo frame's number, the command, the
-/// winning behaviour, and every node's vote.
+/// A [`TickSink`] writing one CSV row per tick: time, true pose (where the
+/// robot has a ground truth: a simulator's), odometric pose, the egomotion
+/// pose with its failures and latest step CV, the stereo frame's number,
+/// the command, the winning behaviour, and every node's vote.
 pub struct TrajectoryWriter {
     out: BufWriter<File>,
+    path: PathBuf,
     columns: Columns,
+    layout: TreeLayout,
     flushed: Instant,
 }
 
@@ -32,60 +34,54 @@ pub struct Columns {
     pub hold: bool,
 }
 
-/// What one row says beyond the tick's record.
-#[derive(Clone, Copy, Debug)]
-pub struct Row<'a> {
-    /// The true pose, where there is one.
-    pub truth: Option<&'a Pose2>,
-    /// The robot's own estimate.
-    pub odometry: &'a Pose2,
-    /// The visual estimate.
-    pub egomotion: &'a EgomotionState,
-    /// The newest stereo frame's number.
-    pub frame: u64,
-    /// Why motion was held, if it was.
-    pub hold: Option<Hold>,
-}
-
 impl TrajectoryWriter {
-    /// Creates (or replaces) `path` and writes the header for the tree
-    /// `layout`, with the true-pose columns.
-    pub fn create(path: &Path, layout: &TreeLayout) -> io::Result<Self> {
-        Self::new(File::create(path)?, layout, Columns { truth: true, hold: false })
+    /// Creates (or replaces) `path`; the header follows when the controller
+    /// starts.
+    pub fn create(path: &Path, columns: Columns) -> io::Result<Self> {
+        Ok(Self::new(File::create(path)?, path, columns))
     }
 
-    /// Writes to `file` the header for the tree `layout`, with the optional
-    /// `columns`.
-    pub fn new(file: File, layout: &TreeLayout, columns: Columns) -> io::Result<Self> {
-        let mut out = BufWriter::new(file);
-        write!(out, "time_s,")?;
-        if columns.truth {
-            write!(out, "true_x,true_y,true_theta,")?;
+    /// Writes to `file`, which is at `path` (named in errors).
+    pub fn new(file: File, path: &Path, columns: Columns) -> Self {
+        TrajectoryWriter {
+            out: BufWriter::new(file),
+            path: path.to_owned(),
+            columns,
+            layout: TreeLayout::default(),
+            flushed: Instant::now(),
         }
-        write!(out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,cmd_velocity,cmd_rot_velocity,winner")?;
-        if columns.hold {
-            write!(out, ",hold")?;
+    }
+
+    /// The header for the tree `layout`.
+    fn header(&mut self, layout: &TreeLayout) -> io::Result<()> {
+        write!(self.out, "time_s,")?;
+        if self.columns.truth {
+            write!(self.out, "true_x,true_y,true_theta,")?;
+        }
+        write!(self.out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,cmd_velocity,cmd_rot_velocity,winner")?;
+        if self.columns.hold {
+            write!(self.out, ",hold")?;
         }
         for node in layout.nodes.iter().skip(1) {
-            write!(out, ",vote:{}", node.path)?;
+            write!(self.out, ",vote:{}", node.path)?;
         }
-        writeln!(out)?;
-        out.flush()?;
-        Ok(TrajectoryWriter { out, columns, flushed: Instant::now() })
+        writeln!(self.out)?;
+        self.out.flush()
     }
 
-    /// Appends the row of one tick; the egomotion columns are empty when the
-    /// robot runs no estimator. The command is the tree's; where the hold
-    /// column says so, the robot was sent STOP instead.
-    pub fn write(&mut self, record: &TickRecord, layout: &TreeLayout, row: &Row) -> io::Result<()> {
-        let Row { truth, odometry, egomotion, frame, hold } = *row;
+    /// One tick's row; the egomotion columns are empty when the robot runs
+    /// no estimator. The command is the tree's; where the hold column says
+    /// so, the robot was sent STOP instead.
+    fn row(&mut self, record: &TickRecord) -> io::Result<()> {
+        let (odometry, egomotion) = (&record.state.pose, &record.state.egomotion);
         // A heading command has no rate yet; the robot picks one.
         let (v, w) = (record.command.velocity(), record.command.rot_velocity().unwrap_or(f64::NAN));
+        let layout = &self.layout;
         let winner = layout.winning_leaf(record).map_or("", |i| layout.nodes[i].path.as_str());
         write!(self.out, "{:.3},", record.time)?;
         if self.columns.truth {
-            match truth {
-                Some(t) => write!(self.out, "{:.5},{:.5},{:.5},", t.x, t.y, t.theta)?,
+            match &record.truth {
+                Some(t) => write!(self.out, "{:.5},{:.5},{:.5},", t.pose.x, t.pose.y, t.pose.theta)?,
                 None => write!(self.out, ",,,")?,
             }
         }
@@ -98,10 +94,10 @@ impl TrajectoryWriter {
             Some(cv) => write!(self.out, "{cv:.6},")?,
             None => write!(self.out, ",")?,
         }
-        write!(self.out, "{frame},")?;
+        write!(self.out, "{},", record.state.stereo.number)?;
         write!(self.out, "{v:.4},{w:.4},{winner}")?;
         if self.columns.hold {
-            match hold {
+            match record.hold {
                 Some(Hold::StaleData) => write!(self.out, ",stale_data")?,
                 Some(Hold::Contact) => write!(self.out, ",contact")?,
                 None => write!(self.out, ",")?,
@@ -118,8 +114,24 @@ impl TrajectoryWriter {
         Ok(())
     }
 
+    /// Names the file in an error.
+    fn named(&self, e: io::Error) -> io::Error {
+        io::Error::new(e.kind(), format!("{}: {e}", self.path.display()))
+    }
+}
+
+impl TickSink for TrajectoryWriter {
+    fn start(&mut self, layout: &TreeLayout) -> io::Result<()> {
+        self.layout = layout.clone();
+        self.header(layout).map_err(|e| self.named(e))
+    }
+
+    fn record(&mut self, record: &TickRecord) -> io::Result<()> {
+        self.row(record).map_err(|e| self.named(e))
+    }
+
     /// Flushes everything to disk.
-    pub fn finish(mut self) -> io::Result<()> {
-        self.out.flush()
+    fn finish(&mut self) -> io::Result<()> {
+        self.out.flush().map_err(|e| self.named(e))
     }
 }

@@ -145,3 +145,39 @@ fn a_damaged_log_is_refused_or_read_as_far_as_it_goes_never_a_crash() {
         }
     }
 }
+
+#[test]
+fn rendered_pairs_are_logged_as_the_pngs_a_recording_holds() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/rendered-corridor.ron");
+    let text = std::fs::read_to_string(path).unwrap().replace("max_time_s: 200.0", "max_time_s: 1.5");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (logged, recorded) = (dir.path().join("run"), dir.path().join("frames"));
+    let outputs = ubf::run::Outputs { dir: &logged, images: true };
+    ubf::run::run_until(&scenario, 1, Some(outputs), &std::sync::atomic::AtomicBool::new(false)).unwrap();
+    ubf::frames::record(&scenario, 1, &recorded, 1).unwrap();
+
+    let bytes = std::fs::read(logged.join("run.mcap")).unwrap();
+    let log = read(&bytes, enumset::EnumSet::empty());
+    assert_eq!(log.schemas["/camera/left"], "foxglove.CompressedImage");
+    let (left, right) = (&log.topics["/camera/left"], &log.topics["/camera/right"]);
+    // 15 ticks of 0.1 s and a frame every 0.5 s: frames at 0, 0.5 and 1 s.
+    assert_eq!((left.len(), right.len()), (3, 3), "one pair per frame");
+    assert_eq!(left[0]["format"], "png");
+    assert_eq!(left[0]["frame_id"], "camera_left");
+    // The first pair, taken at the start before anything moved, is the
+    // recording's first pair, pixel for pixel.
+    use base64::Engine;
+    for (message, side) in [(&left[0], "left"), (&right[0], "right")] {
+        let png = base64::engine::general_purpose::STANDARD.decode(message["data"].as_str().unwrap()).unwrap();
+        let from_log = image::load_from_memory(&png).unwrap().into_luma8();
+        let from_recording = image::open(recorded.join(side).join("000001.png")).unwrap().into_luma8();
+        assert_eq!(from_log.dimensions(), from_recording.dimensions());
+        assert!(from_log == from_recording, "{side} image differs from the recording's");
+    }
+    // Without asking, no images.
+    let plain = dir.path().join("plain");
+    ubf::run::run(&scenario, 1, Some(&plain)).unwrap();
+    let log = read(&std::fs::read(plain.join("run.mcap")).unwrap(), enumset::EnumSet::empty());
+    assert!(!log.topics.contains_key("/camera/left"));
+}

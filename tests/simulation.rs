@@ -234,9 +234,9 @@ fn the_safety_guard_latches_a_stop_on_the_simulators_contact_too() {
     controller.set_goal(scenario.goal);
     let mut first_contact = None;
     for tick in 0..600 {
-        controller.tick().unwrap();
-        if controller.robot().hold() == Some(Hold::Contact) && first_contact.is_none() {
-            first_contact = Some((tick, controller.robot().inner().true_pose()));
+        let record = controller.tick().unwrap();
+        if record.hold == Some(Hold::Contact) && first_contact.is_none() {
+            first_contact = record.truth.map(|t| (tick, t.pose));
         }
     }
     let (tick, at) = first_contact.expect("the box is hit");

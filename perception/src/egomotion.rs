@@ -1074,6 +1074,7 @@ mod tests {
                 time: n as f64 * 0.5,
                 landmarks: frame(&landmarks(), *pose, &camera),
                 calibration: None,
+                images: None,
             };
             tracker.update(&f, pose);
         }
@@ -1118,6 +1119,7 @@ mod tests {
                 time: k as f64 * 0.5,
                 landmarks: frame(&wall, pose, &camera),
                 calibration: None,
+                images: None,
             };
             tracker.update(&f, &pose);
         }
@@ -1172,6 +1174,7 @@ mod tests {
                     time: n as f64 * 0.5,
                     landmarks: frame(&landmarks(), *pose, &camera),
                     calibration: None,
+                    images: None,
                 },
                 pose,
             );
@@ -1179,17 +1182,24 @@ mod tests {
         // Odometry says the robot stood still since: the failed frame is
         // bridged by no motion.
         let odometry = poses[1];
-        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &odometry);
+        tracker.update(
+            &StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None, images: None },
+            &odometry,
+        );
         let s = tracker.state();
         assert_eq!((s.steps, s.failures), (2, 1));
         assert!((s.pose.unwrap().x - 0.25).abs() < 1e-6, "a failure moves nothing: {:?}", s.pose);
         // The same frame twice is not a new step.
-        tracker.update(&StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None }, &odometry);
+        tracker.update(
+            &StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None, images: None },
+            &odometry,
+        );
         assert_eq!(tracker.state().steps, 2);
         // The next good frame, 0.5 m on from the reference, recovers it all.
         let seen = frame(&landmarks(), Pose2::new(0.75, 0.0, 0.0), &camera);
         let odometry = Pose2::new(0.7, 0.0, 0.0);
-        tracker.update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None }, &odometry);
+        tracker
+            .update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None, images: None }, &odometry);
         assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
     }
 
@@ -1207,7 +1217,7 @@ mod tests {
     }
 
     fn at(number: u64, time: f64, landmarks: Vec<LandmarkObservation>) -> StereoFrame {
-        StereoFrame { number, time, landmarks, calibration: None }
+        StereoFrame { number, time, landmarks, calibration: None, images: None }
     }
 
     #[test]
@@ -1338,14 +1348,23 @@ mod tests {
         let poses = [Pose2::default(), Pose2::new(0.25, 0.0, 0.0)];
         let mut tracker = Tracker::new(EgomotionConfig::default(), camera, poses[0], 3);
         tracker.update(
-            &StereoFrame { number: 1, time: 0.0, landmarks: frame(&landmarks(), poses[0], &camera), calibration: None },
+            &StereoFrame {
+                number: 1,
+                time: 0.0,
+                landmarks: frame(&landmarks(), poses[0], &camera),
+                calibration: None,
+                images: None,
+            },
             &Pose2::default(),
         );
         let mut second = frame(&landmarks(), poses[1], &camera);
         // One landmark appears 3 m off where it should be (a wrong match).
         second[2].point_cam[1] += 3.0;
         second[2].pixels = StereoPixels::default();
-        tracker.update(&StereoFrame { number: 2, time: 0.5, landmarks: second, calibration: None }, &Pose2::default());
+        tracker.update(
+            &StereoFrame { number: 2, time: 0.5, landmarks: second, calibration: None, images: None },
+            &Pose2::default(),
+        );
         let end = tracker.state().pose.unwrap();
         assert!((end.x - 0.25).abs() < 1e-6 && end.y.abs() < 1e-6, "{end:?}");
     }

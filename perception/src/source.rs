@@ -29,6 +29,21 @@ pub struct StereoPair {
     pub right: GrayImage,
 }
 
+impl StereoPair {
+    /// The pair's pixels, moved (not copied) into the shape frames carry.
+    pub fn into_images(self) -> ubf_core::StereoImages {
+        let (width, height) = self.left.dimensions();
+        ubf_core::StereoImages { width, height, left: self.left.into_raw(), right: self.right.into_raw() }
+    }
+
+    /// A frame's pixels as a pair taken at `time` (copied); `None` if the
+    /// buffers do not hold `width × height` pixels.
+    pub fn from_images(time: f64, images: &ubf_core::StereoImages) -> Option<StereoPair> {
+        let image = |pixels: &Vec<u8>| GrayImage::from_raw(images.width, images.height, pixels.clone());
+        Some(StereoPair { time, left: image(&images.left)?, right: image(&images.right)? })
+    }
+}
+
 /// What went wrong reading or writing pairs.
 #[derive(Debug, thiserror::Error)]
 pub enum SourceError {

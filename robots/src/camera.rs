@@ -8,14 +8,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::{Command, LandmarkObservation, Limits, Robot, RobotError, State};
+use ubf_core::{Command, LandmarkObservation, Limits, Robot, RobotError, State, StereoImages};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::source::CameraSource;
 use ubf_perception::StereoCamera;
 
-/// A processed pair: when it was taken (seconds since the camera started)
-/// and what was found in it.
-type Frame = (f64, Vec<LandmarkObservation>);
+/// A processed pair: when it was taken (seconds since the camera started),
+/// what was found in it, and the pair itself.
+type Frame = (f64, Vec<LandmarkObservation>, Arc<StereoImages>);
 
 /// The camera's thread and what comes out of it.
 struct CameraThread {
@@ -81,7 +81,8 @@ impl<R: Robot> CameraRobot<R> {
                     }
                     let taken = started.elapsed().as_secs_f64();
                     let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
-                    match sender.try_send(found.map(|landmarks| (taken, landmarks))) {
+                    let frame = found.map(|landmarks| (taken, landmarks, Arc::new(pair.into_images())));
+                    match sender.try_send(frame) {
                         Ok(()) | Err(crossbeam_channel::TrySendError::Full(_)) => {}
                         Err(crossbeam_channel::TrySendError::Disconnected(_)) => return,
                     }
@@ -117,12 +118,13 @@ impl<R: Robot> Robot for CameraRobot<R> {
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
-                Ok(Ok((time, landmarks))) => {
+                Ok(Ok((time, landmarks, images))) => {
                     self.frames += 1;
                     state.stereo.number = self.frames;
                     state.stereo.time = time;
                     state.stereo.landmarks = landmarks;
                     state.stereo.calibration = Some(camera.calibration());
+                    state.stereo.images = Some(images);
                 }
                 Ok(Err(e)) => return Err(RobotError::Protocol(format!("camera: {e}"))),
                 // No new pair, or the source has ended: the last frame stays.
@@ -147,5 +149,12 @@ impl<R: Robot> Robot for CameraRobot<R> {
 
     fn limits(&self) -> Limits {
         self.inner.limits()
+    }
+    fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
+        self.inner.ground_truth()
+    }
+
+    fn hold(&self) -> Option<ubf_core::Hold> {
+        self.inner.hold()
     }
 }

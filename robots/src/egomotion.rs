@@ -58,4 +58,11 @@ impl<R: Robot> Robot for EgomotionRobot<R> {
     fn limits(&self) -> Limits {
         self.inner.limits()
     }
+    fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
+        self.inner.ground_truth()
+    }
+
+    fn hold(&self) -> Option<ubf_core::Hold> {
+        self.inner.hold()
+    }
 }

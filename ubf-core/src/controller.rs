@@ -1,145 +1,9 @@
 //! The control loop: sense → state → root behaviour → action → command → act.
 
-use crate::{Action, Behavior, BehaviorPanic, Clock, Command, Goal, Pose2, Robot, RobotError, State};
-
-/// One node of the behaviour tree, as laid out once when the controller
-/// starts. Nodes are numbered in pre-order; node 0 is the root.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct NodeInfo {
-    /// The node's name (the composite's child name, or the root's name).
-    pub name: String,
-    /// Slash-separated names from the root: `root/avoid/sonar`.
-    pub path: String,
-    /// 0 for the root.
-    pub depth: usize,
-    /// The parent node, `None` for the root.
-    pub parent: Option<usize>,
-    /// Whether the node is a composite.
-    pub composite: bool,
-}
-
-/// The shape of the behaviour tree. It never changes while the controller
-/// runs, so tick records refer to nodes by index instead of copying names.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct TreeLayout {
-    /// Every node, in pre-order.
-    pub nodes: Vec<NodeInfo>,
-}
-
-impl TreeLayout {
-    /// Lays out the tree under `root`.
-    pub fn of(root: &dyn Behavior) -> Self {
-        let mut layout = TreeLayout::default();
-        layout.push(root, root.name().to_owned(), None);
-        layout
-    }
-
-    fn push(&mut self, behavior: &dyn Behavior, name: String, parent: Option<usize>) {
-        let (depth, path) = match parent {
-            Some(p) => (self.nodes[p].depth + 1, format!("{}/{}", self.nodes[p].path, name)),
-            None => (0, name.clone()),
-        };
-        let index = self.nodes.len();
-        let composite = behavior.as_composite();
-        self.nodes.push(NodeInfo { name, path, depth, parent, composite: composite.is_some() });
-        if let Some(composite) = composite {
-            for (child_name, child) in composite.children() {
-                self.push(child, child_name.to_owned(), Some(index));
-            }
-        }
-    }
-
-    /// The leaf reached by following the winners down from the root, if the
-    /// root had a winner at every level down to a leaf or a silent composite.
-    pub fn winning_leaf(&self, record: &TickRecord) -> Option<usize> {
-        if !record.nodes.first()?.won {
-            return None;
-        }
-        let mut current = 0;
-        loop {
-            let next = (current + 1..self.nodes.len())
-                .take_while(|&i| self.nodes[i].depth > self.nodes[current].depth)
-                .find(|&i| self.nodes[i].parent == Some(current) && record.nodes[i].won);
-            match next {
-                Some(i) => current = i,
-                None => return Some(current),
-            }
-        }
-    }
-}
-
-/// What one node did in one tick.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct NodeOutcome {
-    /// The node's action.
-    pub action: Action,
-    /// The node's normalised weight within its parent (1 for the root).
-    pub weight: f64,
-    /// Whether the node won its parent's arbitration (the root "wins" when
-    /// it has an opinion).
-    pub won: bool,
-}
-
-/// A small copy of the state for records.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StateSummary {
-    /// The estimated pose.
-    pub pose: Pose2,
-    /// Measured forward velocity, m/s.
-    pub velocity: f64,
-    /// Measured rotational velocity, rad/s.
-    pub rot_velocity: f64,
-    /// The nearest range reading, m.
-    pub nearest_range: Option<f64>,
-}
-
-/// Everything that happened in one tick.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct TickRecord {
-    /// Tick number, from 0.
-    pub tick: u64,
-    /// Seconds since start, from the controller's clock.
-    pub time: f64,
-    /// What the robot sensed.
-    pub state: StateSummary,
-    /// Every node's outcome, indexed like [`TreeLayout::nodes`]; node 0 is the
-    /// root, whose action went to the robot.
-    pub nodes: Vec<NodeOutcome>,
-    /// The command sent to the robot.
-    pub command: Command,
-}
-
-impl TickRecord {
-    /// The root behaviour's action.
-    pub fn root_action(&self) -> Action {
-        self.nodes.first().map_or(Action::none(), |n| n.action)
-    }
-}
-
-/// Receives every tick's record: a trajectory writer, a log file, a live plot.
-pub trait TickSink: Send {
-    /// Called once before the first tick with the tree's shape.
-    fn start(&mut self, _layout: &TreeLayout) -> std::io::Result<()> {
-        Ok(())
-    }
-    /// Called after every tick.
-    fn record(&mut self, record: &TickRecord) -> std::io::Result<()>;
-    /// Called once when the controller shuts down: flush here.
-    fn finish(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
-
-/// Logs every tick at `trace` level through `tracing`.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct TracingSink;
-
-impl TickSink for TracingSink {
-    fn record(&mut self, r: &TickRecord) -> std::io::Result<()> {
-        tracing::trace!(tick = r.tick, time = r.time, x = r.state.pose.x, y = r.state.pose.y, command = ?r.command, "tick");
-        Ok(())
-    }
-}
+use crate::{
+    Action, Behavior, BehaviorPanic, Clock, Command, Goal, NodeOutcome, Robot, RobotError, State, TickRecord, TickSink,
+    TreeLayout,
+};
 
 /// What the controller does when a behaviour panics. Either way the tick
 /// that caught it sends STOP.
@@ -179,7 +43,7 @@ pub struct Controller<R: Robot> {
     clock: Box<dyn Clock>,
     sinks: Vec<Box<dyn TickSink>>,
     layout: TreeLayout,
-    state: State,
+    /// The latest tick's record; its state is the one the behaviours see.
     record: TickRecord,
     ticks: u64,
     on_panic: OnBehaviorPanic,
@@ -199,7 +63,6 @@ impl<R: Robot> Controller<R> {
             clock,
             sinks: Vec::new(),
             layout,
-            state: State::default(),
             record,
             ticks: 0,
             on_panic: OnBehaviorPanic::default(),
@@ -219,7 +82,7 @@ impl<R: Robot> Controller<R> {
 
     /// Sets (or clears) the goal every behaviour sees in the state.
     pub fn set_goal(&mut self, goal: Option<Goal>) {
-        self.state.goal = goal;
+        self.record.state.goal = goal;
     }
 
     /// The tree's shape.
@@ -229,7 +92,7 @@ impl<R: Robot> Controller<R> {
 
     /// The state as of the latest tick.
     pub fn state(&self) -> &State {
-        &self.state
+        &self.record.state
     }
 
     /// The latest tick's record.
@@ -259,8 +122,8 @@ impl<R: Robot> Controller<R> {
                 sink.start(&self.layout)?;
             }
         }
-        self.state.time = self.clock.now();
-        self.robot.sense(&mut self.state)?;
+        self.record.state.time = self.clock.now();
+        self.robot.sense(&mut self.record.state)?;
         let action = match self.ask_root() {
             Ok(action) => action,
             Err(panic) => {
@@ -289,7 +152,7 @@ impl<R: Robot> Controller<R> {
         if self.root_faulted {
             return Ok(Action::stop(1.0));
         }
-        let (root, state) = (&mut self.root, &self.state);
+        let (root, state) = (&mut self.root, &self.record.state);
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| root.gen_action(state))).map_err(|payload| {
             let panic = BehaviorPanic::caught(root.name(), payload);
             // A leaf root has no composite to silence it.
@@ -301,13 +164,9 @@ impl<R: Robot> Controller<R> {
     fn fill_record(&mut self, action: Action, command: Command) {
         let r = &mut self.record;
         r.tick = self.ticks;
-        r.time = self.state.time;
-        r.state = StateSummary {
-            pose: self.state.pose,
-            velocity: self.state.velocity,
-            rot_velocity: self.state.rot_velocity,
-            nearest_range: self.state.nearest_range(),
-        };
+        r.time = r.state.time;
+        r.truth = self.robot.ground_truth();
+        r.hold = self.robot.hold();
         r.command = command;
         r.nodes[0] = NodeOutcome { action, weight: 1.0, won: action.is_voting() };
         let mut next = 1;

@@ -3,6 +3,7 @@
 //! all share.
 
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// A 256-bit binary feature descriptor (the size of ORB's), compared by
 /// Hamming distance.
@@ -93,6 +94,37 @@ pub struct StereoFrame {
     pub landmarks: Vec<LandmarkObservation>,
     /// The camera that took the frame.
     pub calibration: Option<StereoCalibration>,
+    /// The rectified pair the landmarks were found in, where the camera
+    /// keeps it (a rendered or real camera; the geometric model has none):
+    /// for logs and recordings. Shared, so copying a frame never copies
+    /// its pixels.
+    pub images: Option<Arc<StereoImages>>,
+}
+
+impl StereoFrame {
+    /// Copies `other`, reusing this frame's buffer of landmarks.
+    pub fn copy_from(&mut self, other: &StereoFrame) {
+        let StereoFrame { number, time, landmarks, calibration, images } = other;
+        self.number = *number;
+        self.time = *time;
+        self.landmarks.clone_from(landmarks);
+        self.calibration = *calibration;
+        self.images.clone_from(images);
+    }
+}
+
+/// A rectified stereo pair: two 8-bit grey images of one size, row by row
+/// from the top left.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StereoImages {
+    /// Pixels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// The left image, `width × height` bytes.
+    pub left: Vec<u8>,
+    /// The right image, `width × height` bytes.
+    pub right: Vec<u8>,
 }
 
 #[cfg(test)]

@@ -65,9 +65,11 @@ mod controller;
 mod describe;
 mod geometry;
 mod landmark;
+mod record;
 mod registry;
 mod robot;
 mod safety;
+mod sink;
 mod state;
 
 pub use action::{Action, Channel, Motion};
@@ -77,14 +79,13 @@ pub use clock::{Clock, SimClock, Stopwatch, WallClock};
 pub use command::{Command, Limits, Turn};
 pub use composite::Composite;
 pub use condition::Condition;
-pub use controller::{
-    Controller, ControllerError, NodeInfo, NodeOutcome, OnBehaviorPanic, StateSummary, TickRecord, TickSink,
-    TracingSink, TreeLayout,
-};
+pub use controller::{Controller, ControllerError, OnBehaviorPanic};
 pub use describe::{markdown_table, Describe, Field};
 pub use geometry::{angle_difference, wrap_angle, Pose2};
-pub use landmark::{Descriptor, LandmarkObservation, StereoCalibration, StereoFrame, StereoPixels};
+pub use landmark::{Descriptor, LandmarkObservation, StereoCalibration, StereoFrame, StereoImages, StereoPixels};
+pub use record::{NodeInfo, NodeOutcome, TickRecord, TreeLayout};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
-pub use robot::{NullRobot, Robot, RobotError, VelocityLimiter};
+pub use robot::{GroundTruth, NullRobot, Robot, RobotError, VelocityLimiter};
 pub use safety::{Hold, SafetyGuard, SafetyPolicy};
+pub use sink::{BackgroundSink, TickSink, TracingSink};
 pub use state::{Bumpers, EgomotionState, Goal, RangeReading, State};

@@ -1,6 +1,6 @@
 //! The robot seen from the controller: sense, act, shut down.
 
-use crate::{Command, Limits, State};
+use crate::{Command, Hold, Limits, Pose2, State};
 
 /// Why a robot could not sense or act.
 #[derive(Debug, thiserror::Error)]
@@ -36,6 +36,31 @@ pub trait Robot: Send {
 
     /// The robot's own speed limits.
     fn limits(&self) -> Limits;
+
+    /// Where the robot really was when it last sensed, and what it has
+    /// touched: a simulator knows, a real robot does not (the default).
+    /// Records carry it so that logs and reports can compare the robot's
+    /// belief with the truth.
+    fn ground_truth(&self) -> Option<GroundTruth> {
+        None
+    }
+
+    /// Why the robot is holding still this tick instead of obeying its
+    /// commands (a safety guard's verdict); `None` (the default) when it
+    /// obeys.
+    fn hold(&self) -> Option<Hold> {
+        None
+    }
+}
+
+/// What only a simulator knows: see [`Robot::ground_truth`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GroundTruth {
+    /// The true pose at the instant the state was sensed.
+    pub pose: Pose2,
+    /// Times so far the robot came into contact with a wall, a box or a
+    /// person.
+    pub collisions: u32,
 }
 
 impl<R: Robot + ?Sized> Robot for Box<R> {
@@ -50,6 +75,12 @@ impl<R: Robot + ?Sized> Robot for Box<R> {
     }
     fn limits(&self) -> Limits {
         (**self).limits()
+    }
+    fn ground_truth(&self) -> Option<GroundTruth> {
+        (**self).ground_truth()
+    }
+    fn hold(&self) -> Option<Hold> {
+        (**self).hold()
     }
 }
 
@@ -145,5 +176,11 @@ impl<R: Robot> Robot for VelocityLimiter<R> {
     }
     fn limits(&self) -> Limits {
         self.limits
+    }
+    fn ground_truth(&self) -> Option<GroundTruth> {
+        self.inner.ground_truth()
+    }
+    fn hold(&self) -> Option<Hold> {
+        self.inner.hold()
     }
 }

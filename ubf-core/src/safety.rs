@@ -66,11 +66,6 @@ impl<R: Robot> SafetyGuard<R> {
         SafetyGuard { inner, policy, started: None, hold: None, contact: None }
     }
 
-    /// Why motion is held, as of the latest tick.
-    pub fn hold(&self) -> Option<Hold> {
-        self.hold
-    }
-
     /// The wrapped robot.
     pub fn inner(&self) -> &R {
         &self.inner
@@ -140,6 +135,15 @@ impl<R: Robot> Robot for SafetyGuard<R> {
 
     fn limits(&self) -> Limits {
         self.inner.limits()
+    }
+
+    /// Why motion is held, as of the latest tick.
+    fn hold(&self) -> Option<Hold> {
+        self.hold
+    }
+
+    fn ground_truth(&self) -> Option<crate::GroundTruth> {
+        self.inner.ground_truth()
     }
 }
 

@@ -130,21 +130,43 @@ impl State {
     /// Copies every sensor field of `other` (not `time`, not the goal),
     /// reusing this state's buffers.
     pub fn copy_sensors_from(&mut self, other: &State) {
-        self.pose = other.pose;
-        self.velocity = other.velocity;
-        self.rot_velocity = other.rot_velocity;
-        self.ranges.clone_from(&other.ranges);
-        self.bumpers = other.bumpers;
-        self.stalled = other.stalled;
-        self.motors_enabled = other.motors_enabled;
-        self.estop = other.estop;
-        self.battery_volts = other.battery_volts;
-        self.stereo.number = other.stereo.number;
-        self.stereo.time = other.stereo.time;
-        self.stereo.landmarks.clone_from(&other.stereo.landmarks);
-        self.stereo.calibration = other.stereo.calibration;
-        self.egomotion = other.egomotion;
-        self.sensor_age = other.sensor_age;
+        // Destructured, so that a field added to the state cannot be
+        // forgotten here.
+        let State {
+            time: _,
+            pose,
+            velocity,
+            rot_velocity,
+            ranges,
+            bumpers,
+            stalled,
+            motors_enabled,
+            estop,
+            battery_volts,
+            stereo,
+            egomotion,
+            sensor_age,
+            goal: _,
+        } = other;
+        self.pose = *pose;
+        self.velocity = *velocity;
+        self.rot_velocity = *rot_velocity;
+        self.ranges.clone_from(ranges);
+        self.bumpers = *bumpers;
+        self.stalled = *stalled;
+        self.motors_enabled = *motors_enabled;
+        self.estop = *estop;
+        self.battery_volts = *battery_volts;
+        self.stereo.copy_from(stereo);
+        self.egomotion = *egomotion;
+        self.sensor_age = *sensor_age;
+    }
+
+    /// Copies all of `other`, reusing this state's buffers.
+    pub fn copy_from(&mut self, other: &State) {
+        self.copy_sensors_from(other);
+        self.time = other.time;
+        self.goal = other.goal;
     }
 
     /// Distance to the goal from the estimated pose, if there is a goal.
@@ -159,6 +181,10 @@ impl State {
 
     /// The shortest range any range sensor reports, in metres.
     pub fn nearest_range(&self) -> Option<f64> {
-        self.ranges.iter().filter_map(|r| r.range).min_by(f64::total_cmp)
+        // Branch-free (no echo reads as infinitely far): behaviours ask every
+        // tick, and a `filter_map` with `total_cmp` cost a tenth of a tick
+        // over a 32-sonar ring.
+        let nearest = self.ranges.iter().map(|r| r.range.unwrap_or(f64::INFINITY)).fold(f64::INFINITY, f64::min);
+        (nearest < f64::INFINITY).then_some(nearest)
     }
 }

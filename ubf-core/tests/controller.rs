@@ -3,7 +3,8 @@
 use std::sync::{Arc, Mutex};
 use ubf_core::arbiter::{CommandFusion, HighestPriority};
 use ubf_core::{
-    from_fn, Action, Command, Composite, Controller, NullRobot, SimClock, State, TickRecord, TickSink, TreeLayout, Turn,
+    from_fn, Action, BackgroundSink, Command, Composite, Controller, GroundTruth, Hold, Limits, NullRobot, Pose2,
+    Robot, RobotError, SafetyGuard, SafetyPolicy, SimClock, State, TickRecord, TickSink, TreeLayout, Turn,
 };
 
 #[derive(Default)]
@@ -13,19 +14,18 @@ struct Log {
     finished: bool,
 }
 
-struct SharedSink(Arc<Mutex<Log>>);
-
-impl TickSink for SharedSink {
+/// Shared as `Arc<Mutex<Log>>`, which is itself a sink.
+impl TickSink for Log {
     fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
-        self.0.lock().unwrap().layout = Some(layout.clone());
+        self.layout = Some(layout.clone());
         Ok(())
     }
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
-        self.0.lock().unwrap().records.push(record.clone());
+        self.records.push(record.clone());
         Ok(())
     }
     fn finish(&mut self) -> std::io::Result<()> {
-        self.0.lock().unwrap().finished = true;
+        self.finished = true;
         Ok(())
     }
 }
@@ -43,7 +43,7 @@ fn tree() -> Composite {
 fn every_tick_records_every_node_and_the_command() {
     let log = Arc::new(Mutex::new(Log::default()));
     let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
-    controller.add_sink(Box::new(SharedSink(log.clone())));
+    controller.add_sink(Box::new(log.clone()));
     for _ in 0..4 {
         controller.tick().unwrap();
     }
@@ -91,7 +91,7 @@ fn shutdown_stops_the_robot_and_flushes_sinks_even_when_a_sink_fails() {
     let log = Arc::new(Mutex::new(Log::default()));
     let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
     controller.add_sink(Box::new(Broken));
-    controller.add_sink(Box::new(SharedSink(log.clone())));
+    controller.add_sink(Box::new(log.clone()));
     assert!(controller.tick().unwrap_err().to_string().contains("disk full"));
     assert!(controller.shutdown().is_err());
     assert!(controller.robot().shut_down);
@@ -139,4 +139,113 @@ fn a_panicking_behaviour_can_be_skipped_for_the_rest_of_the_run() {
         controller.tick().unwrap();
         assert!(matches!(controller.last_record().command, Command::Drive { velocity, .. } if velocity == 0.5));
     }
+}
+
+/// A robot that knows where it really is: a simulator, in miniature.
+struct Truthful(NullRobot);
+
+impl Robot for Truthful {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        self.0.sense(state)
+    }
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        self.0.act(command)
+    }
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        self.0.shutdown()
+    }
+    fn limits(&self) -> Limits {
+        self.0.limits()
+    }
+    fn ground_truth(&self) -> Option<GroundTruth> {
+        Some(GroundTruth { pose: Pose2::new(1.0, 2.0, 0.5), collisions: 3 })
+    }
+}
+
+#[test]
+fn records_carry_what_was_sensed_the_ground_truth_and_the_guards_hold() {
+    let mut robot = NullRobot::default();
+    robot.reported.pose = Pose2::new(0.9, 2.1, 0.4);
+    // Data a second old: the guard holds the robot still.
+    robot.reported.sensor_age = 1.0;
+    let policy = SafetyPolicy { link_lost_after_s: 10.0, ..SafetyPolicy::default() };
+    let guarded = SafetyGuard::new(Truthful(robot), policy);
+    let mut controller = Controller::new(guarded, Box::new(tree()), Box::new(SimClock::new(0.1)));
+    let record = controller.tick().unwrap();
+    assert_eq!(record.state.pose, Pose2::new(0.9, 2.1, 0.4), "the state the behaviours saw");
+    assert_eq!(record.truth, Some(GroundTruth { pose: Pose2::new(1.0, 2.0, 0.5), collisions: 3 }));
+    assert_eq!(record.hold, Some(Hold::StaleData));
+    assert_ne!(record.command, Command::Stop, "the tree's command, which the guard replaced with STOP");
+
+    // A real robot has no ground truth to give.
+    let mut plain = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    let record = plain.tick().unwrap();
+    assert_eq!((record.truth, record.hold), (None, None));
+}
+
+#[test]
+fn a_background_sink_writes_every_record_in_order_on_its_own_thread() {
+    let log = Arc::new(Mutex::new(Log::default()));
+    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    controller.add_sink(Box::new(BackgroundSink::spawn("log", log.clone(), 64).unwrap()));
+    for _ in 0..20 {
+        controller.tick().unwrap();
+    }
+    controller.shutdown().unwrap();
+    let log = log.lock().unwrap();
+    assert!(log.finished && log.layout.is_some());
+    let ticks: Vec<u64> = log.records.iter().map(|r| r.tick).collect();
+    assert_eq!(ticks, (0..20).collect::<Vec<_>>());
+    assert_eq!(log.records[3].command, Command::Stop);
+}
+
+/// A sink whose writer waits at a gate before its first record.
+struct Gated {
+    gate: crossbeam_channel::Receiver<()>,
+    seen: Arc<Mutex<Vec<u64>>>,
+}
+
+impl TickSink for Gated {
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        let _ = self.gate.recv();
+        self.seen.lock().unwrap().push(record.tick);
+        Ok(())
+    }
+}
+
+#[test]
+fn a_stuck_writer_loses_records_not_ticks() {
+    let (open, gate) = crossbeam_channel::unbounded();
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let mut sink = BackgroundSink::spawn("stuck", Gated { gate, seen: seen.clone() }, 3).unwrap();
+    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    let layout = controller.layout().clone();
+    sink.start(&layout).unwrap();
+    for _ in 0..10 {
+        sink.record(controller.tick().unwrap()).unwrap();
+    }
+    // Three buffers went to the writer; the other seven ticks went on
+    // without waiting for it.
+    assert_eq!(sink.dropped(), 7);
+    drop(open);
+    sink.finish().unwrap();
+    assert_eq!(*seen.lock().unwrap(), [0, 1, 2]);
+}
+
+#[test]
+fn a_failed_background_writer_is_reported_at_finish_and_the_ticks_go_on() {
+    struct Full;
+    impl TickSink for Full {
+        fn record(&mut self, _: &TickRecord) -> std::io::Result<()> {
+            Err(std::io::Error::other("disk full"))
+        }
+    }
+    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+    controller.add_sink(Box::new(BackgroundSink::spawn("log", Full, 4).unwrap()));
+    for _ in 0..10 {
+        controller.tick().expect("the robot is not stopped for want of a log");
+    }
+    let error = controller.shutdown().unwrap_err().to_string();
+    assert!(error.contains("disk full"), "{error}");
+    assert!(controller.robot().shut_down);
 }

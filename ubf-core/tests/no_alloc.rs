@@ -1,13 +1,15 @@
 //! After warm-up, a controller tick allocates nothing: not for a 4-behaviour
-//! tree under any arbiter, not for a 3-level tree.
+//! tree under any arbiter, not for a 3-level tree, not with its records
+//! handed to a writer thread.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
 use ubf_core::{
-    from_fn, Action, ArbiterSpec, Behavior, Composite, Condition, Controller, Goal, NullRobot, RangeReading, SimClock,
-    State, TracingSink,
+    from_fn, Action, ArbiterSpec, BackgroundSink, Behavior, Composite, Condition, Controller, Goal, NullRobot,
+    RangeReading, SimClock, State, TickRecord, TickSink, TracingSink,
 };
 
 struct CountingAllocator;
@@ -68,12 +70,29 @@ fn robot() -> NullRobot {
     robot
 }
 
+/// A sink that only counts, on the writer thread of a `BackgroundSink`.
+struct Counter(Arc<AtomicU64>);
+
+impl TickSink for Counter {
+    fn record(&mut self, _: &TickRecord) -> std::io::Result<()> {
+        self.0.fetch_add(1, Ordering::SeqCst);
+        Ok(())
+    }
+}
+
 fn allocations_in_ticks(root: Box<dyn Behavior>) -> usize {
     let mut controller = Controller::new(robot(), root, Box::new(SimClock::new(0.1)));
     controller.add_sink(Box::new(TracingSink));
+    let written = Arc::new(AtomicU64::new(0));
+    controller.add_sink(Box::new(BackgroundSink::spawn("counter", Counter(written.clone()), 4).unwrap()));
     controller.set_goal(Some(Goal { x: 10.0, y: 0.0, tolerance: 0.2 }));
-    for _ in 0..10 {
+    // Warm-up: each tick waits for the writer, so that every one of the
+    // background sink's buffers has been filled once.
+    for tick in 1..=10 {
         controller.tick().unwrap();
+        while written.load(Ordering::SeqCst) < tick {
+            std::thread::yield_now();
+        }
     }
     let before = ALLOCATIONS.load(Ordering::Relaxed);
     MEASURED.with(|m| m.set(true));

@@ -6,13 +6,13 @@
 use super::geometry::Segment;
 use super::render::{RenderConfig, Renderer};
 use super::world::{World, WorldLandmark};
-use image::GrayImage;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
+use std::sync::Arc;
 use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoPixels};
+use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoImages, StereoPixels};
 use ubf_perception::features::StereoPipeline;
 use ubf_perception::StereoCamera;
 
@@ -181,7 +181,7 @@ pub struct SimCamera {
     /// With rendered images: the renderer (built at the first frame, from
     /// the world) and the pipeline, and the last pair.
     rendered: Option<(Renderer, StereoPipeline)>,
-    last_images: Option<(GrayImage, GrayImage)>,
+    last_images: Option<Arc<StereoImages>>,
 }
 
 /// The angle between two directions on the floor, signed, radians.
@@ -230,7 +230,9 @@ impl SimCamera {
             // The renderer makes images of the calibrated size, which is all
             // the pipeline can refuse.
             out.extend(pipeline.process(&left, &right).unwrap_or_default());
-            self.last_images = Some((left, right));
+            let (width, height) = left.dimensions();
+            let images = StereoImages { width, height, left: left.into_raw(), right: right.into_raw() };
+            self.last_images = Some(Arc::new(images));
             return Some(self.frames);
         }
         for landmark in &world.landmarks {
@@ -242,7 +244,7 @@ impl SimCamera {
     }
 
     /// The last pair of rendered images, if the camera renders them.
-    pub fn last_images(&self) -> Option<&(GrayImage, GrayImage)> {
+    pub fn last_images(&self) -> Option<&Arc<StereoImages>> {
         self.last_images.as_ref()
     }
 

@@ -242,11 +242,6 @@ impl SimRobot {
         self.body.footprint_at(pose).0
     }
 
-    /// The last pair of images the camera rendered, if it renders them.
-    pub fn last_images(&self) -> Option<&(image::GrayImage, image::GrayImage)> {
-        self.camera.as_ref().and_then(SimCamera::last_images)
-    }
-
     /// The camera's settings, if the robot has one.
     pub fn camera(&self) -> Option<&SimCameraConfig> {
         self.camera.as_ref().map(SimCamera::config)
@@ -285,6 +280,7 @@ impl Robot for SimRobot {
                 state.stereo.number = number;
                 state.stereo.time = self.time;
                 state.stereo.calibration = Some(camera.config().stereo.calibration());
+                state.stereo.images = camera.last_images().cloned();
             }
         }
         Ok(())
@@ -321,5 +317,9 @@ impl Robot for SimRobot {
 
     fn limits(&self) -> Limits {
         self.body.limits()
+    }
+
+    fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
+        Some(ubf_core::GroundTruth { pose: self.sensed, collisions: self.collisions })
     }
 }

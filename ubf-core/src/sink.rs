@@ -1,0 +1,153 @@
+//! Where tick records go: a trajectory file, a log, a live view.
+
+use crate::{TickRecord, TreeLayout};
+use crossbeam_channel::{Receiver, Sender};
+use std::io;
+use std::thread::JoinHandle;
+
+/// Receives every tick's record: a trajectory writer, a log file, a live plot.
+pub trait TickSink: Send {
+    /// Called once before the first tick with the tree's shape.
+    fn start(&mut self, _layout: &TreeLayout) -> std::io::Result<()> {
+        Ok(())
+    }
+    /// Called after every tick.
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()>;
+    /// Called once when the controller shuts down: flush here.
+    fn finish(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// A sink shared with whoever made it: the controller records into it, and
+/// its maker reads it (or finishes it off) once the run is over.
+impl<T: TickSink> TickSink for std::sync::Arc<std::sync::Mutex<T>> {
+    fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).start(layout)
+    }
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).record(record)
+    }
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).finish()
+    }
+}
+
+/// Logs every tick at `trace` level through `tracing`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TracingSink;
+
+impl TickSink for TracingSink {
+    fn record(&mut self, r: &TickRecord) -> std::io::Result<()> {
+        tracing::trace!(tick = r.tick, time = r.time, x = r.state.pose.x, y = r.state.pose.y, command = ?r.command, "tick");
+        Ok(())
+    }
+}
+
+/// Runs a sink on a thread of its own, so that a slow disk never delays a
+/// tick: a real robot's control loop must not wait for a log.
+///
+/// Records are copied into a fixed pool of `capacity` buffers that go to
+/// the writer thread and come back, so ticks allocate nothing once each
+/// buffer has been used. When the writer has every buffer (it has fallen
+/// `capacity` records behind), further records are dropped and counted
+/// rather than the tick waiting. If the sink fails, a warning names it, the
+/// rest of the records are dropped, and [`TickSink::finish`] returns the
+/// failure: the robot is not stopped for want of a log.
+pub struct BackgroundSink {
+    name: String,
+    to_writer: Option<Sender<Message>>,
+    spare: Receiver<Box<TickRecord>>,
+    writer: Option<JoinHandle<io::Result<()>>>,
+    dropped: u64,
+}
+
+enum Message {
+    Start(TreeLayout),
+    Record(Box<TickRecord>),
+}
+
+impl BackgroundSink {
+    /// Starts `sink` on a thread named after `name` (which also names it in
+    /// warnings), with a pool of `capacity` record buffers.
+    pub fn spawn(name: impl Into<String>, mut sink: impl TickSink + 'static, capacity: usize) -> io::Result<Self> {
+        let name = name.into();
+        let capacity = capacity.max(1);
+        // One slot more than there are buffers, for the start message.
+        let (to_writer, messages) = crossbeam_channel::bounded::<Message>(capacity + 1);
+        let (give_back, spare) = crossbeam_channel::bounded::<Box<TickRecord>>(capacity);
+        for _ in 0..capacity {
+            let _ = give_back.send(Box::default());
+        }
+        let label = name.clone();
+        let writer = std::thread::Builder::new().name(format!("sink {name}")).spawn(move || {
+            let mut result = Ok(());
+            for message in messages {
+                let written = match message {
+                    Message::Start(layout) => sink.start(&layout),
+                    Message::Record(record) => {
+                        let written = if result.is_ok() { sink.record(&record) } else { Ok(()) };
+                        let _ = give_back.send(record);
+                        written
+                    }
+                };
+                if let (Ok(()), Err(e)) = (&result, written) {
+                    tracing::warn!("{label}: {e}; nothing more is written there");
+                    result = Err(e);
+                }
+            }
+            // Flush what was written, even after a failure.
+            let finished = sink.finish();
+            result.and(finished)
+        })?;
+        Ok(BackgroundSink { name, to_writer: Some(to_writer), spare, writer: Some(writer), dropped: 0 })
+    }
+
+    /// Records dropped because the writer had fallen behind.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+}
+
+impl TickSink for BackgroundSink {
+    fn start(&mut self, layout: &TreeLayout) -> io::Result<()> {
+        if let Some(to_writer) = &self.to_writer {
+            // Once, before the first tick: waiting here is harmless.
+            let _ = to_writer.send(Message::Start(layout.clone()));
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, record: &TickRecord) -> io::Result<()> {
+        let Some(to_writer) = &self.to_writer else { return Ok(()) };
+        let Ok(mut copy) = self.spare.try_recv() else {
+            if self.dropped == 0 {
+                tracing::warn!("{}: the writer has fallen behind; records are being dropped", self.name);
+            }
+            self.dropped += 1;
+            return Ok(());
+        };
+        copy.copy_from(record);
+        // Never full: there are no more buffers than slots.
+        let _ = to_writer.try_send(Message::Record(copy));
+        Ok(())
+    }
+
+    /// Waits for the writer to write what it was given and flush.
+    fn finish(&mut self) -> io::Result<()> {
+        self.to_writer = None;
+        let Some(writer) = self.writer.take() else { return Ok(()) };
+        if self.dropped > 0 {
+            tracing::warn!("{}: {} records dropped while the writer was behind", self.name, self.dropped);
+        }
+        writer.join().unwrap_or_else(|_| Err(io::Error::other(format!("{}: the writer panicked", self.name))))
+    }
+}
+
+impl Drop for BackgroundSink {
+    fn drop(&mut self) {
+        if let Err(e) = self.finish() {
+            tracing::warn!("{}: {e}", self.name);
+        }
+    }
+}
