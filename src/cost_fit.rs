@@ -300,6 +300,25 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
     })
 }
 
+/// What `ubf model fit-costs` prints.
+impl std::fmt::Display for CostFit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "logs            {} ({} turns, {} straight steps)", self.logs, self.turns, self.steps)?;
+        writeln!(
+            f,
+            "turns           mean {:.1}°, RMS heading error {:.3}°",
+            self.turn_mean_deg, self.turn_rms_error_deg
+        )?;
+        writeln!(f, "steps           RMS translation error {:.4} m", self.step_rms_error_m)?;
+        writeln!(f, "as the decision's costs (paste into ActionAiding(costs: ...)):")?;
+        writeln!(
+            f,
+            "  (step_sigma_per_cv: {:.4e}, heading_var_per_rad: {:.4e}, heading_var_per_turn: {:.4e})",
+            self.step_sigma_per_cv, self.heading_var_per_rad, self.heading_var_per_turn
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

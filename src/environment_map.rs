@@ -269,3 +269,31 @@ pub fn where_aiding_pays(
         cells,
     })
 }
+
+/// The table `ubf experiment where-aiding-pays` prints.
+impl std::fmt::Display for EnvironmentMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f,
+            "Best aided technique (chosen on seeds {}..{}) over straight driving, end-point error on seeds {}..{} in layout {}",
+            self.development_seeds[0],
+            self.development_seeds[1],
+            self.held_out_seeds[0],
+            self.held_out_seeds[1],
+            self.held_out_layout_seed
+        )?;
+        writeln!(
+            f,
+            "{:<20} {:>9} {:>9} {:>11} {:>10} {:>7} {:>16}",
+            "factor", "level", "best", "straight m", "aided m", "ratio", "95 % CI"
+        )?;
+        for c in &self.cells {
+            let base = if c.base { " (base)" } else { "" };
+            writeln!(
+                f,
+                "{:<20} {:>9} {:>9} {:>11.3} {:>10.3} {:>7.2} [{:>5.2}, {:>5.2}]{base}",
+                c.factor, c.level, c.best, c.straight_m, c.aided_m, c.ratio, c.ratio_ci95[0], c.ratio_ci95[1]
+            )?;
+        }
+        Ok(())
+    }
+}

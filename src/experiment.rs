@@ -453,6 +453,117 @@ pub fn thesis_table2(
     Ok(Table2 { thesis, step_m, pixel_noise_px: noise, trials, rows, best_outlier_share: best })
 }
 
+/// The table `ubf experiment thesis-table4` prints.
+impl std::fmt::Display for Table4 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "Journey CV (lower is better); egomotion failures in brackets")?;
+        writeln!(f, "{:>8} {:>14} {:>14} {:>14} {:>14}", "corridor", "none", "zigzag", "scan", "tracking")?;
+        for chunk in self.runs.chunks(TECHNIQUES.len()) {
+            write!(f, "{:>8}", chunk[0].corridor)?;
+            for r in chunk {
+                let unfinished = if r.reached_goal { "" } else { "*" };
+                write!(f, " {:>8.3} ({:>3}){unfinished}", r.journey_cv, r.egomotion_failures)?;
+            }
+            writeln!(f)?;
+        }
+        write!(f, "{:>8}", "mean")?;
+        for t in TECHNIQUES {
+            write!(f, " {:>8.3} ({:>3.0})", self.mean[t.name()], self.mean_failures[t.name()])?;
+        }
+        writeln!(f)?;
+        write!(f, "{:>8}", "vs none")?;
+        for t in TECHNIQUES {
+            write!(f, " {:>13.0}%", -self.improvement_pct[t.name()])?;
+        }
+        writeln!(f, "\n(* did not reach the goal in time)")?;
+        Ok(())
+    }
+}
+
+/// The table `ubf experiment thesis-table2` prints.
+impl std::fmt::Display for Table2 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "Single-landmark egomotion error for one {:.2} m frame step, pixel noise {} px, {} frame pairs per row",
+            self.step_m, self.pixel_noise_px, self.trials
+        )?;
+        writeln!(
+            f,
+            "{:>10} {:>10} {:>12} {:>8} {:>8} {:>8}",
+            "outliers", "landmarks", "median |e| m", ">0.1 m", ">1 m", ">2 m"
+        )?;
+        let rows = self.rows.iter().map(|r| {
+            let mark = if r.outlier_share == self.best_outlier_share { " *" } else { "" };
+            (format!("{:.0} %{mark}", 100.0 * r.outlier_share), &r.stats)
+        });
+        for (label, s) in std::iter::once(("thesis".to_owned(), &self.thesis)).chain(rows) {
+            writeln!(
+                f,
+                "{label:>10} {:>10} {:>12.3} {:>7.0}% {:>7.0}% {:>7.0}%",
+                s.landmarks,
+                s.median_abs_m,
+                100.0 * s.beyond_0_1_m,
+                100.0 * s.beyond_1_m,
+                100.0 * s.beyond_2_m
+            )?;
+        }
+        writeln!(f, "(* nearest the thesis beyond 1 m and 2 m: outlier_share {:.2})", self.best_outlier_share)?;
+        Ok(())
+    }
+}
+
+/// The tables `ubf experiment thesis-endpoint` prints.
+impl std::fmt::Display for Endpoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let layout = self.layout_seed.map_or("each route's own layout".into(), |s| format!("layout seed {s}"));
+        writeln!(
+            f,
+            "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective",
+            self.seeds[0], self.seeds[1], self.camera, self.objective
+        )?;
+        for (route, estimators) in &self.routes {
+            for (estimator, techniques) in estimators {
+                writeln!(f, "\n{route}, {estimator} estimator")?;
+                writeln!(
+                    f,
+                    "{:>9} {:>24} {:>7} {:>8} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7}",
+                    "technique",
+                    "end-point error m",
+                    "% dist",
+                    "pred σ",
+                    "act/pred",
+                    "failures",
+                    "outages",
+                    "time lim",
+                    "path +%",
+                    "time +%"
+                )?;
+                for t in TECHNIQUES {
+                    let Some(c) = techniques.get(t.name()) else { continue };
+                    let e = &c.endpoint_error_m;
+                    writeln!(
+                        f,
+                        "{:>9} {:>7.2} {:>16} {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
+                        t.name(),
+                        e.mean,
+                        e.ci95.map_or("(n too small)".to_owned(), |[l, h]| format!("[{l:>6.2}, {h:>6.2}]")),
+                        c.endpoint_error_pct.mean,
+                        c.predicted_sigma_m.mean,
+                        c.actual_over_predicted,
+                        c.egomotion_failures.mean,
+                        c.outages.mean,
+                        c.runs_time_limit,
+                        c.path_overhead_pct.mean,
+                        c.time_overhead_pct.mean
+                    )?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

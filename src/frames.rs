@@ -371,3 +371,45 @@ pub fn load_camera(dir: &Path) -> Result<StereoCamera, String> {
         .map(|checked| checked.0)
         .map_err(|e| format!("{}:{e}", path.display()))
 }
+
+/// What `ubf pipeline` prints.
+impl std::fmt::Display for PipelineReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "{} stereo pairs ({}), {:.0} landmarks each on average",
+            self.frames, self.layout, self.landmarks_mean
+        )?;
+        writeln!(f,
+            "median per pair: features and stereo {:.2} ms, egomotion {:.2} ms, total {:.2} ms ({:.0} pairs/s on one core)",
+            self.pipeline_ms_median, self.egomotion_ms_median, self.total_ms_median, self.frames_per_s
+        )?;
+        writeln!(
+            f,
+            "egomotion: {} failures; end pose ({:.2}, {:.2}) m, {:.1}°; limits {} m/s, {} °/s",
+            self.failures,
+            self.final_pose[0],
+            self.final_pose[1],
+            self.final_pose[2].to_degrees(),
+            self.limits[0],
+            self.limits[1]
+        )?;
+        if let Some(a) = &self.accuracy {
+            let lengths: Vec<String> = a.segment_lengths_m.iter().map(|l| format!("{l}")).collect();
+            writeln!(f, "path {:.1} m; end point off by {:.2} % of it", a.path_m, a.endpoint_drift_pct)?;
+            writeln!(
+                f,
+                "KITTI error over {} m segments: translation {:.2} %, rotation {:.4} °/m",
+                lengths.join(", "),
+                a.translation_error_pct,
+                a.rotation_error_deg_per_m
+            )?;
+            writeln!(
+                f,
+                "per step (median): translation error {:.2} %, scale {:.3}, rotation {:.4} °/m",
+                a.step_translation_error_pct_median, a.step_scale_median, a.step_rotation_error_deg_per_m_median
+            )?;
+        }
+        Ok(())
+    }
+}

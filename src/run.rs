@@ -91,6 +91,45 @@ pub struct RunReport {
     pub wall_time_s: f64,
 }
 
+/// The summary `ubf run` prints.
+impl std::fmt::Display for RunReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ending = match self.end {
+            EndReason::GoalReached => "robot believes it reached the goal",
+            EndReason::TimeLimit => "time limit",
+            EndReason::BehaviorFailed => "a behaviour failed; the robot was stopped",
+            EndReason::Interrupted => "interrupted",
+        };
+        let pose = |p: &Pose2| format!("({:.3}, {:.3}) m, {:.1}°", p.x, p.y, p.theta.to_degrees());
+        writeln!(f, "scenario        {} (seed {})", self.scenario, self.seed)?;
+        writeln!(f, "ended           {ending} after {:.1} s simulated, {} ticks", self.sim_time_s, self.ticks)?;
+        if let Some(failure) = &self.failure {
+            writeln!(f, "failure         {failure}")?;
+        }
+        writeln!(f, "goal reached    {}", if self.reached_goal { "yes" } else { "no" })?;
+        writeln!(f, "distance        {:.2} m", self.distance_m)?;
+        writeln!(f, "collisions      {}", self.collisions)?;
+        writeln!(f, "true pose       {}", pose(&self.final_true_pose))?;
+        writeln!(f, "estimated pose  {}", pose(&self.final_estimated_pose))?;
+        if let (Some(error), Some(steps), Some(failures)) =
+            (self.endpoint_error_m, self.egomotion_steps, self.egomotion_failures)
+        {
+            writeln!(f, "egomotion       end-point error {error:.2} m; {steps} steps, {failures} failed")?;
+            if let Some(sigma) = self.predicted_endpoint_sigma_m {
+                writeln!(f, "predicted       end-point σ {sigma:.2} m (the decision's error model)")?;
+            }
+            writeln!(
+                f,
+                "outages         {} ({:.1} s, {:.2} m driven on odometry)",
+                self.outages.unwrap_or(0),
+                self.outage_s.unwrap_or(0.0),
+                self.outage_m.unwrap_or(0.0)
+            )?;
+        }
+        writeln!(f, "wall time       {:.3} s", self.wall_time_s)
+    }
+}
+
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {

@@ -1,0 +1,173 @@
+//! `ubf experiment` and `ubf model`: the thesis's experiments and the
+//! landmark error model.
+
+use super::{CameraArgs, CliError, Exit, ExperimentCommand, ModelCommand, Outcome};
+use crate::experiment::{thesis_endpoint, thesis_table2, thesis_table4, EndpointOptions};
+use crate::scenario::Scenario;
+use std::path::PathBuf;
+use ubf_behaviors::DecisionObjective;
+use ubf_core::Registry;
+
+/// Runs one experiment and prints its table (or JSON).
+pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome {
+    match which {
+        ExperimentCommand::WhereAidingPays { seeds, held_out_seeds, layout_seed, jobs, plot, json } => {
+            let runs = 3 * seeds.clone().count() + 2 * held_out_seeds.clone().count();
+            if runs == 0 || runs > 100_000 {
+                return Err(CliError::bad_input("need 1 to 20000 seeds in each set"));
+            }
+            let bar = crate::sweep::progress_bar(24, "environments");
+            let progress = |done: usize, total: usize| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            };
+            let jobs = jobs.unwrap_or_else(super::cores);
+            let map = crate::environment_map::where_aiding_pays(
+                registry,
+                seeds,
+                held_out_seeds,
+                layout_seed,
+                jobs,
+                &progress,
+            );
+            bar.finish_and_clear();
+            let map = map.map_err(CliError::failed)?;
+            if let Some(path) = &plot {
+                match crate::plot::draw_environment_map(&map, path) {
+                    Ok(()) => eprintln!("wrote {}", path.display()),
+                    Err(e) => eprintln!("error: {e}"),
+                }
+            }
+            super::show(&map, json)?;
+        }
+        ExperimentCommand::ThesisTable2 { step, trials, jobs, json } => {
+            if !(step.is_finite() && step > 0.0 && step < 10.0) || trials == 0 || trials > 100_000 {
+                return Err(CliError::bad_input("need 0 < --step < 10 m and 1 ≤ --trials ≤ 100000"));
+            }
+            let shares: Vec<f64> = (0..=20).map(|k| f64::from(k) / 100.0).collect();
+            let jobs = jobs.unwrap_or_else(super::cores);
+            let table = thesis_table2(registry, step, trials, &shares, jobs).map_err(CliError::failed)?;
+            super::show(&table, json)?;
+        }
+        ExperimentCommand::ThesisTable4 { seeds, objective, jobs, json } => {
+            let table = thesis_table4(registry, seeds, jobs.unwrap_or_else(super::cores), objective)
+                .map_err(CliError::failed)?;
+            super::show(&table, json)?;
+        }
+        ExperimentCommand::ThesisEndpoint {
+            seeds,
+            jobs,
+            json,
+            rendered,
+            layout_seed,
+            objective,
+            rotate_then_translate,
+        } => {
+            let profile = rotate_then_translate
+                .then_some(ubf_robots::sim::MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 });
+            let jobs = jobs.unwrap_or_else(super::cores);
+            let options = EndpointOptions { seeds, jobs, rendered, layout_seed, objective, profile };
+            let result = thesis_endpoint(registry, &options).map_err(CliError::failed)?;
+            super::show(&result, json)?;
+        }
+    }
+    Ok(Exit::Success)
+}
+
+/// Fits, prints or draws the landmark error model, or fits the decision's
+/// costs from run logs.
+pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
+    use ubf_perception::error_model::{fit_exponential, GeometricModel};
+    let args: &CameraArgs = match &action {
+        ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
+        ModelCommand::FitCosts { logs, json } => return fit_costs(logs, *json),
+    };
+    if !(args.step.is_finite() && args.step > 0.0) {
+        return Err(CliError::bad_input("--step must be a positive number of metres"));
+    }
+    let camera = match &args.scenario {
+        None => ubf_perception::StereoCamera::default(),
+        Some(file) => {
+            let scenario = Scenario::load(registry, file).map_err(CliError::bad_input)?;
+            scenario.robot.camera.map(|c| c.stereo).unwrap_or_default()
+        }
+    };
+    let geometric = GeometricModel::new(&camera, args.step);
+    let depths = [args.depths[0].max(geometric.min_depth()), args.depths[1]];
+    if depths[1] <= depths[0] {
+        return Err(CliError::bad_input(format!(
+            "--depths: FAR must exceed the camera's nearest stereo depth, {:.2} m (with this camera)",
+            depths[0]
+        )));
+    }
+    let fit = fit_exponential(|x, y| geometric.cv(x, y), &camera, depths, 0.25);
+    match action {
+        ModelCommand::Fit { json: true, .. } => {
+            println!("{}", serde_json::to_string_pretty(&fit).expect("a fit report always serialises"));
+        }
+        ModelCommand::Fit { .. } => {
+            println!(
+                "camera          f = {:.1} px, T = {:.3} m, {}×{} px",
+                camera.focal_px, camera.baseline_m, camera.width_px, camera.height_px
+            );
+            println!(
+                "model step      {} m; fitted over depths {:.2}–{:.2} m, {} points of the field of view",
+                args.step, depths[0], depths[1], fit.samples
+            );
+            println!("CV(x, y)        α·exp(β·y)·exp(−γ·|x|)");
+            println!("α               {:.6e}", fit.model.alpha);
+            println!("β               {:.5} 1/m", fit.model.beta);
+            println!("γ               {:.5} 1/m", fit.model.gamma);
+            println!("R² of ln CV     {:.4}", fit.r_squared_log);
+            println!(
+                "relative error  median {:.1} %, 95th percentile {:.1} %",
+                100.0 * fit.median_relative_error,
+                100.0 * fit.p95_relative_error
+            );
+            println!(
+                "pair ordering   {:.1} % of landmark pairs ranked as the geometric model ranks them",
+                100.0 * fit.pair_order_agreement
+            );
+        }
+        // Answered before a camera was needed.
+        ModelCommand::FitCosts { .. } => {}
+        ModelCommand::Heatmap { exponential, out, .. } => {
+            let m = fit.model;
+            let (title, cv): (&str, &dyn Fn(f64, f64) -> f64) = if exponential {
+                ("Fitted exponential model (eq. 24)", &|x, y| m.cv(x, y))
+            } else {
+                ("Geometric error model (eq. 16-23)", &|x, y| geometric.cv(x, y))
+            };
+            crate::plot::draw_error_model(title, cv, &camera, depths[1], &out).map_err(CliError::failed)?;
+            println!("wrote {}", out.display());
+        }
+    }
+    Ok(Exit::Success)
+}
+
+fn fit_costs(logs: &[PathBuf], json: bool) -> Outcome {
+    use crate::cost_fit::{find_logs, fit_costs};
+    let fit = find_logs(logs).and_then(|paths| fit_costs(&paths)).map_err(CliError::bad_input)?;
+    super::show(&fit, json)?;
+    Ok(Exit::Success)
+}
+
+/// Parses `end-point` or `cv`.
+pub(super) fn parse_objective(text: &str) -> Result<DecisionObjective, String> {
+    match text {
+        "end-point" => Ok(DecisionObjective::EndPoint),
+        "cv" => Ok(DecisionObjective::Cv),
+        _ => Err("expected `end-point` or `cv`".into()),
+    }
+}
+
+/// Parses `NEAR..FAR` depths in metres.
+pub(super) fn parse_depths(text: &str) -> Result<[f64; 2], String> {
+    let (a, b) = text.split_once("..").ok_or("expected NEAR..FAR, in metres")?;
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a depth in metres"));
+    let (near, far) = (number(a)?, number(b)?);
+    if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far && far <= 1000.0) {
+        return Err(format!("`{text}`: need 0 < NEAR < FAR ≤ 1000 m"));
+    }
+    Ok([near, far])
+}

@@ -1,0 +1,60 @@
+//! `ubf frames` and `ubf pipeline`: recording stereo pairs, and replaying
+//! them through the feature pipeline and egomotion.
+
+use super::{CliError, Exit, Outcome};
+use crate::scenario::{Scenario, Work};
+use std::path::Path;
+use ubf_core::Registry;
+
+/// Records a scenario's rendered pairs into `out`.
+pub(super) fn frames(
+    registry: &Registry,
+    file: &Path,
+    out: &Path,
+    seed: Option<u64>,
+    max: usize,
+    huge: bool,
+) -> Outcome {
+    let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
+    let scenario = loaded.map_err(CliError::bad_input)?;
+    let bytes = crate::frames::recording_bytes(&scenario, max);
+    if bytes > Work::MOST_RECORDING_BYTES && !huge {
+        return Err(CliError::bad_input(format!(
+            "up to {} of images (PNG compresses rendered noise little), more than {}; \
+             lower --max-frames, or pass --huge to record them anyway",
+            Work::bytes_text(bytes),
+            Work::bytes_text(Work::MOST_RECORDING_BYTES)
+        )));
+    }
+    let count = crate::frames::record(&scenario, seed.unwrap_or(scenario.seed), out, max).map_err(CliError::failed)?;
+    println!("{count} stereo pairs in {}", out.display());
+    Ok(Exit::Success)
+}
+
+/// Replays a directory of pairs, timing the stages and, with ground truth,
+/// measuring the estimate.
+pub(super) fn pipeline(dir: &Path, options: &crate::frames::ReplayOptions, json: bool, plot: Option<&Path>) -> Outcome {
+    let replay = crate::frames::replay(dir, options).map_err(CliError::bad_input)?;
+    if let Some(path) = plot {
+        crate::plot::draw_paths(&replay.estimate, replay.truth.as_deref(), path).map_err(CliError::failed)?;
+    }
+    super::show(&replay.report, json)?;
+    Ok(Exit::Success)
+}
+
+/// A speed or turn-rate limit: finite and positive.
+pub(super) fn parse_limit(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1e4 => Ok(v),
+        _ => Err(format!("expected a number above 0 and at most 10 000; got {text:?}")),
+    }
+}
+
+/// A disparity offset, px: any finite number (the camera's check bounds it
+/// by the image width).
+pub(super) fn parse_offset(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("expected a number of pixels; got {text:?}")),
+    }
+}

@@ -1,0 +1,621 @@
+//! The `ubf` command line.
+//!
+//! A user's crate gets the same command line, with its own behaviours usable
+//! from scenario files, by handing its registry to [`main_with`]:
+//!
+//! ```no_run
+//! fn main() -> std::process::ExitCode {
+//!     let registry = ubf::registry();
+//!     // registry.register("Wander", |c: &WanderConfig, ctx| Wander::new(c, ctx));
+//!     ubf::cli::main_with(registry)
+//! }
+//! ```
+
+mod experiment;
+mod images;
+mod inspect;
+mod robot;
+mod run;
+mod sweep;
+
+use clap::{Parser, Subcommand};
+use experiment::{parse_depths, parse_objective};
+use images::{parse_limit, parse_offset};
+use robot::{parse_room, parse_silence, parse_sip_period};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use sweep::{parse_jobs, parse_seeds};
+use ubf_behaviors::DecisionObjective;
+use ubf_core::Registry;
+
+/// Exit code for bad input: a malformed file, a bad argument.
+pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit code for a run that failed after its input was accepted.
+pub const EXIT_FAILURE: u8 = 1;
+
+/// Exit code for a run stopped by Ctrl-C or SIGTERM (128 + SIGINT, as
+/// shells report it).
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+/// How a command that did its job ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Exit {
+    /// All well (exit code 0).
+    Success,
+    /// What it ran failed, and it said so: a behaviour, a run of a sweep, a
+    /// lost link (exit code 1).
+    Failure,
+    /// Ctrl-C or SIGTERM ended it, and it reported what it had (130).
+    Interrupted,
+    /// Some of its input was bad, and each was reported (exit code 2).
+    BadInput,
+}
+
+/// Why a command could not do its job. Which variant decides the exit
+/// code; [`finish`] is the one place that maps them.
+#[derive(Debug, thiserror::Error)]
+enum CliError {
+    /// Bad input: a malformed file, a bad argument (exit code 2).
+    #[error("{0}")]
+    BadInput(Box<dyn std::error::Error + Send + Sync>),
+    /// The input was accepted and then something failed (exit code 1).
+    #[error("{0}")]
+    Failed(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl CliError {
+    fn bad_input(error: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        CliError::BadInput(error.into())
+    }
+
+    fn failed(error: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        CliError::Failed(error.into())
+    }
+
+    /// A failure to do something with `file`, which the message names.
+    fn failed_in(file: &std::path::Path, error: impl std::fmt::Display) -> Self {
+        CliError::Failed(format!("{}: {error}", file.display()).into())
+    }
+}
+
+type Outcome = Result<Exit, CliError>;
+
+/// The exit code for how a command ended, its error printed.
+fn finish(outcome: Outcome) -> ExitCode {
+    match outcome {
+        Ok(Exit::Success) => ExitCode::SUCCESS,
+        Ok(Exit::Failure) => ExitCode::from(EXIT_FAILURE),
+        Ok(Exit::Interrupted) => ExitCode::from(EXIT_INTERRUPTED),
+        Ok(Exit::BadInput) => ExitCode::from(EXIT_BAD_INPUT),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(match e {
+                CliError::BadInput(_) => EXIT_BAD_INPUT,
+                CliError::Failed(_) => EXIT_FAILURE,
+            })
+        }
+    }
+}
+
+/// Prints a report as text, or with `json` as JSON: one path for both.
+fn show<T: std::fmt::Display + serde::Serialize>(report: &T, json: bool) -> Result<(), CliError> {
+    if json {
+        let text = serde_json::to_string_pretty(report).map_err(|e| CliError::failed(format!("writing JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        print!("{report}");
+    }
+    Ok(())
+}
+
+/// Jobs by default: one per core.
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "ubf",
+    version,
+    about = "Unified Behavior Framework: run behaviour trees on simulated and real robots"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+    /// More log on stderr: -v info, -vv debug, -vvv every tick (trace).
+    /// RUST_LOG, when set, decides instead.
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    /// Errors only on stderr.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+}
+
+/// What `ubf sweep` does besides sweeping.
+#[derive(Debug, Subcommand)]
+enum SweepAction {
+    /// Combine the shards of a sweep (`ubf sweep ... --shard K/N`) into the
+    /// summary one sweep would have written: `summary.csv` and
+    /// `summary.json`, byte for byte.
+    Merge {
+        /// Directories holding the shards' output (one may hold them all).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where the summary goes (default: the first directory).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run a scenario headless on the simulator and print a summary.
+    Run {
+        /// The scenario file (RON).
+        file: PathBuf,
+        /// Use this seed instead of the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Write report.json, trajectory.csv and plot.png into this directory.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print the report as JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Run it even beyond the bound on ticks (a deliberately huge run).
+        #[arg(long)]
+        huge: bool,
+        /// Put the camera's rendered stereo pairs in run.mcap (PNG; needs
+        /// `--out` and a camera that renders).
+        #[arg(long, requires = "out")]
+        log_images: bool,
+    },
+    /// Run every scenario with every seed in parallel and summarise; with
+    /// `--shard K/N`, a share of the runs, for `ubf sweep merge` to combine.
+    #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+    Sweep {
+        #[command(subcommand)]
+        action: Option<SweepAction>,
+        /// The scenario files (RON).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
+        #[arg(long, required = true, value_parser = parse_seeds)]
+        seeds: Option<std::ops::Range<u64>>,
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
+        jobs: Option<usize>,
+        /// Where the reports and the summary go.
+        #[arg(long, required = true)]
+        out: Option<PathBuf>,
+        /// Run only share K of N (from 0) of the runs, leaving their
+        /// reports and `shard-K-of-N.json` in `--out` (which may hold other
+        /// shards' output) instead of a summary; `ubf sweep merge` then
+        /// combines the shards. For a Slurm job array or a Kubernetes
+        /// indexed job.
+        #[arg(long, value_name = "K/N", value_parser = crate::sweep::Shard::parse)]
+        shard: Option<crate::sweep::Shard>,
+        /// Also write every run's trajectory.csv and plot.png.
+        #[arg(long)]
+        trajectories: bool,
+        /// Replace an earlier sweep's output in `--out` (a directory holding
+        /// its summary.json); without this a non-empty `--out` is refused,
+        /// so old runs never sit beside a new summary.
+        #[arg(long)]
+        overwrite: bool,
+        /// Run it even beyond the bounds on runs and on ticks per run.
+        #[arg(long)]
+        huge: bool,
+    },
+    /// Check scenario files without running them; exit code 2 on the first
+    /// bad one.
+    Check {
+        /// The scenario files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+    /// List the behaviours this build can read from scenario files; with
+    /// `--describe`, their fields (kind, unit, default, range, meaning) as
+    /// Markdown tables.
+    Behaviors {
+        /// Print each behaviour's fields, not only its name.
+        #[arg(long)]
+        describe: bool,
+        /// Only these behaviours (with `--describe`).
+        names: Vec<String>,
+    },
+    /// Read a run's log (`run.mcap`) back: print the run's summary and draw
+    /// its plot again from the log alone.
+    Replay {
+        /// The log, as `ubf run --out DIR` writes it (`DIR/run.mcap`).
+        file: PathBuf,
+        /// Where to draw the plot (default: beside the log, as
+        /// `<name>-replay.png`).
+        #[arg(long, value_name = "FILE.png")]
+        plot: Option<PathBuf>,
+    },
+    /// Print a scenario's (or robot file's) behaviour tree as Graphviz DOT
+    /// (`| dot -Tpng > tree.png`), or as Mermaid for Markdown pages: each
+    /// composite with its arbiter and vote override, each child with its
+    /// share of the vote.
+    Tree {
+        /// The scenario or robot file (RON).
+        file: PathBuf,
+        /// Mermaid instead of DOT.
+        #[arg(long)]
+        mermaid: bool,
+    },
+    /// Run a scenario with rendered stereo images and write every pair into
+    /// a directory (with `frames.csv` and `camera.ron`), for replay.
+    Frames {
+        /// The scenario file (RON); its robot needs a camera.
+        file: PathBuf,
+        /// Where the images go.
+        #[arg(long)]
+        out: PathBuf,
+        /// Seed (default: the scenario's).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Stop after this many pairs.
+        #[arg(long, default_value_t = 100_000)]
+        max_frames: usize,
+        /// Record even beyond 10 GB of images (a deliberately huge
+        /// recording).
+        #[arg(long)]
+        huge: bool,
+    },
+    /// Replay a directory of stereo pairs through the feature pipeline and
+    /// the rigid egomotion estimator on one core, and time them; with
+    /// ground truth, measure the estimate's accuracy (KITTI's metrics).
+    Pipeline {
+        /// A directory written by `ubf frames` (or laid out the same way),
+        /// or a KITTI odometry sequence (`image_0/`, `image_1/`,
+        /// `calib.txt`, `times.txt`).
+        dir: PathBuf,
+        /// Print the measurements as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Ground-truth poses for a KITTI sequence, in KITTI's format
+        /// (default: the sequence's `poses.txt`, if it has one).
+        #[arg(long, value_name = "FILE")]
+        poses: Option<PathBuf>,
+        /// The fastest motion egomotion accepts, m/s (default: 0.6, the
+        /// robot's, for a recording; 40, a road vehicle's, for KITTI).
+        #[arg(long, value_name = "M/S", value_parser = parse_limit)]
+        max_speed: Option<f64>,
+        /// The fastest turn egomotion accepts, °/s (default: 100 for a
+        /// recording, 90 for KITTI).
+        #[arg(long, value_name = "DEG/S", value_parser = parse_limit)]
+        max_turn_rate: Option<f64>,
+        /// How far from a keyframe a frame may still be matched to it, m
+        /// (default 10); near 1 m the matching is almost frame to frame.
+        #[arg(long, value_name = "M", value_parser = parse_limit)]
+        keyframe_range: Option<f64>,
+        /// Add this to every disparity before triangulating, px, in place
+        /// of the calibration's offset (`disparity_offset_px` in
+        /// `camera.ron`; KITTI's `calib.txt` has none): for a pair whose
+        /// rectification leaves a disparity bias. Negative values allowed.
+        #[arg(long, value_name = "PX", allow_negative_numbers = true, value_parser = parse_offset)]
+        disparity_offset: Option<f64>,
+        /// Draw the estimated path (over the true one, if known) here (PNG).
+        #[arg(long, value_name = "FILE.png")]
+        plot: Option<PathBuf>,
+        /// Write every landmark of every pair here (CSV: pair, pixels with
+        /// the first pixel's centre at (0, 0), disparity, camera-frame
+        /// point).
+        #[arg(long, value_name = "FILE.csv")]
+        landmarks: Option<PathBuf>,
+    },
+    /// Drive a real robot (or an emulator) with a behaviour tree; Ctrl-C or
+    /// SIGTERM stops it safely.
+    Drive {
+        /// The robot configuration file (RON).
+        file: PathBuf,
+        /// Connect and show the robot's identity, odometry and sonar without
+        /// enabling the motors.
+        #[arg(long)]
+        dry_run: bool,
+        /// Show the live state (link, pose, speeds, winning behaviour, hold)
+        /// on stderr even when it is not a terminal (on a terminal it is
+        /// always shown, on one updating line).
+        #[arg(long)]
+        status: bool,
+        /// End the drive once the robot believes it is at the goal (the
+        /// robot is stopped and the session closed); without it the tree
+        /// holds the robot there until Ctrl-C.
+        #[arg(long)]
+        until_goal: bool,
+    },
+    /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
+    /// for trying things out without a robot.
+    EmulatePowerbot {
+        /// Address to listen on.
+        #[arg(long, default_value = "127.0.0.1:8101", conflicts_with = "pty")]
+        listen: String,
+        /// Serve on a new pseudo-terminal instead, as the robot's serial port
+        /// would be; prints its device path for `connection`.
+        #[arg(long)]
+        pty: bool,
+        /// Put the robot in the middle of a LENGTHxWIDTH metre room, facing
+        /// along it, for the sonar to see (default: open space, no echoes).
+        #[arg(long, value_name = "LENGTHxWIDTH", value_parser = parse_room)]
+        room: Option<(f64, f64)>,
+        /// Milliseconds between SIPs (ARCOS: 100); down to 0.1 to flood a
+        /// client with 10 000 a second.
+        #[arg(long, value_name = "MS", default_value_t = 100.0, value_parser = parse_sip_period)]
+        sip_period_ms: f64,
+        /// Freeze AFTER seconds into each session, for FOR seconds: no SIPs
+        /// and no motion while commands are still read, as a paused
+        /// simulator does; for rehearsing what the client does.
+        #[arg(long, value_name = "AFTER:FOR", value_parser = parse_silence)]
+        silence: Option<(f64, f64)>,
+    },
+    /// Reproduce one of the thesis's experiments.
+    Experiment {
+        #[command(subcommand)]
+        which: ExperimentCommand,
+    },
+    /// The landmark egomotion error model of a camera (thesis §3.3.3).
+    Model {
+        #[command(subcommand)]
+        action: ModelCommand,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum ExperimentCommand {
+    /// Where aiding pays: vary one factor of route 1→2 at a time (corridor
+    /// width, landmark count, side-wall share, featureless stretch,
+    /// detection range, pixel noise), choose the best aided technique on the
+    /// development seeds, and measure its gain over straight driving on
+    /// held-out seeds in a held-out layout; table, JSON and a PNG map.
+    WhereAidingPays {
+        /// Seeds the best technique is chosen on.
+        #[arg(long, default_value = "0..30", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Seeds the gain is measured on.
+        #[arg(long, default_value = "1000..1030", value_parser = parse_seeds)]
+        held_out_seeds: std::ops::Range<u64>,
+        /// The held-out landmark layout.
+        #[arg(long, default_value_t = 101)]
+        layout_seed: u64,
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
+        jobs: Option<usize>,
+        /// Draw the map here (PNG).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Table 2: single-landmark egomotion errors for one frame step, beside
+    /// the thesis's, for a range of gross stereo mismatch shares; names the
+    /// share that matches (the route scenarios use it).
+    ThesisTable2 {
+        /// The step between the two frames, m (the thesis's robot: 0.15 m).
+        #[arg(long, default_value_t = 0.15)]
+        step: f64,
+        /// Frame pairs per outlier share.
+        #[arg(long, default_value_t = 200)]
+        trials: u64,
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Table 4: journey CV of every technique in 10 random 6 m × 60 m corridors.
+    ThesisTable4 {
+        /// Corridors (seeds of their layouts).
+        #[arg(long, default_value = "0..10", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// What the evaluative techniques minimise: `end-point` (the
+        /// predicted end-point variance, turns included) or `cv` (the
+        /// thesis's step CV, turns free).
+        #[arg(long, default_value = "cv", value_parser = parse_objective)]
+        objective: DecisionObjective,
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Tables 5–7 and 10: end-point egomotion error on the two 40.7 m routes
+    /// and the feature-poor section, both estimators.
+    ThesisEndpoint {
+        /// Seeds per route, technique and estimator.
+        #[arg(long, default_value = "0..30", value_parser = parse_seeds)]
+        seeds: std::ops::Range<u64>,
+        /// Runs at once (at least 1); by default one per core.
+        #[arg(long, value_parser = parse_jobs)]
+        jobs: Option<usize>,
+        /// Print the results as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Render stereo images and find the landmarks in them with the
+        /// feature pipeline, instead of the geometric camera model (about
+        /// 30 ms a frame: a few seconds a run; use fewer seeds).
+        #[arg(long)]
+        rendered: bool,
+        /// Replace each route's fixed landmark layout with one drawn from
+        /// this seed (layouts nobody tuned on).
+        #[arg(long)]
+        layout_seed: Option<u64>,
+        /// What the evaluative techniques minimise: `end-point` (the
+        /// predicted end-point variance, turns included) or `cv` (the
+        /// thesis's step CV, turns free).
+        #[arg(long, default_value = "end-point", value_parser = parse_objective)]
+        objective: DecisionObjective,
+        /// Drive with the thesis's decoupled motion (turn on the spot, then
+        /// translate) instead of the routes' continuous profile.
+        #[arg(long)]
+        rotate_then_translate: bool,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum ModelCommand {
+    /// Fit the exponential model (eq. 24) to the geometric one (eq. 16–23)
+    /// and report the fit's quality.
+    Fit {
+        #[command(flatten)]
+        camera: CameraArgs,
+        /// Print the fit as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Fit the coefficients the end-point decision weighs (turn heading
+    /// variance, step translation error per CV) from run logs with ground
+    /// truth: `trajectory.csv` files, or directories searched for them (as
+    /// `ubf sweep --trajectories` writes them).
+    FitCosts {
+        /// Logs or directories of logs.
+        #[arg(required = true)]
+        logs: Vec<PathBuf>,
+        /// Print the fit as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Draw the model as a heat map over the field of view (thesis figure 16).
+    Heatmap {
+        #[command(flatten)]
+        camera: CameraArgs,
+        /// Draw the fitted exponential model instead of the geometric one.
+        #[arg(long)]
+        exponential: bool,
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+#[derive(Debug, clap::Args)]
+struct CameraArgs {
+    /// Take the camera from this scenario's robot (default: the default camera).
+    #[arg(long)]
+    scenario: Option<PathBuf>,
+    /// The step the model assumes, m (the thesis: 1 m).
+    #[arg(long, default_value_t = 1.0)]
+    step: f64,
+    /// Nearest and farthest depth of the fit, m, as `NEAR..FAR`.
+    #[arg(long, default_value = "1.2..40", value_parser = parse_depths)]
+    depths: [f64; 2],
+}
+
+/// Whether `ubf` accepts `args` (the words after the program's name) as a
+/// command line, without running anything: the docs test checks every
+/// command the docs show with it. The error is clap's message.
+pub fn parses<I: IntoIterator<Item = T>, T: Into<std::ffi::OsString> + Clone>(args: I) -> Result<(), String> {
+    let words = std::iter::once(std::ffi::OsString::from("ubf")).chain(args.into_iter().map(Into::into));
+    Cli::try_parse_from(words).map(drop).map_err(|e| e.to_string())
+}
+
+/// Runs the command line with `registry` resolving behaviour names.
+pub fn main_with(registry: Registry) -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // clap prints help and version to stdout with success, usage errors
+            // to stderr with code 2.
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { EXIT_BAD_INPUT } else { 0 });
+        }
+    };
+    init_tracing(cli.verbose, cli.quiet);
+    // A closed pipe (`ubf run S | head -1`) ends a command quietly with the
+    // conventional status, as it does any Unix filter, instead of a panic.
+    // Not for the commands that drive a robot: they notice a closed output
+    // as a write error and stop the robot before they exit.
+    #[cfg(unix)]
+    if !matches!(cli.command, Command::Drive { .. } | Command::EmulatePowerbot { .. }) {
+        // SAFETY: restoring the default action of a signal, before any
+        // thread has started.
+        unsafe {
+            libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        }
+    }
+    let outcome = match cli.command {
+        Command::Run { file, seed, out, json, huge, log_images } => {
+            run::command(&registry, &file, seed, out.as_deref(), json, huge, log_images)
+        }
+        Command::Replay { file, plot } => run::replay(&file, plot),
+        Command::Check { files } => inspect::check(&registry, &files),
+        Command::Tree { file, mermaid } => inspect::tree(&registry, &file, mermaid),
+        Command::Behaviors { describe, names } => inspect::behaviors(&registry, describe, &names),
+        Command::Sweep { action: Some(SweepAction::Merge { dirs, out }), .. } => sweep::merge(&dirs, out.as_deref()),
+        Command::Sweep { action: None, files, seeds, jobs, out, shard, trajectories, overwrite, huge } => {
+            let (Some(seeds), Some(out)) = (seeds, out) else {
+                unreachable!("clap requires --seeds and --out without a subcommand")
+            };
+            let request =
+                sweep::SweepRequest { files: &files, seeds, shard, jobs, out: &out, trajectories, overwrite, huge };
+            sweep::command(&registry, request)
+        }
+        Command::Model { action } => experiment::model(&registry, action),
+        Command::Experiment { which } => experiment::command(&registry, which),
+        Command::Drive { file, dry_run, status, until_goal } => {
+            robot::drive(&registry, &file, dry_run, status, until_goal)
+        }
+        Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
+            let mut config =
+                ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
+            if let Some((length, width)) = room {
+                config = config.in_room(length, width);
+            }
+            config.sip_period = std::time::Duration::from_secs_f64(sip_period_ms / 1000.0);
+            config.silence = silence.map(|(after, span)| {
+                (std::time::Duration::from_secs_f64(after), std::time::Duration::from_secs_f64(span))
+            });
+            robot::emulate(&listen, pty, &config)
+        }
+        Command::Frames { file, out, seed, max_frames, huge } => {
+            images::frames(&registry, &file, &out, seed, max_frames, huge)
+        }
+        Command::Pipeline {
+            dir,
+            json,
+            poses,
+            max_speed,
+            max_turn_rate,
+            keyframe_range,
+            disparity_offset,
+            plot,
+            landmarks,
+        } => {
+            let options = crate::frames::ReplayOptions {
+                features: ubf_perception::features::FeatureConfig::default(),
+                max_speed,
+                max_turn_rate_deg: max_turn_rate,
+                poses,
+                keyframe_range_m: keyframe_range,
+                disparity_offset_px: disparity_offset,
+                landmarks,
+            };
+            images::pipeline(&dir, &options, json, plot.as_deref())
+        }
+    };
+    finish(outcome)
+}
+
+/// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by
+/// default).
+fn init_tracing(verbose: u8, quiet: bool) {
+    use tracing_subscriber::EnvFilter;
+    let level = match (quiet, verbose) {
+        (true, _) => "error",
+        (false, 0) => "warn",
+        (false, 1) => "info",
+        (false, 2) => "debug",
+        (false, _) => "trace",
+    };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
+    use std::io::IsTerminal;
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .try_init();
+}

@@ -1,0 +1,169 @@
+//! `ubf drive` and `ubf emulate-powerbot`: the real robot, and a stand-in
+//! for it.
+
+use super::{CliError, Exit, Outcome};
+use std::path::Path;
+use ubf_core::Registry;
+use ubf_robots::arcos::emulator::{EmulatorConfig, EmulatorReport};
+
+/// Drives the robot (or only looks at it, `dry_run`) until stopped.
+pub(super) fn drive(registry: &Registry, file: &Path, dry_run: bool, status: bool, until_goal: bool) -> Outcome {
+    use crate::drive::{DriveConfig, DriveEnd};
+    let (mut config, model) = DriveConfig::load(registry, file).map_err(CliError::bad_input)?;
+    config.until_goal |= until_goal;
+    let stop = crate::drive::install_stop_flag();
+    if dry_run {
+        crate::drive::dry_run(&config, &model, &stop).map_err(CliError::failed)?;
+        return Ok(Exit::Success);
+    }
+    use std::io::IsTerminal;
+    let status = match (std::io::stderr().is_terminal(), status) {
+        (true, _) => crate::drive::Status::Line,
+        (false, true) => crate::drive::Status::Lines,
+        (false, false) => crate::drive::Status::Off,
+    };
+    let outcome = crate::drive::drive(&config, &model, &stop, status);
+    match outcome.logs.as_slice() {
+        [] => eprintln!("no session opened; no log written"),
+        [one] => eprintln!("log in {}", one.display()),
+        many => {
+            let names: Vec<String> = many.iter().map(|p| p.display().to_string()).collect();
+            eprintln!("logs (CSV and MCAP), per session: {}", names.join(", "));
+        }
+    }
+    match outcome.end.map_err(CliError::failed)? {
+        DriveEnd::Stopped => {
+            eprintln!("stopped");
+            Ok(Exit::Success)
+        }
+        DriveEnd::GoalReached => {
+            eprintln!("at the goal; stopped");
+            Ok(Exit::Success)
+        }
+        DriveEnd::LinkLost => Ok(Exit::Failure),
+    }
+}
+
+/// Emulates a Powerbot on a TCP address, or on a new pseudo-terminal.
+pub(super) fn emulate(listen: &str, pty: bool, config: &EmulatorConfig) -> Outcome {
+    if pty {
+        emulate_on_pty(config)
+    } else {
+        emulate_on_tcp(listen, config)
+    }
+}
+
+/// Serves clients one after another on a new pseudo-terminal until Ctrl-C
+/// or SIGTERM.
+#[cfg(unix)]
+fn emulate_on_pty(config: &EmulatorConfig) -> Outcome {
+    use ubf_robots::arcos::emulator::serve;
+    let (master, path) = ubf_robots::arcos::link::pseudo_terminal()
+        .map_err(|e| CliError::failed(format!("opening a pseudo-terminal: {e}")))?;
+    println!("emulating a Powerbot on {path}");
+    let stop = crate::drive::install_stop_flag();
+    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+        let link = master.try_clone_native().map_err(CliError::failed)?;
+        match serve(Box::new(link), config, &stop) {
+            // Nobody on the other end yet.
+            Ok(report) if report.commands == 0 => std::thread::sleep(std::time::Duration::from_millis(100)),
+            Ok(report) => print_emulator_report(&report),
+            Err(e) => {
+                eprintln!("client error: {e}");
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+        }
+    }
+    Ok(Exit::Success)
+}
+
+#[cfg(not(unix))]
+fn emulate_on_pty(_config: &EmulatorConfig) -> Outcome {
+    Err(CliError::failed("pseudo-terminals are supported on Unix only"))
+}
+
+fn emulate_on_tcp(listen: &str, config: &EmulatorConfig) -> Outcome {
+    use ubf_robots::arcos::emulator::serve;
+    let listener =
+        std::net::TcpListener::bind(listen).map_err(|e| CliError::bad_input(format!("listening on {listen}: {e}")))?;
+    match listener.local_addr() {
+        Ok(address) => println!("emulating a Powerbot on tcp://{address}"),
+        Err(e) => eprintln!("warning: {e}"),
+    }
+    let stop = crate::drive::install_stop_flag();
+    // Poll for clients so that Ctrl-C or SIGTERM ends a waiting emulator.
+    listener.set_nonblocking(true).map_err(CliError::failed)?;
+    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+        let stream = match listener.accept() {
+            Ok((stream, _)) => stream,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                continue;
+            }
+            Err(e) => {
+                eprintln!("error: accepting a client: {e}");
+                continue;
+            }
+        };
+        let _ = stream.set_nonblocking(false);
+        let _ = stream.set_read_timeout(Some(ubf_robots::arcos::link::READ_TIMEOUT));
+        match serve(Box::new(stream), config, &stop) {
+            Ok(report) => print_emulator_report(&report),
+            Err(e) => eprintln!("client error: {e}"),
+        }
+    }
+    Ok(Exit::Success)
+}
+
+/// Prints what the emulator saw of a client, one line, the timings as
+/// `name=value` (`-` when it did not happen). Nobody reading the output is
+/// no reason to stop emulating: a closed pipe is ignored.
+fn print_emulator_report(report: &EmulatorReport) {
+    use std::io::Write;
+    let show = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.3}"));
+    let limits = report.speed_limits.map_or("-".to_owned(), |(v, w)| format!("{v},{w}"));
+    let _ = writeln!(
+        std::io::stdout(),
+        "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m; sips={} motion_before_first_sip={} \
+         last_motion_after_silence_s={} stop_after_silence_s={} stop_to_disable_s={} speed_at_disable_mm_s={} \
+         speed_limits={limits} stalled_cycles={} host_baud={}",
+        report.commands,
+        report.closed,
+        report.pose.0 / 1000.0,
+        report.pose.1 / 1000.0,
+        report.sips,
+        report.motion_before_first_sip,
+        show(report.last_motion_after_silence_s),
+        show(report.stop_after_silence_s),
+        show(report.stop_to_disable_s),
+        show(report.speed_at_disable),
+        report.stalled_cycles,
+        report.host_baud.map_or("-".to_owned(), |b| b.to_string()),
+    );
+}
+
+/// `LENGTHxWIDTH` in metres, both positive.
+pub(super) fn parse_room(text: &str) -> Result<(f64, f64), String> {
+    let parse = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0);
+    match text.split_once(['x', 'X']).map(|(l, w)| (parse(l), parse(w))) {
+        Some((Some(length), Some(width))) => Ok((length, width)),
+        _ => Err(format!("expected LENGTHxWIDTH in metres, both positive, e.g. 8x4; got {text:?}")),
+    }
+}
+
+/// Milliseconds between SIPs, 0.1 to 1000.
+pub(super) fn parse_sip_period(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(ms) if (0.1..=1000.0).contains(&ms) => Ok(ms),
+        _ => Err(format!("expected milliseconds from 0.1 to 1000; got {text:?}")),
+    }
+}
+
+/// `AFTER:FOR` in seconds, each 0 to a day.
+pub(super) fn parse_silence(text: &str) -> Result<(f64, f64), String> {
+    let parse = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite() && (0.0..=86_400.0).contains(v));
+    match text.split_once(':').map(|(a, f)| (parse(a), parse(f))) {
+        Some((Some(after), Some(span))) => Ok((after, span)),
+        _ => Err(format!("expected AFTER:FOR in seconds, e.g. 3:2; got {text:?}")),
+    }
+}

@@ -1,0 +1,76 @@
+//! `ubf run` and `ubf replay`.
+
+use super::{CliError, Exit, Outcome};
+use crate::run::{run_until, EndReason, Outputs};
+use crate::scenario::Scenario;
+use std::path::{Path, PathBuf};
+use ubf_core::Registry;
+
+/// Runs a scenario and prints its report; a run a behaviour ended, or
+/// Ctrl-C, still reports, but does not pass.
+pub(super) fn command(
+    registry: &Registry,
+    file: &Path,
+    seed: Option<u64>,
+    out: Option<&Path>,
+    json: bool,
+    huge: bool,
+    log_images: bool,
+) -> Outcome {
+    let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
+    let scenario = loaded.map_err(CliError::bad_input)?;
+    let seed = seed.unwrap_or(scenario.seed);
+    let stop = crate::drive::install_stop_flag();
+    let outputs = out.map(|dir| Outputs { dir, images: log_images });
+    let report = run_until(&scenario, seed, outputs, &stop).map_err(|e| CliError::failed_in(file, e))?;
+    super::show(&report, json)?;
+    if let Some(dir) = out.filter(|_| !json) {
+        println!("outputs         {}/{{report.json, trajectory.csv, run.mcap, plot.png}}", dir.display());
+    }
+    Ok(match report.end {
+        EndReason::BehaviorFailed => Exit::Failure,
+        EndReason::Interrupted => Exit::Interrupted,
+        EndReason::GoalReached | EndReason::TimeLimit => Exit::Success,
+    })
+}
+
+/// Prints a run's summary from its log and draws its plot again.
+pub(super) fn replay(file: &Path, plot: Option<PathBuf>) -> Outcome {
+    let replayed = crate::mcap_log::read(file).map_err(CliError::bad_input)?;
+    let Some(run) = &replayed.run else {
+        let why = replayed.cut_short.as_ref().map_or(String::new(), |e| format!(" ({e})"));
+        return Err(CliError::bad_input(format!(
+            "{}: no /run message: not a ubf run log, or cut before its start{why}",
+            file.display()
+        )));
+    };
+    println!("scenario        {} (seed {})", run.scenario, run.seed);
+    println!("ticks logged    {}", replayed.timeline.time.len());
+    let end_time = replayed.timeline.time.last().copied().unwrap_or(0.0);
+    println!("logged until    {end_time:.1} s");
+    println!("decisions       {}", replayed.decisions.len());
+    println!("collisions      {}", replayed.collisions.len());
+    match &replayed.report {
+        Some(report) => {
+            let number = |key: &str| report[key].as_f64().map_or("—".to_owned(), |v| format!("{v:.3}"));
+            println!("ended           {}", report["end"].as_str().unwrap_or("?"));
+            println!("distance        {} m", number("distance_m"));
+            println!("estimate error  {} m", number("estimate_error_m"));
+            if report["endpoint_error_m"].is_number() {
+                println!("egomotion error {} m at the last frame", number("endpoint_error_m"));
+            }
+        }
+        None => println!(
+            "ended           not recorded: the log stops early{}",
+            replayed.cut_short.as_ref().map_or(String::new(), |e| format!(" ({e})"))
+        ),
+    }
+    let plot = plot.unwrap_or_else(|| {
+        let stem = file.file_stem().map_or("run".into(), |s| s.to_string_lossy().into_owned());
+        file.with_file_name(format!("{stem}-replay.png"))
+    });
+    let title = format!("{} (seed {}), from its log", run.scenario, run.seed);
+    crate::plot::draw_replayed(&replayed, &title, &plot).map_err(CliError::failed)?;
+    println!("plot            {}", plot.display());
+    Ok(Exit::Success)
+}

@@ -1,0 +1,185 @@
+//! `ubf sweep` and `ubf sweep merge`.
+
+use super::{CliError, Exit, Outcome};
+use crate::scenario::Scenario;
+use crate::sweep::{Shard, SweepItem};
+use std::path::{Path, PathBuf};
+use ubf_core::Registry;
+
+/// The most runs a sweep starts without `--huge`.
+const MOST_SWEEP_RUNS: u64 = 100_000;
+
+/// What one `ubf sweep` was asked to do.
+pub(super) struct SweepRequest<'a> {
+    pub files: &'a [PathBuf],
+    pub seeds: std::ops::Range<u64>,
+    pub shard: Option<Shard>,
+    pub jobs: Option<usize>,
+    pub out: &'a Path,
+    pub trajectories: bool,
+    pub overwrite: bool,
+    pub huge: bool,
+}
+
+/// Runs every scenario with every seed (or a shard's share of them) and
+/// summarises; exit code 1 if any run failed.
+pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
+    let SweepRequest { files, seeds, shard, jobs, out, trajectories, overwrite, huge } = request;
+    let share = shard.map_or(1, |s| s.count);
+    let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).div_ceil(share);
+    if runs > MOST_SWEEP_RUNS && !huge {
+        return Err(CliError::bad_input(format!(
+            "{runs} runs ({} seeds × {} files), more than {MOST_SWEEP_RUNS}: each leaves a \
+             directory and a report; narrow --seeds, or pass --huge to run them anyway",
+            seeds.end - seeds.start,
+            files.len()
+        )));
+    }
+    match shard {
+        None => clear_sweep_output(out, overwrite),
+        Some(shard) => clear_shard_output(out, shard, overwrite),
+    }
+    .map_err(CliError::bad_input)?;
+    let mut items: Vec<SweepItem> = Vec::new();
+    for file in files {
+        let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
+        let scenario = loaded.map_err(CliError::bad_input)?;
+        let stem = file.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned());
+        let mut label = stem.clone();
+        let mut n = 2;
+        while items.iter().any(|i| i.label == label) {
+            label = format!("{stem}_{n}");
+            n += 1;
+        }
+        items.push(SweepItem { scenario, label });
+    }
+    let jobs = jobs.unwrap_or_else(super::cores);
+    let stopwatch = ubf_core::Stopwatch::start();
+    let failed: Vec<(String, u64, String)> = match shard {
+        Some(shard) => {
+            let record = crate::sweep::sweep_shard(&items, seeds.clone(), shard, jobs, out, trajectories)
+                .map_err(CliError::failed)?;
+            let total = items.len() * (seeds.end - seeds.start) as usize;
+            let runs = (0..total).filter(|&t| shard.takes(t)).count();
+            println!(
+                "shard {}/{}: {runs} runs in {:.2} s on {jobs} job(s); {} failed",
+                shard.index,
+                shard.count,
+                stopwatch.elapsed_s(),
+                record.failed.len()
+            );
+            println!(
+                "record: {}; once every shard has run: ubf sweep merge DIR...",
+                out.join(shard.record_name()).display()
+            );
+            record.failed
+        }
+        None => {
+            let summary =
+                crate::sweep::sweep(&items, seeds.clone(), jobs, out, trajectories).map_err(CliError::failed)?;
+            let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
+            let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
+            println!(
+                "{runs} runs of {} scenario(s) × seeds {}..{} in {:.2} s on {jobs} job(s); {failed} failed",
+                items.len(),
+                seeds.start,
+                seeds.end,
+                stopwatch.elapsed_s()
+            );
+            println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
+            let by_scenario = summary.scenarios.iter();
+            by_scenario
+                .flat_map(|(label, s)| s.failed.iter().map(move |(seed, error)| (label.clone(), *seed, error.clone())))
+                .collect()
+        }
+    };
+    for (label, seed, error) in &failed {
+        eprintln!("error: {label} seed {seed}: {error}");
+    }
+    Ok(if failed.is_empty() { Exit::Success } else { Exit::Failure })
+}
+
+/// Combines shards into the summary one sweep writes.
+pub(super) fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Outcome {
+    let out = out.unwrap_or(&dirs[0]);
+    let summary = crate::sweep::merge(dirs, out).map_err(|e| match e {
+        crate::sweep::MergeError::Write(_) => CliError::failed(e),
+        _ => CliError::bad_input(e),
+    })?;
+    let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
+    let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
+    println!("merged {runs} runs of {} scenario(s); {failed} failed", summary.scenarios.len());
+    println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
+    Ok(Exit::Success)
+}
+
+/// Makes `out` ready for a sweep: absent or empty, or, with `overwrite`,
+/// an earlier sweep's output (it holds a summary.json), which is removed.
+fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), String> {
+    let shown = out.display();
+    let mut entries = match std::fs::read_dir(out) {
+        Ok(entries) => entries,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(format!("--out {shown}: {e}")),
+    };
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    if !overwrite {
+        return Err(format!(
+            "--out {shown} is not empty: earlier runs would sit beside the new summary. \
+             Choose another directory, or pass --overwrite to replace an earlier sweep's output"
+        ));
+    }
+    if !out.join("summary.json").is_file() {
+        return Err(format!("--out {shown} holds no summary.json, so it is not a sweep's output: not deleting it"));
+    }
+    std::fs::remove_dir_all(out).map_err(|e| format!("clearing --out {shown}: {e}"))
+}
+
+/// Makes `out` ready for one shard of a sweep: other shards' output may be
+/// there (shards often share a directory), but this shard's record only
+/// with `overwrite`.
+fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), String> {
+    let record = out.join(shard.record_name());
+    if !record.exists() {
+        return Ok(());
+    }
+    if !overwrite {
+        return Err(format!(
+            "{} exists: this shard has run before. Pass --overwrite to run it again",
+            record.display()
+        ));
+    }
+    std::fs::remove_file(&record).map_err(|e| format!("removing {}: {e}", record.display()))
+}
+
+/// Parses `A..B`, `A..=B` or `N` into a range of seeds.
+pub(super) fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
+    let number = |s: &str| s.trim().parse::<u64>().map_err(|_| format!("`{s}` is not a seed (a whole number ≥ 0)"));
+    let range = if let Some((a, b)) = text.split_once("..=") {
+        let end = number(b)?.checked_add(1).ok_or("the last seed is too large")?;
+        number(a)?..end
+    } else if let Some((a, b)) = text.split_once("..") {
+        number(a)?..number(b)?
+    } else {
+        let n = number(text)?;
+        n..n.checked_add(1).ok_or("the seed is too large")?
+    };
+    if range.is_empty() {
+        return Err(format!("`{text}` holds no seed"));
+    }
+    if range.end - range.start > 10_000_000 {
+        return Err(format!("`{text}` holds {} seeds; at most 10 000 000", range.end - range.start));
+    }
+    Ok(range)
+}
+
+/// Parses a number of jobs, at least 1.
+pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("at least one job is needed".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("`{text}` is not a number of jobs")),
+    }
+}
