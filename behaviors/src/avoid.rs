@@ -8,77 +8,50 @@ use ubf_core::{wrap_angle, Action, Behavior, State};
 
 /// Settings of [`AvoidCollision`], as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct AvoidCollisionConfig {
     /// An echo ahead nearer than this makes the robot slow and turn, m.
-    #[serde(default = "AvoidCollisionConfig::default_slow", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub slow_distance: f64,
     /// With an echo ahead nearer than this the robot may not drive forward, m.
-    #[serde(default = "AvoidCollisionConfig::default_stop", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub stop_distance: f64,
     /// Forward speed allowed per metre of clearance ahead beyond
     /// `stop_distance`, 1/s: the robot stays this many seconds from contact.
-    #[serde(default = "AvoidCollisionConfig::default_speed_gain", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub speed_per_metre: f64,
     /// Half the width of the strip ahead that the robot will sweep, m: echoes
     /// ahead within this distance of the centreline are in its way. The
     /// default is the Powerbot's half-width (0.34 m) and a 16 cm margin.
-    #[serde(default = "AvoidCollisionConfig::default_path_half_width", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub path_half_width: f64,
     /// Distance from the centre of rotation to the front of the robot, m
     /// (the Powerbot's 0.369 m by default).
-    #[serde(default = "AvoidCollisionConfig::default_body_front", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub body_front: f64,
     /// Turn rate per radian between the current and the chosen heading, 1/s.
-    #[serde(default = "AvoidCollisionConfig::default_turn_gain", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub turn_gain: f64,
     /// Largest turn rate it asks for, °/s.
-    #[serde(default = "AvoidCollisionConfig::default_turn", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_turn_deg: f64,
     /// Vote when an obstacle is at `stop_distance`; it falls to 0 at
     /// `slow_distance`.
-    #[serde(default = "AvoidCollisionConfig::default_vote", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub vote: f64,
-}
-
-impl AvoidCollisionConfig {
-    fn default_slow() -> f64 {
-        1.2
-    }
-    fn default_stop() -> f64 {
-        0.25
-    }
-    fn default_speed_gain() -> f64 {
-        0.5
-    }
-    fn default_path_half_width() -> f64 {
-        0.5
-    }
-    fn default_turn() -> f64 {
-        45.0
-    }
-    fn default_body_front() -> f64 {
-        0.369
-    }
-    fn default_turn_gain() -> f64 {
-        1.5
-    }
-    fn default_vote() -> f64 {
-        1.0
-    }
 }
 
 impl Default for AvoidCollisionConfig {
     fn default() -> Self {
         AvoidCollisionConfig {
-            slow_distance: Self::default_slow(),
-            stop_distance: Self::default_stop(),
-            speed_per_metre: Self::default_speed_gain(),
-            path_half_width: Self::default_path_half_width(),
-            body_front: Self::default_body_front(),
-            turn_gain: Self::default_turn_gain(),
-            max_turn_deg: Self::default_turn(),
-            vote: Self::default_vote(),
+            slow_distance: 1.2,
+            stop_distance: 0.25,
+            speed_per_metre: 0.5,
+            path_half_width: 0.5,
+            body_front: 0.369,
+            turn_gain: 1.5,
+            max_turn_deg: 45.0,
+            vote: 1.0,
         }
     }
 }

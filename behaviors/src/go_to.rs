@@ -6,53 +6,29 @@ use ubf_core::{Action, Behavior, State};
 
 /// Settings of [`GoTo`], as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct GoToConfig {
     /// Forward speed far from the goal, m/s.
-    #[serde(default = "GoToConfig::default_cruise_speed", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub cruise_speed: f64,
     /// Turn rate per radian of heading error, 1/s.
-    #[serde(default = "GoToConfig::default_turn_gain", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub turn_gain: f64,
     /// Largest turn rate it asks for, °/s. Bounded so that a large heading
     /// error does not swamp the other children of a fusing arbiter.
-    #[serde(default = "GoToConfig::default_max_turn", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_turn_deg: f64,
     /// Within this distance of the goal the speed ramps down, m.
-    #[serde(default = "GoToConfig::default_slow_radius", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub slow_radius: f64,
     /// The vote while driving.
-    #[serde(default = "GoToConfig::default_vote", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub vote: f64,
-}
-
-impl GoToConfig {
-    fn default_cruise_speed() -> f64 {
-        0.5
-    }
-    fn default_turn_gain() -> f64 {
-        1.5
-    }
-    fn default_max_turn() -> f64 {
-        45.0
-    }
-    fn default_slow_radius() -> f64 {
-        1.0
-    }
-    fn default_vote() -> f64 {
-        0.5
-    }
 }
 
 impl Default for GoToConfig {
     fn default() -> Self {
-        GoToConfig {
-            cruise_speed: Self::default_cruise_speed(),
-            turn_gain: Self::default_turn_gain(),
-            max_turn_deg: Self::default_max_turn(),
-            slow_radius: Self::default_slow_radius(),
-            vote: Self::default_vote(),
-        }
+        GoToConfig { cruise_speed: 0.5, turn_gain: 1.5, max_turn_deg: 45.0, slow_radius: 1.0, vote: 0.5 }
     }
 }
 

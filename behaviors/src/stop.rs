@@ -6,35 +6,29 @@ use ubf_core::{Action, Behavior, Condition, State};
 
 /// Settings of [`Stop`], as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct StopConfig {
     /// When to stop. By default: at the goal, on a bumper, on a stall, on an
     /// emergency stop, or when sensor data is older than half a second.
-    #[serde(default = "StopConfig::default_when", deserialize_with = "ubf_core::config::checked")]
+    #[serde(deserialize_with = "ubf_core::config::checked")]
     pub when: Condition,
     /// The vote of the stop request.
-    #[serde(default = "StopConfig::default_vote", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub vote: f64,
-}
-
-impl StopConfig {
-    fn default_when() -> Condition {
-        Condition::Any(vec![
-            Condition::GoalReached,
-            Condition::Bumped,
-            Condition::Stalled,
-            Condition::EStop,
-            Condition::SensorsOlderThan { seconds: 0.5 },
-        ])
-    }
-    fn default_vote() -> f64 {
-        1.0
-    }
 }
 
 impl Default for StopConfig {
     fn default() -> Self {
-        StopConfig { when: Self::default_when(), vote: Self::default_vote() }
+        StopConfig {
+            when: Condition::Any(vec![
+                Condition::GoalReached,
+                Condition::Bumped,
+                Condition::Stalled,
+                Condition::EStop,
+                Condition::SensorsOlderThan { seconds: 0.5 },
+            ]),
+            vote: 1.0,
+        }
     }
 }
 

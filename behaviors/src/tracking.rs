@@ -9,44 +9,27 @@ use ubf_perception::egomotion::MatchConfig;
 
 /// Settings of the tracking list.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct TrackingConfig {
     /// Descriptor matching against the list (eq. 30–34).
     #[serde(default)]
     pub matching: MatchConfig,
     /// Position gate (eq. 35) at zero range, m…
-    #[serde(default = "TrackingConfig::default_gate", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub gate_m: f64,
     /// …growing by this much per metre of range, as stereo depth error does.
-    #[serde(default = "TrackingConfig::default_gate_per_m", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub gate_per_m: f64,
     /// Drop a landmark once the robot sees it from this much further round
     /// than when it last saw it (the thesis: 20°, as descriptor matching falls
     /// below 80 % past about 30°).
-    #[serde(default = "TrackingConfig::default_drop_deg", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub drop_viewpoint_deg: f64,
-}
-
-impl TrackingConfig {
-    fn default_gate() -> f64 {
-        0.5
-    }
-    fn default_gate_per_m() -> f64 {
-        0.05
-    }
-    fn default_drop_deg() -> f64 {
-        20.0
-    }
 }
 
 impl Default for TrackingConfig {
     fn default() -> Self {
-        TrackingConfig {
-            matching: MatchConfig::default(),
-            gate_m: Self::default_gate(),
-            gate_per_m: Self::default_gate_per_m(),
-            drop_viewpoint_deg: Self::default_drop_deg(),
-        }
+        TrackingConfig { matching: MatchConfig::default(), gate_m: 0.5, gate_per_m: 0.05, drop_viewpoint_deg: 20.0 }
     }
 }
 

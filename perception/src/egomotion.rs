@@ -48,28 +48,18 @@ impl PlanarMotion {
 
 /// Descriptor matching between frames (thesis eq. 8–11).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct MatchConfig {
     /// Largest Hamming distance of a match, bits of 256.
-    #[serde(default = "MatchConfig::default_max_distance")]
     pub max_distance: u32,
     /// The best match must be nearer than this share of the second best.
-    #[serde(default = "MatchConfig::default_ratio", deserialize_with = "unit_interval")]
+    #[serde(deserialize_with = "unit_interval")]
     pub ratio: f64,
-}
-
-impl MatchConfig {
-    fn default_max_distance() -> u32 {
-        64
-    }
-    fn default_ratio() -> f64 {
-        0.8
-    }
 }
 
 impl Default for MatchConfig {
     fn default() -> Self {
-        MatchConfig { max_distance: Self::default_max_distance(), ratio: Self::default_ratio() }
+        MatchConfig { max_distance: 64, ratio: 0.8 }
     }
 }
 
@@ -125,13 +115,13 @@ pub fn match_frames(
 
 /// Settings of the thesis's simplified estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Simple2dConfig {
     /// A range change above this means translation, m.
-    #[serde(default = "Simple2dConfig::default_translation", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub translation_threshold_m: f64,
     /// A bearing change above this means rotation, °.
-    #[serde(default = "Simple2dConfig::default_rotation", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub rotation_threshold_deg: f64,
     /// Rotation compensation RC (eq. 60); the thesis left it at 1.
     #[serde(default = "one", deserialize_with = "positive")]
@@ -149,7 +139,7 @@ pub struct Simple2dConfig {
     #[serde(default = "yes")]
     pub robust: bool,
     /// Pixel noise assumed when scaling the threshold and the gate, px.
-    #[serde(default = "Simple2dConfig::default_pixel_sigma", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub pixel_sigma: f64,
 }
 
@@ -161,55 +151,33 @@ fn yes() -> bool {
     true
 }
 
-impl Simple2dConfig {
-    fn default_translation() -> f64 {
-        0.02
-    }
-    fn default_rotation() -> f64 {
-        0.3
-    }
-    fn default_pixel_sigma() -> f64 {
-        0.3
-    }
-}
-
 impl Default for Simple2dConfig {
     fn default() -> Self {
         Simple2dConfig {
-            translation_threshold_m: Self::default_translation(),
-            rotation_threshold_deg: Self::default_rotation(),
+            translation_threshold_m: 0.02,
+            rotation_threshold_deg: 0.3,
             rc: 1.0,
             tc: 1.0,
             robust: true,
-            pixel_sigma: Self::default_pixel_sigma(),
+            pixel_sigma: 0.3,
         }
     }
 }
 
 /// Settings of the rigid estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct RigidConfig {
     /// RANSAC draws of two matches.
-    #[serde(default = "RigidConfig::default_iterations")]
     pub iterations: u32,
     /// Pixel noise assumed when judging residuals, px.
-    #[serde(default = "RigidConfig::default_pixel_sigma", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub pixel_sigma: f64,
-}
-
-impl RigidConfig {
-    fn default_iterations() -> u32 {
-        64
-    }
-    fn default_pixel_sigma() -> f64 {
-        0.3
-    }
 }
 
 impl Default for RigidConfig {
     fn default() -> Self {
-        RigidConfig { iterations: Self::default_iterations(), pixel_sigma: Self::default_pixel_sigma() }
+        RigidConfig { iterations: 64, pixel_sigma: 0.3 }
     }
 }
 
@@ -231,7 +199,7 @@ impl Default for EstimatorKind {
 
 /// The egomotion settings, as written in a scenario file.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct EgomotionConfig {
     /// The estimator.
     #[serde(default)]
@@ -244,37 +212,36 @@ pub struct EgomotionConfig {
     pub matching: MatchConfig,
     /// Reference frames (keyframes) kept from distinct viewpoints, each a
     /// frame new ones can be matched against.
-    #[serde(default = "EgomotionConfig::default_keyframes", deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "at_least_one")]
     pub keyframes: usize,
     /// A frame becomes a keyframe when the robot is at least this far from
     /// every keyframe, m…
-    #[serde(default = "EgomotionConfig::default_keyframe_spacing_m", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub keyframe_spacing_m: f64,
     /// …or turned at least this far from every keyframe's heading, °.
-    #[serde(default = "EgomotionConfig::default_keyframe_spacing_deg", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub keyframe_spacing_deg: f64,
     /// A keyframe is retired once the robot has driven this far from it:
     /// little of what it saw is still in view, m.
-    #[serde(default = "EgomotionConfig::default_keyframe_range_m", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub keyframe_range_m: f64,
     /// A match to a keyframe is trusted outright with at least this many
     /// consistent landmarks; with fewer (but enough for the estimator) the
     /// next keyframe is tried and the best match kept.
-    #[serde(default = "EgomotionConfig::default_good_match", deserialize_with = "at_least_one")]
+    #[serde(deserialize_with = "at_least_one")]
     pub good_match_landmarks: usize,
     /// The robot's top speed: motions faster than this are impossible and
     /// rejected (thesis §4.4.6), m/s.
-    #[serde(default = "EgomotionConfig::default_max_speed", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_speed: f64,
     /// Rejects a visual motion that disagrees with odometry's by more than
     /// odometry can err over the same stretch: a wrong consensus of far
     /// landmarks. `None` turns the check off (pure egomotion).
-    #[serde(default = "EgomotionConfig::default_odometry_gate")]
     pub odometry_gate: Option<OdometryGate>,
     /// The robot's top turn rate: turns faster than this, or wider than
     /// the field of view, are impossible between frames that share
     /// landmarks and rejected, °/s.
-    #[serde(default = "EgomotionConfig::default_max_turn_rate", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_turn_rate_deg: f64,
 }
 
@@ -286,47 +253,20 @@ fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usi
     Ok(n)
 }
 
-impl EgomotionConfig {
-    fn default_max_speed() -> f64 {
-        0.6
-    }
-    fn default_odometry_gate() -> Option<OdometryGate> {
-        Some(OdometryGate::default())
-    }
-    fn default_max_turn_rate() -> f64 {
-        100.0
-    }
-    fn default_keyframes() -> usize {
-        10
-    }
-    fn default_keyframe_spacing_m() -> f64 {
-        1.0
-    }
-    fn default_keyframe_spacing_deg() -> f64 {
-        15.0
-    }
-    fn default_keyframe_range_m() -> f64 {
-        10.0
-    }
-    fn default_good_match() -> usize {
-        6
-    }
-}
-
 impl Default for EgomotionConfig {
     fn default() -> Self {
         EgomotionConfig {
             estimator: EstimatorKind::default(),
             model: ErrorModelKind::default(),
             matching: MatchConfig::default(),
-            keyframes: Self::default_keyframes(),
-            keyframe_spacing_m: Self::default_keyframe_spacing_m(),
-            keyframe_spacing_deg: Self::default_keyframe_spacing_deg(),
-            keyframe_range_m: Self::default_keyframe_range_m(),
-            good_match_landmarks: Self::default_good_match(),
-            max_speed: Self::default_max_speed(),
-            max_turn_rate_deg: Self::default_max_turn_rate(),
-            odometry_gate: Self::default_odometry_gate(),
+            keyframes: 10,
+            keyframe_spacing_m: 1.0,
+            keyframe_spacing_deg: 15.0,
+            keyframe_range_m: 10.0,
+            good_match_landmarks: 6,
+            max_speed: 0.6,
+            max_turn_rate_deg: 100.0,
+            odometry_gate: Some(OdometryGate::default()),
         }
     }
 }
@@ -334,45 +274,25 @@ impl Default for EgomotionConfig {
 /// How far a visual motion may disagree with odometry's before it is taken
 /// for a wrong match.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct OdometryGate {
     /// Position disagreement allowed at zero distance, m…
-    #[serde(default = "OdometryGate::default_metres", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub metres: f64,
     /// …plus this share of the distance odometry drove.
-    #[serde(default = "OdometryGate::default_share", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub share: f64,
     /// Heading disagreement allowed at zero distance, °…
-    #[serde(default = "OdometryGate::default_degrees", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub degrees: f64,
     /// …plus this much per metre driven.
-    #[serde(default = "OdometryGate::default_degrees_per_m", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub degrees_per_m: f64,
-}
-
-impl OdometryGate {
-    fn default_metres() -> f64 {
-        0.3
-    }
-    fn default_share() -> f64 {
-        0.1
-    }
-    fn default_degrees() -> f64 {
-        5.0
-    }
-    fn default_degrees_per_m() -> f64 {
-        1.0
-    }
 }
 
 impl Default for OdometryGate {
     fn default() -> Self {
-        OdometryGate {
-            metres: Self::default_metres(),
-            share: Self::default_share(),
-            degrees: Self::default_degrees(),
-            degrees_per_m: Self::default_degrees_per_m(),
-        }
+        OdometryGate { metres: 0.3, share: 0.1, degrees: 5.0, degrees_per_m: 1.0 }
     }
 }
 

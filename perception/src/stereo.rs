@@ -16,7 +16,7 @@ use ubf_core::{StereoCalibration, StereoPixels};
 
 /// Where the camera pair sits on the robot, looking straight ahead.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct CameraMount {
     /// Metres ahead of the centre of rotation. The thesis mounted its
     /// cameras over the wheel axle (§3.5.1.4): 0.
@@ -26,15 +26,11 @@ pub struct CameraMount {
     #[serde(default, deserialize_with = "finite")]
     pub left: f64,
     /// Metres above the floor.
-    #[serde(default = "CameraMount::default_height", deserialize_with = "finite")]
+    #[serde(deserialize_with = "finite")]
     pub height: f64,
 }
 
 impl CameraMount {
-    fn default_height() -> f64 {
-        1.0
-    }
-
     /// A point in the robot frame, in the camera frame.
     pub fn robot_to_cam(&self, p: [f64; 3]) -> [f64; 3] {
         [-(p[1] - self.left), p[0] - self.forward, p[2] - self.height]
@@ -48,27 +44,25 @@ impl CameraMount {
 
 impl Default for CameraMount {
     fn default() -> Self {
-        CameraMount { forward: 0.0, left: 0.0, height: Self::default_height() }
+        CameraMount { forward: 0.0, left: 0.0, height: 1.0 }
     }
 }
 
 /// A calibrated, rectified stereo pair.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct StereoCamera {
     /// Image width, pixels.
-    #[serde(default = "StereoCamera::default_width")]
     pub width_px: u32,
     /// Image height, pixels.
-    #[serde(default = "StereoCamera::default_height")]
     pub height_px: u32,
     /// Focal length, pixels. The default gives a 60° horizontal field of
     /// view at 640 pixels.
-    #[serde(default = "StereoCamera::default_focal", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub focal_px: f64,
     /// Distance between the two cameras' centres, m. The default is the
     /// thesis's 60 cm (§4.4.10.1, figure 39).
-    #[serde(default = "StereoCamera::default_baseline", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub baseline_m: f64,
     /// Where the pair sits on the robot.
     #[serde(default)]
@@ -105,10 +99,10 @@ pub struct PrincipalPoint {
 impl Default for StereoCamera {
     fn default() -> Self {
         StereoCamera {
-            width_px: Self::default_width(),
-            height_px: Self::default_height(),
-            focal_px: Self::default_focal(),
-            baseline_m: Self::default_baseline(),
+            width_px: 640,
+            height_px: 480,
+            focal_px: 320.0 / 30f64.to_radians().tan(),
+            baseline_m: 0.6,
             mount: CameraMount::default(),
             principal_point: None,
             disparity_offset_px: 0.0,
@@ -162,19 +156,6 @@ impl ubf_core::config::Check for StereoCamera {
 }
 
 impl StereoCamera {
-    fn default_width() -> u32 {
-        640
-    }
-    fn default_height() -> u32 {
-        480
-    }
-    fn default_focal() -> f64 {
-        320.0 / 30f64.to_radians().tan()
-    }
-    fn default_baseline() -> f64 {
-        0.6
-    }
-
     /// The calibration frames from this camera carry.
     pub fn calibration(&self) -> StereoCalibration {
         StereoCalibration {

@@ -18,16 +18,16 @@ use ubf_perception::StereoCamera;
 
 /// The simulated camera's settings, as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SimCameraConfig {
     /// The calibrated pair and its mounting.
     #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub stereo: StereoCamera,
     /// Frames per second. The thesis's cameras ran at 2 Hz (§3.3.2).
-    #[serde(default = "SimCameraConfig::default_rate", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub rate_hz: f64,
     /// Standard deviation of the Gaussian noise on every pixel coordinate.
-    #[serde(default = "SimCameraConfig::default_noise", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub pixel_noise_px: f64,
     /// Round pixel coordinates to whole pixels after the noise.
     #[serde(default)]
@@ -37,27 +37,26 @@ pub struct SimCameraConfig {
     #[serde(default, deserialize_with = "unit_interval")]
     pub outlier_share: f64,
     /// Smallest disparity a match can have, px.
-    #[serde(default = "SimCameraConfig::default_min_disparity", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub min_disparity_px: f64,
     /// Nearest depth at which features are matched, m (the image bounds
     /// already impose the pair's minimum stereo distance, §4.4.10.1).
     #[serde(default, deserialize_with = "non_negative")]
     pub min_depth_m: f64,
     /// Farthest distance at which a feature is still detected, m.
-    #[serde(default = "SimCameraConfig::default_max_range", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_range_m: f64,
     /// Largest angle between the two cameras' lines of sight at a feature
     /// for left and right descriptors still to match, ° (thesis §4.4.10.3:
     /// 30°, reached at 1.1 m with a 60 cm baseline).
-    #[serde(default = "SimCameraConfig::default_stereo_viewpoint", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_stereo_viewpoint_deg: f64,
     /// Largest angle between the line of sight and a wall's normal at which a
     /// feature on the wall is still detected, °.
-    #[serde(default = "SimCameraConfig::default_incidence", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_incidence_deg: f64,
     /// Bits of a descriptor flipped at random in every observation (image
     /// noise), out of 256.
-    #[serde(default = "SimCameraConfig::default_descriptor_noise")]
     pub descriptor_noise_bits: u32,
     /// Render images and find the landmarks in them with the feature
     /// pipeline, instead of projecting the landmarks (the geometric camera
@@ -98,44 +97,22 @@ impl SimCameraConfig {
         }
         Ok(())
     }
-
-    fn default_rate() -> f64 {
-        2.0
-    }
-    fn default_noise() -> f64 {
-        0.2
-    }
-    fn default_min_disparity() -> f64 {
-        1.0
-    }
-    fn default_max_range() -> f64 {
-        80.0
-    }
-    fn default_stereo_viewpoint() -> f64 {
-        30.0
-    }
-    fn default_incidence() -> f64 {
-        75.0
-    }
-    fn default_descriptor_noise() -> u32 {
-        4
-    }
 }
 
 impl Default for SimCameraConfig {
     fn default() -> Self {
         SimCameraConfig {
             stereo: StereoCamera::default(),
-            rate_hz: Self::default_rate(),
-            pixel_noise_px: Self::default_noise(),
+            rate_hz: 2.0,
+            pixel_noise_px: 0.2,
             quantize: false,
             outlier_share: 0.0,
-            min_disparity_px: Self::default_min_disparity(),
+            min_disparity_px: 1.0,
             min_depth_m: 0.0,
-            max_range_m: Self::default_max_range(),
-            max_stereo_viewpoint_deg: Self::default_stereo_viewpoint(),
-            max_incidence_deg: Self::default_incidence(),
-            descriptor_noise_bits: Self::default_descriptor_noise(),
+            max_range_m: 80.0,
+            max_stereo_viewpoint_deg: 30.0,
+            max_incidence_deg: 75.0,
+            descriptor_noise_bits: 4,
             images: None,
         }
     }

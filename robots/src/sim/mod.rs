@@ -38,26 +38,26 @@ use ubf_perception::egomotion::EgomotionConfig;
 /// The simulated robot's settings, as written in a scenario file. The
 /// geometry and the sonar ring default to the Powerbot's.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SimRobotConfig {
     /// Where the robot starts.
     #[serde(default)]
     pub start: StartPose,
     /// Largest forward speed, m/s. The default is the thesis robot's reduced
     /// top speed (§4.4.6).
-    #[serde(default = "SimRobotConfig::default_max_velocity", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_velocity: f64,
     /// Largest turn rate, °/s.
-    #[serde(default = "SimRobotConfig::default_max_rot_velocity_deg", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_rot_velocity_deg: f64,
     /// Largest change of forward speed, m/s².
-    #[serde(default = "SimRobotConfig::default_max_acceleration", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_acceleration: f64,
     /// Largest change of turn rate, °/s².
-    #[serde(default = "SimRobotConfig::default_max_rot_acceleration_deg", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_rot_acceleration_deg: f64,
     /// Turn rate per radian of error when a command gives a heading, 1/s.
-    #[serde(default = "SimRobotConfig::default_heading_gain", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub heading_gain: f64,
     /// How drive commands are executed.
     #[serde(default)]
@@ -92,33 +92,15 @@ impl Check for SimRobotConfig {
     }
 }
 
-impl SimRobotConfig {
-    fn default_max_velocity() -> f64 {
-        0.6
-    }
-    fn default_max_rot_velocity_deg() -> f64 {
-        60.0
-    }
-    fn default_max_acceleration() -> f64 {
-        0.5
-    }
-    fn default_max_rot_acceleration_deg() -> f64 {
-        120.0
-    }
-    fn default_heading_gain() -> f64 {
-        2.0
-    }
-}
-
 impl Default for SimRobotConfig {
     fn default() -> Self {
         SimRobotConfig {
             start: StartPose::default(),
-            max_velocity: Self::default_max_velocity(),
-            max_rot_velocity_deg: Self::default_max_rot_velocity_deg(),
-            max_acceleration: Self::default_max_acceleration(),
-            max_rot_acceleration_deg: Self::default_max_rot_acceleration_deg(),
-            heading_gain: Self::default_heading_gain(),
+            max_velocity: 0.6,
+            max_rot_velocity_deg: 60.0,
+            max_acceleration: 0.5,
+            max_rot_acceleration_deg: 120.0,
+            heading_gain: 2.0,
             motion: MotionProfile::default(),
             odometry: OdometryErrors::default(),
             footprint: None,

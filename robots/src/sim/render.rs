@@ -24,42 +24,25 @@ use ubf_perception::StereoCamera;
 
 /// Rendering settings, as written in a scenario file.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct RenderConfig {
     /// Height of the walls and the ceiling, m.
-    #[serde(default = "RenderConfig::default_wall_height", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub wall_height_m: f64,
     /// Standard deviation of the pixel noise, grey levels.
-    #[serde(default = "RenderConfig::default_noise", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub noise: f64,
     /// Side of a landmark's poster, m.
-    #[serde(default = "RenderConfig::default_poster", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub poster_m: f64,
     /// The feature pipeline's settings.
     #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub features: FeatureConfig,
 }
 
-impl RenderConfig {
-    fn default_wall_height() -> f64 {
-        2.5
-    }
-    fn default_noise() -> f64 {
-        2.0
-    }
-    fn default_poster() -> f64 {
-        0.42
-    }
-}
-
 impl Default for RenderConfig {
     fn default() -> Self {
-        RenderConfig {
-            wall_height_m: Self::default_wall_height(),
-            noise: Self::default_noise(),
-            poster_m: Self::default_poster(),
-            features: FeatureConfig::default(),
-        }
+        RenderConfig { wall_height_m: 2.5, noise: 2.0, poster_m: 0.42, features: FeatureConfig::default() }
     }
 }
 

@@ -10,19 +10,19 @@ use ubf_core::{Pose2, RangeReading};
 
 /// The sonar's settings, as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SonarConfig {
     /// Whether the robot has its sonar on.
     #[serde(default = "SonarConfig::yes")]
     pub enabled: bool,
     /// Farthest echo reported, m.
-    #[serde(default = "SonarConfig::default_max_range", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub max_range: f64,
     /// Full width of each transducer's cone, °.
-    #[serde(default = "SonarConfig::default_cone_deg", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub cone_deg: f64,
     /// Standard deviation of the range noise, m.
-    #[serde(default = "SonarConfig::default_noise", deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub noise_m: f64,
     /// The transducers; by default the robot model's ring.
     #[serde(default)]
@@ -33,26 +33,11 @@ impl SonarConfig {
     fn yes() -> bool {
         true
     }
-    fn default_max_range() -> f64 {
-        5.0
-    }
-    fn default_cone_deg() -> f64 {
-        30.0
-    }
-    fn default_noise() -> f64 {
-        0.02
-    }
 }
 
 impl Default for SonarConfig {
     fn default() -> Self {
-        SonarConfig {
-            enabled: true,
-            max_range: Self::default_max_range(),
-            cone_deg: Self::default_cone_deg(),
-            noise_m: Self::default_noise(),
-            units: None,
-        }
+        SonarConfig { enabled: true, max_range: 5.0, cone_deg: 30.0, noise_m: 0.02, units: None }
     }
 }
 
