@@ -22,7 +22,6 @@ use crate::fusion::{fuse_cv, weighted_mean, weighted_median};
 use crate::stereo::StereoCamera;
 use nalgebra::{Matrix2, Matrix3, Vector2};
 use rand::seq::index::sample;
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
@@ -681,7 +680,7 @@ impl Tracker {
             config,
             camera,
             table,
-            rng: ChaCha8Rng::seed_from_u64(seed),
+            rng: ubf_core::seeds::rng(seed, ubf_core::seeds::Stream::Egomotion),
             keyframes: Vec::new(),
             newest: (0, Pose2::default()),
             covariance: Matrix3::zeros(),

@@ -69,6 +69,7 @@ mod record;
 mod registry;
 mod robot;
 mod safety;
+pub mod seeds;
 mod sink;
 mod state;
 

@@ -10,7 +10,6 @@ use crate::arbiter::ArbiterSpec;
 use crate::config::{self, RonError};
 use crate::describe::{Describe, Field};
 use crate::{Behavior, Composite};
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::de::{self, DeserializeOwned, Deserializer, EnumAccess, VariantAccess, Visitor};
 use serde::Deserialize;
@@ -55,15 +54,8 @@ impl BuildContext {
     /// its own chosen by the node's path, so that adding a behaviour elsewhere
     /// in the tree does not change this one's draws.
     pub fn rng(&self) -> ChaCha8Rng {
-        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        rng.set_stream(fnv1a(self.path.as_bytes()));
-        rng
+        crate::seeds::rng(self.seed, crate::seeds::Stream::Behavior(&self.path))
     }
-}
-
-/// FNV-1a: a stable hash (std's hashers may change between releases).
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 /// A behaviour read from a file: its kind and its checked config, ready to

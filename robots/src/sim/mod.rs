@@ -28,10 +28,10 @@ use crate::model::{Footprint, RobotModel};
 use body::{Body, BodyConfig};
 use camera::SimCamera;
 use geometry::Circle;
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{positive, Check};
+use ubf_core::seeds::{rng, Stream};
 use ubf_core::{Bumpers, Command, Limits, Pose2, Robot, RobotError, State};
 use ubf_perception::egomotion::EgomotionConfig;
 
@@ -111,21 +111,6 @@ impl Default for SimRobotConfig {
     }
 }
 
-/// The random streams, one per source of randomness.
-#[derive(Clone, Copy)]
-enum Stream {
-    World = 1,
-    Motion = 2,
-    Sonar = 3,
-    Camera = 4,
-}
-
-fn stream(seed: u64, which: Stream) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(which as u64);
-    rng
-}
-
 /// A simulated robot. Each [`Robot::act`] advances the simulation by one
 /// period.
 #[derive(Clone, Debug)]
@@ -167,7 +152,7 @@ impl SimRobot {
             footprint,
         });
         let units = config.sonar.units.clone().unwrap_or(model.sonar);
-        let world = World::build(world, &mut stream(seed, Stream::World));
+        let world = World::build(world, &mut rng(seed, Stream::World));
         SimRobot {
             body,
             world,
@@ -176,9 +161,9 @@ impl SimRobot {
             period,
             time: 0.0,
             reach: footprint.radius(),
-            motion_rng: stream(seed, Stream::Motion),
-            sonar_rng: stream(seed, Stream::Sonar),
-            camera_rng: stream(seed, Stream::Camera),
+            motion_rng: rng(seed, Stream::Motion),
+            sonar_rng: rng(seed, Stream::Sonar),
+            camera_rng: rng(seed, Stream::Camera),
             people: Vec::new(),
             bumpers: Bumpers::default(),
             stalled: false,
