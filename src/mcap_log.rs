@@ -385,7 +385,7 @@ impl McapLog {
         let frame = &state.stereo;
         if frame.number != self.frame && frame.number != 0 {
             self.frame = frame.number;
-            let mount = frame.calibration.map_or([0.0, 0.0, 0.0], |c| c.mount);
+            let mount = frame.calibration.map_or([0.0, 0.0, 0.0], |c| [c.mount.forward, c.mount.left, c.mount.height]);
             let spheres: Vec<serde_json::Value> = frame
                 .landmarks
                 .iter()

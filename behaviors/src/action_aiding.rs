@@ -475,7 +475,7 @@ impl Behavior for ActionAiding {
             self.last_frame = frame.number;
             if let Some(calibration) = &frame.calibration {
                 if self.camera.is_none() {
-                    let camera = StereoCamera::from_calibration(calibration);
+                    let camera = *calibration;
                     let table = CvTable::for_camera(self.config.model, &camera, MODEL_STEP_M, self.config.max_range_m);
                     self.camera = Some((camera, table));
                 }

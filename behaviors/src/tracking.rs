@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
-use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoCalibration};
+use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoCamera};
 use ubf_perception::egomotion::MatchConfig;
 
 /// Settings of the tracking list.
@@ -86,10 +86,10 @@ fn unit(x: f64, y: f64) -> (f64, f64) {
 }
 
 /// Where an observation is in the world, from the robot's pose (eq. 25–29).
-pub fn world_position(observation: &LandmarkObservation, calibration: &StereoCalibration, pose: &Pose2) -> (f64, f64) {
+pub fn world_position(observation: &LandmarkObservation, camera: &StereoCamera, pose: &Pose2) -> (f64, f64) {
     let [x_cam, y_cam, _] = observation.point_cam;
     // Camera frame (x right, y ahead) to robot frame (x forward, y left).
-    let (forward, left) = (y_cam + calibration.mount[0], -x_cam + calibration.mount[1]);
+    let (forward, left) = (y_cam + camera.mount.forward, -x_cam + camera.mount.left);
     pose.transform_point(forward, left)
 }
 
@@ -125,12 +125,12 @@ impl TrackingList {
     pub fn observe(
         &mut self,
         observations: &[LandmarkObservation],
-        calibration: &StereoCalibration,
+        camera: &StereoCamera,
         pose: &Pose2,
     ) -> TrackingUpdate {
         let mut update = TrackingUpdate::default();
         for obs in observations {
-            let position = world_position(obs, calibration, pose);
+            let position = world_position(obs, camera, pose);
             let range = pose.distance_to(position.0, position.1);
             let seen_along = unit(position.0 - pose.x, position.1 - pose.y);
             let fresh = TrackedLandmark { position, descriptor: obs.descriptor, seen_along, sightings: 1 };
@@ -180,15 +180,8 @@ impl TrackingList {
 mod tests {
     use super::*;
 
-    fn calibration() -> StereoCalibration {
-        StereoCalibration {
-            focal_px: 554.0,
-            baseline_m: 0.6,
-            width_px: 640,
-            height_px: 480,
-            mount: [0.0, 0.0, 1.0],
-            ..StereoCalibration::default()
-        }
+    fn calibration() -> StereoCamera {
+        StereoCamera { focal_px: 554.0, ..StereoCamera::default() }
     }
 
     fn obs(point_cam: [f64; 3], seed: u64) -> LandmarkObservation {

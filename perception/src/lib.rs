@@ -24,7 +24,9 @@ pub mod fusion;
 pub mod kitti;
 pub mod rectify;
 pub mod source;
-pub mod stereo;
+/// The stereo camera's geometry, which lives in `ubf-core` (frames carry
+/// the camera that took them).
+pub use ubf_core::stereo;
 #[cfg(feature = "v4l")]
 pub mod v4l_source;
 

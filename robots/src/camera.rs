@@ -123,7 +123,7 @@ impl<R: Robot> Robot for CameraRobot<R> {
                     state.stereo.number = self.frames;
                     state.stereo.time = time;
                     state.stereo.landmarks = landmarks;
-                    state.stereo.calibration = Some(camera.calibration());
+                    state.stereo.calibration = Some(*camera);
                     state.stereo.images = Some(images);
                 }
                 Ok(Err(e)) => return Err(RobotError::Protocol(format!("camera: {e}"))),

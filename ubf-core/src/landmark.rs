@@ -57,31 +57,6 @@ pub struct LandmarkObservation {
     pub source_id: Option<u32>,
 }
 
-/// The intrinsics of a rectified stereo pair, carried with its frames so that
-/// whoever reads them (an error model, a behaviour) needs no copy of the
-/// camera's settings.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct StereoCalibration {
-    /// Focal length, pixels.
-    pub focal_px: f64,
-    /// Distance between the cameras, m.
-    pub baseline_m: f64,
-    /// Image width, pixels.
-    pub width_px: u32,
-    /// Image height, pixels.
-    pub height_px: u32,
-    /// Where the pair's midpoint sits in the robot frame (x forward, y
-    /// left, z up), m.
-    pub mount: [f64; 3],
-    /// The left camera's principal point (x, y), pixels, with the first
-    /// pixel's centre at (0, 0) as calibration tools write it; `None`: the
-    /// image centre.
-    pub principal_point: Option<[f64; 2]>,
-    /// The right camera's principal point column minus the left's, pixels
-    /// (0 when rectification made them equal).
-    pub disparity_offset_px: f64,
-}
-
 /// The latest stereo frame's landmarks.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StereoFrame {
@@ -92,8 +67,9 @@ pub struct StereoFrame {
     pub time: f64,
     /// The landmarks matched in both images.
     pub landmarks: Vec<LandmarkObservation>,
-    /// The camera that took the frame.
-    pub calibration: Option<StereoCalibration>,
+    /// The camera that took the frame, so that whoever reads the frame (an
+    /// error model, a behaviour) needs no copy of the camera's settings.
+    pub calibration: Option<crate::StereoCamera>,
     /// The rectified pair the landmarks were found in, where the camera
     /// keeps it (a rendered or real camera; the geometric model has none):
     /// for logs and recordings. Shared, so copying a frame never copies

@@ -96,10 +96,10 @@ pub struct TickRecord {
     /// stereo frame, the egomotion estimate, the goal.
     pub state: State,
     /// Where the robot really was when it sensed, for robots that know (a
-    /// simulator's); see [`Robot::ground_truth`].
+    /// simulator's); see [`Robot::ground_truth`](crate::Robot::ground_truth).
     pub truth: Option<GroundTruth>,
     /// Why the robot held still instead of obeying `command`, if it did;
-    /// see [`Robot::hold`].
+    /// see [`Robot::hold`](crate::Robot::hold).
     pub hold: Option<Hold>,
     /// Every node's outcome, indexed like [`TreeLayout::nodes`]; node 0 is the
     /// root, whose action went to the robot.

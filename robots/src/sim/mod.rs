@@ -21,7 +21,7 @@ pub use camera::{descriptor_from, SimCameraConfig};
 pub use sonar::{Sonar, SonarConfig};
 pub use world::{
     Anchor, BoxConfig, CorridorConfig, FeaturelessConfig, LandmarkConfig, PersonConfig, RandomLandmarks, Side,
-    WallConfig, World, WorldConfig, WorldLandmark, Xy,
+    WallConfig, World, WorldConfig, WorldLandmark, Xy, MOST_RANDOM_LANDMARKS,
 };
 
 use crate::model::{Footprint, RobotModel};
@@ -246,7 +246,7 @@ impl Robot for SimRobot {
             if let Some(number) = camera.capture(self.time, &pose, &self.world, &mut self.camera_rng, landmarks) {
                 state.stereo.number = number;
                 state.stereo.time = self.time;
-                state.stereo.calibration = Some(camera.config().stereo.calibration());
+                state.stereo.calibration = Some(camera.config().stereo);
                 state.stereo.images = camera.last_images().cloned();
             }
         }

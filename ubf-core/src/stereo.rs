@@ -10,9 +10,9 @@
 //! top-left corner, and the continuous coordinate of pixel k's centre is
 //! k + ½ (calibration tools put it at k: see [`PrincipalPoint`]).
 
+use crate::config::{finite, positive};
+use crate::StereoPixels;
 use serde::{Deserialize, Serialize};
-use ubf_core::config::{finite, positive};
-use ubf_core::{StereoCalibration, StereoPixels};
 
 /// Where the camera pair sits on the robot, looking straight ahead.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,7 +116,7 @@ pub const MAX_IMAGE_SIDE_PX: u32 = 16_384;
 /// pair cannot see 180°), degrees.
 pub const MAX_FIELD_OF_VIEW_DEG: f64 = 170.0;
 
-impl ubf_core::config::Check for StereoCamera {
+impl crate::config::Check for StereoCamera {
     /// Image sides within 8 to 16 384 pixels, a field of view up to 170°
     /// and a focal length up to 10⁶ pixels: beyond these no real pair
     /// exists, and the error model's tables would not fit in memory.
@@ -156,32 +156,6 @@ impl ubf_core::config::Check for StereoCamera {
 }
 
 impl StereoCamera {
-    /// The calibration frames from this camera carry.
-    pub fn calibration(&self) -> StereoCalibration {
-        StereoCalibration {
-            focal_px: self.focal_px,
-            baseline_m: self.baseline_m,
-            width_px: self.width_px,
-            height_px: self.height_px,
-            mount: [self.mount.forward, self.mount.left, self.mount.height],
-            principal_point: self.principal_point.map(|p| [p.x, p.y]),
-            disparity_offset_px: self.disparity_offset_px,
-        }
-    }
-
-    /// The camera a frame's calibration describes.
-    pub fn from_calibration(c: &StereoCalibration) -> Self {
-        StereoCamera {
-            width_px: c.width_px,
-            height_px: c.height_px,
-            focal_px: c.focal_px,
-            baseline_m: c.baseline_m,
-            mount: CameraMount { forward: c.mount[0], left: c.mount[1], height: c.mount[2] },
-            principal_point: c.principal_point.map(|[x, y]| PrincipalPoint { x, y }),
-            disparity_offset_px: c.disparity_offset_px,
-        }
-    }
-
     /// The left camera's principal point column, in continuous image
     /// coordinates (pixel k's centre at k + ½).
     pub fn cx(&self) -> f64 {
@@ -292,12 +266,11 @@ mod tests {
         assert!((px.disparity() + 12.0 - cam.focal_px * 0.6 / 10.0).abs() < 1e-9);
         let p = cam.triangulate(&px).unwrap();
         assert!(p.iter().zip([0.0, 10.0, 0.0]).all(|(a, b)| (a - b).abs() < 1e-9), "{p:?}");
-        assert_eq!(StereoCamera::from_calibration(&cam.calibration()), cam);
     }
 
     #[test]
     fn a_principal_point_outside_the_image_is_refused() {
-        use ubf_core::config::Check;
+        use crate::config::Check;
         let cam =
             StereoCamera { principal_point: Some(PrincipalPoint { x: 700.0, y: 10.0 }), ..StereoCamera::default() };
         assert!(cam.check().unwrap_err().contains("principal_point"));
