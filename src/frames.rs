@@ -33,21 +33,79 @@ pub const RAW_RIGHT_INFO: &str = "right.yaml";
 /// of the raw pairs (`K1`, `D1`, `K2`, `D2`, `R`, `T`).
 pub const RAW_STEREO_CALIBRATION: &str = "stereo.yaml";
 
+/// Why a recording could not be made, or a directory of pairs replayed.
+#[derive(Debug, thiserror::Error)]
+pub enum FramesError {
+    /// The scenario's robot has no camera to record.
+    #[error("the scenario's robot has no camera: add `camera: ()`")]
+    NoCamera,
+    /// An option does not fit the directory.
+    #[error("{0}")]
+    Options(String),
+    /// The directory's calibration is missing, doubled or bad.
+    #[error("{0}")]
+    Calibration(String),
+    /// `camera.ron` is not a camera.
+    #[error("{}:{source}", path.display())]
+    CameraFile {
+        /// The file.
+        path: PathBuf,
+        /// Where and why it failed.
+        source: ubf_core::config::RonError,
+    },
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A pair could not be read or written.
+    #[error(transparent)]
+    Source(#[from] ubf_perception::source::SourceError),
+    /// A pair the pipeline refused (its size does not match the calibration).
+    #[error("{}: pair {number}: {source} (in {})", index.display(), calibration.display())]
+    Pair {
+        /// The directory's list of pairs.
+        index: PathBuf,
+        /// The pair's number, from 1.
+        number: u64,
+        /// The calibration it was checked against.
+        calibration: PathBuf,
+        /// Why.
+        source: ubf_perception::features::PipelineError,
+    },
+    /// The directory lists no pairs.
+    #[error("{}: no pairs listed", .0.display())]
+    NoPairs(PathBuf),
+    /// The recorded run failed.
+    #[error(transparent)]
+    Run(#[from] ubf_core::ControllerError),
+}
+
+impl FramesError {
+    /// An I/O error on `path`.
+    fn file(path: &Path) -> impl FnOnce(std::io::Error) -> FramesError + '_ {
+        move |source| FramesError::File { path: path.to_owned(), source }
+    }
+}
+
 /// Runs `scenario` with rendered images (turned on if the camera uses the
 /// geometric model) and writes every pair into `dir`, with the camera's
 /// calibration. Returns the number of pairs.
-pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> Result<usize, String> {
+pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> Result<usize, FramesError> {
     let mut scenario = scenario.clone();
-    let camera = scenario.robot.camera.as_mut().ok_or("the scenario's robot has no camera: add `camera: ()`")?;
+    let camera = scenario.robot.camera.as_mut().ok_or(FramesError::NoCamera)?;
     camera.images.get_or_insert_with(RenderConfig::default);
     let stereo = camera.stereo;
     // At most this many pairs: the frames the run has time for, or fewer.
     let bound = ((camera.rate_hz * scenario.max_time_s).ceil() as usize).min(max_frames);
-    let writer = ImageDirectoryWriter::create(dir).map_err(|e| e.to_string())?;
+    let writer = ImageDirectoryWriter::create(dir)?;
     let calibration =
-        ron::ser::to_string_pretty(&stereo, ron::ser::PrettyConfig::default()).map_err(|e| e.to_string())?;
+        ron::ser::to_string_pretty(&stereo, ron::ser::PrettyConfig::default()).expect("a camera always serialises");
     let path = dir.join(CAMERA_FILE);
-    std::fs::write(&path, calibration).map_err(|e| format!("{}: {e}", path.display()))?;
+    std::fs::write(&path, calibration).map_err(FramesError::file(&path))?;
 
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
     let root = scenario.root.build(&BuildContext::new(seed));
@@ -58,18 +116,18 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     controller.add_sink(Box::new(pairs.clone()));
     let max_ticks = scenario.max_ticks();
     loop {
-        let record = controller.tick().map_err(|e| e.to_string())?;
+        let record = controller.tick()?;
         let enough = record.state.stereo.number as usize >= max_frames;
         if record.state.goal_reached() || enough || record.tick + 1 >= max_ticks {
             break;
         }
     }
-    controller.shutdown().map_err(|e| e.to_string())?;
+    controller.shutdown()?;
     drop(controller);
     let recorder = Arc::into_inner(pairs).expect("the controller, the only other holder, is gone");
     let recorder = recorder.into_inner().unwrap_or_else(PoisonError::into_inner);
     recorder.progress.finish_and_clear();
-    recorder.writer.finish().map_err(|e| e.to_string())
+    Ok(recorder.writer.finish()?)
 }
 
 /// A sink writing each new frame's pair of images into a recording.
@@ -219,9 +277,9 @@ pub struct Replay {
 /// KITTI odometry sequence) through the pipeline and the rigid estimator on
 /// this thread. There is no odometry on replay, so the odometry gate is off
 /// and an outage is bridged by standing still.
-pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
+pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError> {
     let (layout, camera, mut source, truth, limits, pairs) = if kitti::is_sequence(dir) {
-        let sequence = kitti::open(dir, options.poses.as_deref()).map_err(|e| e.to_string())?;
+        let sequence = kitti::open(dir, options.poses.as_deref())?;
         let pairs = sequence.pairs.len();
         (
             Layout::Kitti,
@@ -233,10 +291,13 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         )
     } else {
         if let Some(poses) = &options.poses {
-            return Err(format!("--poses {}: ground truth is read for KITTI sequences only", poses.display()));
+            return Err(FramesError::Options(format!(
+                "--poses {}: ground truth is read for KITTI sequences only",
+                poses.display()
+            )));
         }
         let defaults = EgomotionConfig::default();
-        let raw = ImageDirectory::open(dir).map_err(|e| e.to_string())?;
+        let raw = ImageDirectory::open(dir)?;
         let pairs = raw.len();
         let (left, right, stereo) =
             (dir.join(RAW_LEFT_INFO), dir.join(RAW_RIGHT_INFO), dir.join(RAW_STEREO_CALIBRATION));
@@ -249,18 +310,18 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         .filter_map(|(present, name)| present.then_some(name))
         .collect();
         if calibrations.len() > 1 {
-            return Err(format!(
+            return Err(FramesError::Calibration(format!(
                 "{}: holds {} ({CAMERA_FILE} describes rectified images; the others, raw images to rectify); keep \
                  the one that describes its images",
                 dir.display(),
                 calibrations.join(" and ")
-            ));
+            )));
         }
         let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if stereo.exists() {
-            let rectifier = ubf_perception::rectify::load_stereo(&stereo)?;
+            let rectifier = ubf_perception::rectify::load_stereo(&stereo).map_err(FramesError::Calibration)?;
             (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
         } else if left.exists() || right.exists() {
-            let rectifier = ubf_perception::rectify::load_pair(&left, &right)?;
+            let rectifier = ubf_perception::rectify::load_pair(&left, &right).map_err(FramesError::Calibration)?;
             (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
         } else {
             (load_camera(dir)?, Box::new(raw))
@@ -271,7 +332,8 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
         None => camera,
         Some(offset) => {
             let camera = StereoCamera { disparity_offset_px: offset, ..camera };
-            ubf_core::config::Check::check(&camera).map_err(|e| format!("--disparity-offset {offset}: {e}"))?;
+            ubf_core::config::Check::check(&camera)
+                .map_err(|e| FramesError::Options(format!("--disparity-offset {offset}: {e}")))?;
             camera
         }
     };
@@ -293,18 +355,21 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
     let mut landmark_log = match &options.landmarks {
         None => None,
         Some(path) => {
-            let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let file = std::fs::File::create(path).map_err(FramesError::file(path))?;
             let mut log = std::io::BufWriter::new(file);
-            writeln!(log, "{LANDMARKS_HEADER}").map_err(|e| format!("{}: {e}", path.display()))?;
+            writeln!(log, "{LANDMARKS_HEADER}").map_err(FramesError::file(path))?;
             Some((log, path))
         }
     };
     let mut number = 0;
-    while let Some(pair) = source.next_pair().map_err(|e| e.to_string())? {
+    while let Some(pair) = source.next_pair()? {
         number += 1;
         let started = Instant::now();
-        let observed = pipeline.process(&pair.left, &pair.right).map_err(|e| {
-            format!("{}: pair {number}: {e} (in {})", index.display(), dir.join(layout.calibration()).display())
+        let observed = pipeline.process(&pair.left, &pair.right).map_err(|source| FramesError::Pair {
+            index: index.clone(),
+            number,
+            calibration: dir.join(layout.calibration()),
+            source,
         })?;
         let processed = Instant::now();
         landmarks += observed.len();
@@ -319,7 +384,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
                     p.v - 0.5,
                     p.disparity()
                 )
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(FramesError::file(path))?;
             }
         }
         let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None, images: None };
@@ -334,10 +399,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
     }
     progress.finish_and_clear();
     if number == 0 {
-        return Err(format!("{}: no pairs listed", index.display()));
+        return Err(FramesError::NoPairs(index));
     }
     if let Some((log, path)) = &mut landmark_log {
-        log.flush().map_err(|e| format!("{}: {e}", path.display()))?;
+        log.flush().map_err(FramesError::file(path))?;
     }
     let pose = tracker.state().pose.unwrap_or_default();
     let total = ubf_perception::median(&mut total_ms);
@@ -359,17 +424,17 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, String> {
 
 /// The calibration in `dir`'s `camera.ron`, checked; the default camera if
 /// there is none.
-pub fn load_camera(dir: &Path) -> Result<StereoCamera, String> {
+pub fn load_camera(dir: &Path) -> Result<StereoCamera, FramesError> {
     let path = dir.join(CAMERA_FILE);
     let bytes = match std::fs::read(&path) {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(StereoCamera::default()),
-        Err(e) => return Err(format!("{}: {e}", path.display())),
+        Err(e) => return Err(FramesError::file(&path)(e)),
     };
     ubf_core::config::utf8_text(bytes)
         .and_then(|text| ubf_core::config::from_ron::<ubf_core::config::Checked<StereoCamera>>(&text))
         .map(|checked| checked.0)
-        .map_err(|e| format!("{}:{e}", path.display()))
+        .map_err(|source| FramesError::CameraFile { path, source })
 }
 
 /// What `ubf pipeline` prints.

@@ -145,7 +145,7 @@ fn replayed(file: &str, text: &str) -> Result<(), TestCaseError> {
     std::fs::remove_file(dir.path().join(file)).unwrap();
     std::fs::write(dir.path().join(file), text).unwrap();
     let started = std::time::Instant::now();
-    match ubf::frames::replay(dir.path(), &ubf::frames::ReplayOptions::default()) {
+    match ubf::frames::replay(dir.path(), &ubf::frames::ReplayOptions::default()).map_err(|e| e.to_string()) {
         Ok(replay) => prop_assert!(replay.report.frames <= 6, "{:?}", replay.report),
         Err(e) if file == "camera.ron" && e.contains("camera.ron:") => {}
         Err(e) if e.contains("frames.csv:") || e.contains("no pairs listed") => {}
