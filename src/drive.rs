@@ -270,26 +270,26 @@ impl DriveConfig {
         }
     }
 
-    /// Everything that can be checked without the robot: the tree builds,
-    /// the egomotion tables fit the camera. Run before connecting, so that
-    /// nothing after ENABLE can fail on the file.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Builds what can be built without the robot (the tree, the egomotion
+    /// tables for the camera) before connecting, so that nothing after
+    /// ENABLE is built for the first time.
+    pub fn validate(&self) {
         if let (Some(config), Some(camera)) = (self.egomotion, &self.camera) {
             let _ = Tracker::new(config, camera.stereo, Pose2::default(), 0);
         }
         let _ = self.root.build(&BuildContext::new(0));
-        Ok(())
     }
 
     /// Reads a configuration file. Paths in it (a model file, a camera's
     /// image directory) become relative to the file's directory.
-    pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let text = ubf_core::config::utf8_text(bytes).map_err(|e| format!("{}:{e}", path.display()))?;
-        let mut config: DriveConfig =
-            registry.from_ron(&text).map_err(|e: RonError| format!("{}:{e}", path.display()))?;
+    pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), RobotFileError> {
+        let read =
+            |path: &Path| std::fs::read(path).map_err(|source| RobotFileError::Read { path: path.into(), source });
+        let parse = RobotFileError::parse;
+        let text = ubf_core::config::utf8_text(read(path)?).map_err(parse(path))?;
+        let mut config: DriveConfig = registry.from_ron(&text).map_err(parse(path))?;
         if config.egomotion.is_some() && config.camera.is_none() {
-            return Err(format!("{}: egomotion needs a camera: add `camera: (...)`", path.display()));
+            return Err(RobotFileError::EgomotionWithoutCamera { path: path.into() });
         }
         let beside = |file: &str| path.parent().unwrap_or(Path::new(".")).join(file).to_string_lossy().into_owned();
         if let Some(camera) = &mut config.camera {
@@ -300,7 +300,8 @@ impl DriveConfig {
                 for file in [&mut files.left, &mut files.right, &mut files.stereo].into_iter().flatten() {
                     *file = beside(file);
                 }
-                let rectified = files.load().map_err(|e| format!("{}: camera.rectify: {e}", path.display()))?;
+                let rectified =
+                    files.load().map_err(|message| RobotFileError::Rectify { path: path.into(), message })?;
                 camera.stereo = StereoCamera { mount: camera.stereo.mount, ..rectified.camera() };
             }
         }
@@ -309,13 +310,55 @@ impl DriveConfig {
             ModelChoice::P3dx => RobotModel::p3dx(),
             ModelChoice::File(file) => {
                 let model_path = path.parent().unwrap_or(Path::new(".")).join(file);
-                let text =
-                    std::fs::read_to_string(&model_path).map_err(|e| format!("{}: {e}", model_path.display()))?;
-                RobotModel::from_ron(&text).map_err(|e| format!("{}:{e}", model_path.display()))?
+                let text = ubf_core::config::utf8_text(read(&model_path)?).map_err(parse(&model_path))?;
+                RobotModel::from_ron(&text).map_err(parse(&model_path))?
             }
         };
-        config.validate().map_err(|e| format!("{}: {e}", path.display()))?;
+        config.validate();
         Ok((config, model))
+    }
+}
+
+/// Why a robot file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotFileError {
+    /// The file, or the model file it names, could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file, or its model file, is not what it should be; the error
+    /// says where (line, column, field).
+    #[error("{}:{source}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Where and why.
+        source: RonError,
+    },
+    /// Egomotion was asked for without a camera.
+    #[error("{}: egomotion needs a camera: add `camera: (...)`", path.display())]
+    EgomotionWithoutCamera {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The rectification files it names could not be used.
+    #[error("{}: camera.rectify: {message}", path.display())]
+    Rectify {
+        /// The robot file.
+        path: PathBuf,
+        /// What was wrong with them.
+        message: String,
+    },
+}
+
+impl RobotFileError {
+    /// A parse error in `path`.
+    fn parse(path: &Path) -> impl FnOnce(RonError) -> RobotFileError + '_ {
+        move |source| RobotFileError::Parse { path: path.into(), source }
     }
 }
 

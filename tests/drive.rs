@@ -527,6 +527,6 @@ fn a_camera_to_rectify_takes_its_calibration_from_the_camera_info_files() {
     assert!((stereo.focal_px - 906.3).abs() < 1e-9 && (stereo.baseline_m - 0.12).abs() < 1e-3);
     assert_eq!(stereo.mount.height, 1.3, "the mount is the file's own");
     write(r#"(left: "right.yaml", right: "left.yaml")"#);
-    let err = ubf::drive::DriveConfig::load(&ubf::registry(), &file).unwrap_err();
+    let err = ubf::drive::DriveConfig::load(&ubf::registry(), &file).unwrap_err().to_string();
     assert!(err.contains("robot.ron: camera.rectify:") && err.contains("to the right"), "{err}");
 }

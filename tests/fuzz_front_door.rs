@@ -99,7 +99,7 @@ fn front_door(path: &str, text: &str) -> Result<(), TestCaseError> {
         let file = dir.path().join("robot.ron");
         std::fs::write(&file, text).unwrap();
         if let Err(e) = ubf::drive::DriveConfig::load(&registry, &file) {
-            prop_assert!(e.contains("robot.ron"), "no file named: {e}");
+            prop_assert!(e.to_string().contains("robot.ron"), "no file named: {e}");
         }
         return Ok(());
     }

@@ -11,16 +11,18 @@ pub(super) fn check(registry: &Registry, files: &[PathBuf]) -> Outcome {
     let mut outcome = Exit::Success;
     for file in files {
         let checked = if is_robot_file(file) {
-            crate::drive::DriveConfig::load(registry, file).map(|(config, model)| {
-                let nodes = ubf_core::TreeLayout::of(config.root.build(&ubf_core::BuildContext::new(0)).as_ref());
-                format!(
-                    "robot file \"{}\": a {} at {}, {} behaviour nodes",
-                    config.name,
-                    model.name,
-                    config.connection,
-                    nodes.nodes.len()
-                )
-            })
+            crate::drive::DriveConfig::load(registry, file)
+                .map(|(config, model)| {
+                    let nodes = ubf_core::TreeLayout::of(config.root.build(&ubf_core::BuildContext::new(0)).as_ref());
+                    format!(
+                        "robot file \"{}\": a {} at {}, {} behaviour nodes",
+                        config.name,
+                        model.name,
+                        config.connection,
+                        nodes.nodes.len()
+                    )
+                })
+                .map_err(|e| e.to_string())
         } else {
             Scenario::load(registry, file).map(|s| format!("scenario \"{}\"", s.name)).map_err(|e| e.to_string())
         };
