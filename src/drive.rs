@@ -73,7 +73,7 @@ fn open_source(camera: &DriveCamera) -> Result<(Box<dyn CameraSource + Send>, bo
     match &camera.rectify {
         None => Ok((raw, paced)),
         Some(files) => {
-            let rectifier = files.load()?;
+            let rectifier = files.load().map_err(|e| e.to_string())?;
             Ok((Box::new(ubf_perception::rectify::Rectified::new(raw, rectifier)), paced))
         }
     }
@@ -99,15 +99,29 @@ pub struct RectifyFiles {
 }
 
 impl RectifyFiles {
-    fn load(&self) -> Result<ubf_perception::rectify::Rectifier, String> {
+    fn load(&self) -> Result<ubf_perception::rectify::Rectifier, RectifyFilesError> {
         match (&self.left, &self.right, &self.stereo) {
-            (Some(left), Some(right), None) => ubf_perception::rectify::load_pair(Path::new(left), Path::new(right)),
-            (None, None, Some(stereo)) => ubf_perception::rectify::load_stereo(Path::new(stereo)),
-            _ => Err("give either `left` and `right` (camera_info files) or `stereo` (an OpenCV stereo \
-                      calibration), not both or neither"
-                .into()),
+            (Some(left), Some(right), None) => {
+                Ok(ubf_perception::rectify::load_pair(Path::new(left), Path::new(right))?)
+            }
+            (None, None, Some(stereo)) => Ok(ubf_perception::rectify::load_stereo(Path::new(stereo))?),
+            _ => Err(RectifyFilesError::Choice),
         }
     }
+}
+
+/// Why a robot file's rectification files could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RectifyFilesError {
+    /// Neither or both kinds of calibration were given.
+    #[error(
+        "give either `left` and `right` (camera_info files) or `stereo` (an OpenCV stereo calibration), not both \
+         or neither"
+    )]
+    Choice,
+    /// The files were given but are not a usable calibration.
+    #[error(transparent)]
+    Calibration(#[from] ubf_perception::rectify::CalibrationError),
 }
 
 #[cfg(feature = "v4l")]
@@ -300,8 +314,7 @@ impl DriveConfig {
                 for file in [&mut files.left, &mut files.right, &mut files.stereo].into_iter().flatten() {
                     *file = beside(file);
                 }
-                let rectified =
-                    files.load().map_err(|message| RobotFileError::Rectify { path: path.into(), message })?;
+                let rectified = files.load().map_err(|source| RobotFileError::Rectify { path: path.into(), source })?;
                 camera.stereo = StereoCamera { mount: camera.stereo.mount, ..rectified.camera() };
             }
         }
@@ -346,12 +359,12 @@ pub enum RobotFileError {
         path: PathBuf,
     },
     /// The rectification files it names could not be used.
-    #[error("{}: camera.rectify: {message}", path.display())]
+    #[error("{}: camera.rectify: {source}", path.display())]
     Rectify {
         /// The robot file.
         path: PathBuf,
         /// What was wrong with them.
-        message: String,
+        source: RectifyFilesError,
     },
 }
 

@@ -42,9 +42,12 @@ pub enum FramesError {
     /// An option does not fit the directory.
     #[error("{0}")]
     Options(String),
-    /// The directory's calibration is missing, doubled or bad.
+    /// The directory holds more than one calibration.
     #[error("{0}")]
     Calibration(String),
+    /// The raw pair's calibration files could not be used.
+    #[error(transparent)]
+    Rectification(#[from] ubf_perception::rectify::CalibrationError),
     /// `camera.ron` is not a camera.
     #[error("{}:{source}", path.display())]
     CameraFile {
@@ -318,10 +321,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
             )));
         }
         let (camera, source): (StereoCamera, Box<dyn CameraSource>) = if stereo.exists() {
-            let rectifier = ubf_perception::rectify::load_stereo(&stereo).map_err(FramesError::Calibration)?;
+            let rectifier = ubf_perception::rectify::load_stereo(&stereo)?;
             (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
         } else if left.exists() || right.exists() {
-            let rectifier = ubf_perception::rectify::load_pair(&left, &right).map_err(FramesError::Calibration)?;
+            let rectifier = ubf_perception::rectify::load_pair(&left, &right)?;
             (rectifier.camera(), Box::new(Rectified::new(raw, rectifier)))
         } else {
             (load_camera(dir)?, Box::new(raw))

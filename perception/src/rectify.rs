@@ -22,7 +22,75 @@ use crate::stereo::{PrincipalPoint, StereoCamera};
 use image::{GrayImage, Luma};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde::Deserialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// What is wrong with a calibration, and where: the file, then the line
+/// and column or the field.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrationError {
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A problem inside the file at `path`.
+    #[error("{}:{problem}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What and where.
+        problem: Box<CalibrationError>,
+    },
+    /// Malformed YAML, where the parser places it.
+    #[error("{line}:{column}: {message}")]
+    Yaml {
+        /// Line, from 1.
+        line: usize,
+        /// Column, from 1.
+        column: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// Malformed YAML the parser does not place.
+    #[error(" {0}")]
+    YamlUnplaced(String),
+    /// A field that is there but wrong.
+    #[error(" {field}: {problem}")]
+    Field {
+        /// The field (or fields).
+        field: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// Two projections that do not make a rectified pair.
+    #[error("{0}")]
+    NotRectified(String),
+    /// A problem with the pair in `files`.
+    #[error("{files}: {problem}")]
+    Pair {
+        /// The file, or the two files.
+        files: String,
+        /// What is wrong.
+        problem: Box<CalibrationError>,
+    },
+}
+
+impl CalibrationError {
+    fn field(field: &'static str, problem: impl Into<String>) -> Self {
+        CalibrationError::Field { field, problem: problem.into() }
+    }
+
+    fn read(path: &Path) -> impl FnOnce(std::io::Error) -> CalibrationError + '_ {
+        move |source| CalibrationError::Read { path: path.to_owned(), source }
+    }
+
+    fn in_file(path: &Path) -> impl FnOnce(CalibrationError) -> CalibrationError + '_ {
+        move |problem| CalibrationError::InFile { path: path.to_owned(), problem: Box::new(problem) }
+    }
+}
 
 /// One camera's calibration, as a ROS `camera_info` file gives it.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,17 +132,18 @@ impl CameraInfo {
     /// Reads a ROS `camera_info` YAML file (as `camera_calibration` writes
     /// it). Errors name the file, and the line and column where YAML knows
     /// them.
-    pub fn load(path: &Path) -> Result<CameraInfo, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Self::from_yaml(&text).map_err(|e| format!("{}:{e}", path.display()))
+    pub fn load(path: &Path) -> Result<CameraInfo, CalibrationError> {
+        let text = std::fs::read_to_string(path).map_err(CalibrationError::read(path))?;
+        Self::from_yaml(&text).map_err(CalibrationError::in_file(path))
     }
 
     /// Reads `camera_info` YAML text; the error starts with `line:column:`
     /// when the YAML is malformed, or names the field.
-    pub fn from_yaml(text: &str) -> Result<CameraInfo, String> {
+    pub fn from_yaml(text: &str) -> Result<CameraInfo, CalibrationError> {
         let yaml: YamlCameraInfo = parse_yaml(text)?;
         if !matches!(yaml.distortion_model.as_str(), "plumb_bob" | "rational_polynomial") {
-            return Err(format!(" distortion_model: {:?}; plumb_bob is understood", yaml.distortion_model));
+            let problem = format!("{:?}; plumb_bob is understood", yaml.distortion_model);
+            return Err(CalibrationError::field("distortion_model", problem));
         }
         let d = plumb_bob("distortion_coefficients", &yaml.distortion_coefficients)?;
         let info = CameraInfo {
@@ -87,7 +156,7 @@ impl CameraInfo {
         };
         check_size(info.width, info.height)?;
         if info.k[0] <= 0.0 || info.k[4] <= 0.0 || info.p[0] <= 0.0 || info.p[5] <= 0.0 {
-            return Err(" camera_matrix, projection_matrix: focal lengths must be positive".into());
+            return Err(CalibrationError::field("camera_matrix, projection_matrix", "focal lengths must be positive"));
         }
         Ok(info)
     }
@@ -141,24 +210,30 @@ struct YamlStereo {
 }
 
 /// A matrix's numbers, checked against its expected shape.
-fn fixed<const N: usize>(name: &str, m: &YamlMatrix, rows: usize, cols: usize) -> Result<[f64; N], String> {
+fn fixed<const N: usize>(
+    name: &'static str,
+    m: &YamlMatrix,
+    rows: usize,
+    cols: usize,
+) -> Result<[f64; N], CalibrationError> {
     let ok = m.rows == rows && m.cols == cols && m.data.len() == N && m.data.iter().all(|v| v.is_finite());
     ok.then(|| m.data.clone().try_into().ok()).flatten().ok_or_else(|| {
-        format!(" {name}: expected {rows} × {cols} finite numbers, got {} × {} with {}", m.rows, m.cols, m.data.len())
+        let got = format!("{} × {} with {}", m.rows, m.cols, m.data.len());
+        CalibrationError::field(name, format!("expected {rows} × {cols} finite numbers, got {got}"))
     })
 }
 
 /// Distortion coefficients as (k1, k2, p1, p2, k3): fewer are padded with
 /// zeros; more must be zero (the rational and thin-prism terms are not
 /// modelled).
-fn plumb_bob(name: &str, m: &YamlMatrix) -> Result<[f64; 5], String> {
+fn plumb_bob(name: &'static str, m: &YamlMatrix) -> Result<[f64; 5], CalibrationError> {
     if m.data.len() > 5 && m.data[5..].iter().any(|&c| c != 0.0) {
-        return Err(format!(" {name}: only k1, k2, p1, p2, k3 are understood"));
+        return Err(CalibrationError::field(name, "only k1, k2, p1, p2, k3 are understood"));
     }
     let mut d = [0.0; 5];
     for (slot, &c) in d.iter_mut().zip(&m.data) {
         if !c.is_finite() {
-            return Err(format!(" {name}: not finite"));
+            return Err(CalibrationError::field(name, "not finite"));
         }
         *slot = c;
     }
@@ -167,20 +242,20 @@ fn plumb_bob(name: &str, m: &YamlMatrix) -> Result<[f64; 5], String> {
 
 /// Parses YAML into `T`; the error starts with `line:column:` where YAML
 /// knows them.
-fn parse_yaml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, String> {
+fn parse_yaml<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, CalibrationError> {
     serde_norway::from_str(text).map_err(|e| match e.location() {
-        Some(at) => format!("{}:{}: {e}", at.line(), at.column()),
-        None => format!(" {e}"),
+        Some(at) => CalibrationError::Yaml { line: at.line(), column: at.column(), message: e.to_string() },
+        None => CalibrationError::YamlUnplaced(e.to_string()),
     })
 }
 
 /// Checks an image size read from a calibration file.
-fn check_size(width: u32, height: u32) -> Result<(), String> {
+fn check_size(width: u32, height: u32) -> Result<(), CalibrationError> {
     let side = 8..=crate::stereo::MAX_IMAGE_SIDE_PX;
     if side.contains(&width) && side.contains(&height) {
         Ok(())
     } else {
-        Err(format!(" image_width, image_height: {width} × {height}; each 8 to 16 384"))
+        Err(CalibrationError::field("image_width, image_height", format!("{width} × {height}; each 8 to 16 384")))
     }
 }
 
@@ -190,13 +265,13 @@ impl StereoCalibrationFile {
     /// the matrices `K1` (or `M1`, `cameraMatrix1`), `D1` (`distCoeffs1`),
     /// `K2`, `D2`, `R` and `T`. Errors name the file, and the line and
     /// column or the field.
-    pub fn load(path: &Path) -> Result<StereoCalibrationFile, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Self::from_yaml(&text).map_err(|e| format!("{}:{e}", path.display()))
+    pub fn load(path: &Path) -> Result<StereoCalibrationFile, CalibrationError> {
+        let text = std::fs::read_to_string(path).map_err(CalibrationError::read(path))?;
+        Self::from_yaml(&text).map_err(CalibrationError::in_file(path))
     }
 
     /// Reads OpenCV `FileStorage` YAML text.
-    pub fn from_yaml(text: &str) -> Result<StereoCalibrationFile, String> {
+    pub fn from_yaml(text: &str) -> Result<StereoCalibrationFile, CalibrationError> {
         // OpenCV's own header (`%YAML:1.0` in older versions) and tags are
         // not YAML every parser takes; blanking them keeps line numbers.
         let plain: String = text
@@ -218,18 +293,19 @@ impl StereoCalibrationFile {
             t: if yaml.t.rows == 1 { fixed("T", &yaml.t, 1, 3)? } else { fixed("T", &yaml.t, 3, 1)? },
         };
         if file.k1[0] <= 0.0 || file.k1[4] <= 0.0 || file.k2[0] <= 0.0 || file.k2[4] <= 0.0 {
-            return Err(" K1, K2: focal lengths must be positive".into());
+            return Err(CalibrationError::field("K1, K2", "focal lengths must be positive"));
         }
         let r = Matrix3::from_row_slice(&file.r);
         if ((r.transpose() * r) - Matrix3::identity()).norm() > 1e-3 || r.determinant() < 0.0 {
-            return Err(" R: not a rotation matrix".into());
+            return Err(CalibrationError::field("R", "not a rotation matrix"));
         }
         let t = Vector3::from(file.t);
         if t.x.abs() <= t.y.abs() || t.norm() == 0.0 {
-            return Err(format!(
-                " T: ({}, {}, {}); the cameras must sit side by side (|T.x| > |T.y|)",
+            let problem = format!(
+                "({}, {}, {}); the cameras must sit side by side (|T.x| > |T.y|)",
                 file.t[0], file.t[1], file.t[2]
-            ));
+            );
+            return Err(CalibrationError::field("T", problem));
         }
         Ok(file)
     }
@@ -392,26 +468,27 @@ impl Rectifier {
     /// The rectifier for a pair, checking that the two projections describe
     /// a rectified pair: the same focal lengths and principal row, the
     /// right camera displaced along x only.
-    pub fn new(left: &CameraInfo, right: &CameraInfo) -> Result<Rectifier, String> {
+    pub fn new(left: &CameraInfo, right: &CameraInfo) -> Result<Rectifier, CalibrationError> {
         let (pl, pr) = (&left.p, &right.p);
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(1.0);
+        let not_rectified = CalibrationError::NotRectified;
         if (left.width, left.height) != (right.width, right.height) {
-            return Err("the two cameras' images differ in size".into());
+            return Err(not_rectified("the two cameras' images differ in size".into()));
         }
         if !(close(pl[0], pr[0]) && close(pl[5], pr[5]) && close(pl[6], pr[6]) && close(pl[0], pl[5])) {
-            return Err(format!(
+            return Err(not_rectified(format!(
                 "projection_matrix: the pair is not rectified to one camera (fx {} and {}, fy {} and {}, cy {} and \
                  {}; fx must equal fy)",
                 pl[0], pr[0], pl[5], pr[5], pl[6], pr[6]
-            ));
+            )));
         }
         let baseline = (pl[3] - pr[3]) / pl[0];
         if baseline <= 0.0 || pr[7] != 0.0 || pr[11] != 0.0 {
-            return Err(format!(
+            return Err(not_rectified(format!(
                 "projection_matrix: the right camera must sit to the right of the left one, along x only \
                  (P[0,3] {} and {})",
                 pl[3], pr[3]
-            ));
+            )));
         }
         let camera = StereoCamera {
             width_px: left.width,
@@ -422,7 +499,7 @@ impl Rectifier {
             disparity_offset_px: pr[2] - pl[2],
             ..StereoCamera::default()
         };
-        ubf_core::config::Check::check(&camera)?;
+        ubf_core::config::Check::check(&camera).map_err(not_rectified)?;
         Ok(Rectifier { left: RemapTable::new(left), right: RemapTable::new(right), camera })
     }
 
@@ -464,14 +541,17 @@ impl<S: crate::source::CameraSource> crate::source::CameraSource for Rectified<S
 
 /// The rectifier for a pair calibrated but never rectified, from the
 /// OpenCV `FileStorage` file at `path` (see [`StereoCalibrationFile`]).
-pub fn load_stereo(path: &Path) -> Result<Rectifier, String> {
+pub fn load_stereo(path: &Path) -> Result<Rectifier, CalibrationError> {
     let (left, right) = stereo_rectify(&StereoCalibrationFile::load(path)?);
-    Rectifier::new(&left, &right).map_err(|e| format!("{}: {e}", path.display()))
+    Rectifier::new(&left, &right)
+        .map_err(|e| CalibrationError::Pair { files: path.display().to_string(), problem: Box::new(e) })
 }
 
 /// The rectifier for the pair whose `camera_info` files are `left` and
 /// `right`.
-pub fn load_pair(left: &Path, right: &Path) -> Result<Rectifier, String> {
-    Rectifier::new(&CameraInfo::load(left)?, &CameraInfo::load(right)?)
-        .map_err(|e| format!("{} and {}: {e}", left.display(), right.display()))
+pub fn load_pair(left: &Path, right: &Path) -> Result<Rectifier, CalibrationError> {
+    Rectifier::new(&CameraInfo::load(left)?, &CameraInfo::load(right)?).map_err(|e| CalibrationError::Pair {
+        files: format!("{} and {}", left.display(), right.display()),
+        problem: Box::new(e),
+    })
 }
