@@ -559,40 +559,14 @@ fn drive_sessions(
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
         controller.add_sink(Box::new(TracingSink));
-        // The logs are written on threads of their own: a slow disk must not
-        // delay a tick, and a failed log must not stop the robot.
-        let ended = match create_fresh_log(&config.log) {
-            Ok((file, path)) => {
-                eprintln!("logging to {}", path.display());
-                logs.push(path.clone());
-                let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true });
-                let attached = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map(|sink| {
-                    controller.add_sink(Box::new(sink));
-                    if let Some((mut mcap, mcap_path)) =
-                        open_session_mcap(&path, model, controller.state().pose, config.goal)
-                    {
-                        mcap.log_images(config.log_images);
-                        match BackgroundSink::spawn("MCAP log", mcap, LOG_QUEUE) {
-                            Ok(sink) => {
-                                eprintln!("and to {}", mcap_path.display());
-                                logs.push(mcap_path);
-                                controller.add_sink(Box::new(sink));
-                            }
-                            Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
-                        }
-                    }
-                });
-                match attached {
-                    Ok(()) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        run_session(&mut controller, stop, &out_of_time, config.until_goal, status)
-                    }))
-                    .unwrap_or_else(|panic| {
-                        SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
-                    }),
-                    Err(e) => SessionEnd::Failed(format!("starting the log writer: {e}")),
-                }
-            }
-            Err(e) => SessionEnd::Failed(format!("{}: {e}", config.log.display())),
+        let ended = match attach_logs(&mut controller, config, model, logs) {
+            Ok(()) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                run_session(&mut controller, stop, &out_of_time, config.until_goal, status)
+            }))
+            .unwrap_or_else(|panic| {
+                SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
+            }),
+            Err(why) => SessionEnd::Failed(why),
         };
         pose = controller.state().pose;
         // Whatever happened: stop the robot, close the session and flush
@@ -614,6 +588,38 @@ fn drive_sessions(
             }
         }
     }
+}
+
+/// Attaches the session's logs, each written on a thread of its own (a
+/// slow disk must not delay a tick, and a failed log must not stop the
+/// robot), and adds their paths to `logs`. The CSV log is the one a session
+/// cannot do without; the MCAP log beside it is left out, with a warning, if
+/// it cannot be made.
+fn attach_logs<R: Robot>(
+    controller: &mut Controller<R>,
+    config: &DriveConfig,
+    model: &RobotModel,
+    logs: &mut Vec<PathBuf>,
+) -> Result<(), String> {
+    let (file, path) = create_fresh_log(&config.log).map_err(|e| format!("{}: {e}", config.log.display()))?;
+    eprintln!("logging to {}", path.display());
+    logs.push(path.clone());
+    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true });
+    let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(|e| format!("starting the log writer: {e}"))?;
+    controller.add_sink(Box::new(sink));
+    let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {
+        return Ok(());
+    };
+    mcap.log_images(config.log_images);
+    match BackgroundSink::spawn("MCAP log", mcap, LOG_QUEUE) {
+        Ok(sink) => {
+            eprintln!("and to {}", mcap_path.display());
+            logs.push(mcap_path);
+            controller.add_sink(Box::new(sink));
+        }
+        Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
+    }
+    Ok(())
 }
 
 /// The session's MCAP log beside its CSV one (same name, `.mcap`), or

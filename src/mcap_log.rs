@@ -188,6 +188,19 @@ fn identity_orientation() -> serde_json::Value {
     json!({"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0})
 }
 
+fn point(x: f64, y: f64, z: f64) -> serde_json::Value {
+    json!({"x": x, "y": y, "z": z})
+}
+
+/// A `foxglove.LinePrimitive` drawing a segment between each pair of
+/// `points`, in the world frame.
+fn line_list(points: Vec<serde_json::Value>, thickness: f64, [r, g, b, a]: [f64; 4]) -> serde_json::Value {
+    json!({
+        "type": 2, "pose": identity_pose(), "thickness": thickness, "scale_invariant": false,
+        "points": points, "color": {"r": r, "g": g, "b": b, "a": a}, "colors": [], "indices": [],
+    })
+}
+
 fn identity_pose() -> serde_json::Value {
     json!({"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": identity_orientation()})
 }
@@ -300,7 +313,6 @@ impl McapLog {
         if let Some([x, y, _]) = run.goal {
             self.write("/goal", 0.0, &pose_json(0.0, &Pose2::new(x, y, 0.0)))?;
         }
-        let point = |x: f64, y: f64, z: f64| json!({"x": x, "y": y, "z": z});
         let walls: Vec<serde_json::Value> =
             world.segments.iter().flat_map(|[a, b]| [point(a[0], a[1], 0.0), point(b[0], b[1], 0.0)]).collect();
         let spheres: Vec<serde_json::Value> = world
@@ -314,10 +326,7 @@ impl McapLog {
                 })
             })
             .collect();
-        let lines = vec![json!({
-            "type": 2, "pose": identity_pose(), "thickness": 0.05, "scale_invariant": false,
-            "points": walls, "color": {"r": 0.1, "g": 0.1, "b": 0.1, "a": 1.0}, "colors": [], "indices": [],
-        })];
+        let lines = vec![line_list(walls, 0.05, [0.1, 0.1, 0.1, 1.0])];
         let scene = scene_entity(0.0, "world", lines, spheres);
         self.write("/scene", 0.0, &scene)
     }
@@ -326,7 +335,7 @@ impl McapLog {
     /// egomotion estimate where it runs one), what the sensors saw, placed
     /// by the robot's own pose, the tree's part, and any new collision.
     fn tick(&mut self, record: &TickRecord) -> Result<(), LogError> {
-        let (time, state) = (record.time, &record.state);
+        let (time, state) = (record.time(), &record.state);
         self.sensors(time, state)?;
         if let Some(truth) = &record.truth {
             self.write("/pose/true", time, &pose_json(time, &truth.pose))?;
@@ -369,32 +378,28 @@ impl McapLog {
     /// landmarks, in the world by the robot's own pose.
     fn sensors(&mut self, time: f64, state: &State) -> Result<(), LogError> {
         let pose = &state.pose;
-        let point = |(x, y): (f64, f64), z: f64| json!({"x": x, "y": y, "z": z});
         let mut echoes = Vec::new();
         for reading in &state.ranges {
             let Some(range) = reading.range else { continue };
             let sensor = pose.compose(&reading.pose_robot_sensor);
             let hit = sensor.compose(&Pose2::new(range, 0.0, 0.0));
-            echoes.extend([point((sensor.x, sensor.y), 0.3), point((hit.x, hit.y), 0.3)]);
+            echoes.extend([point(sensor.x, sensor.y, 0.3), point(hit.x, hit.y, 0.3)]);
         }
-        let lines = vec![json!({
-            "type": 2, "pose": identity_pose(), "thickness": 0.02, "scale_invariant": false,
-            "points": echoes, "color": {"r": 0.2, "g": 0.6, "b": 0.9, "a": 0.8}, "colors": [], "indices": [],
-        })];
+        let lines = vec![line_list(echoes, 0.02, [0.2, 0.6, 0.9, 0.8])];
         self.write("/ranges", time, &scene_entity(time, "ranges", lines, Vec::new()))?;
         let frame = &state.stereo;
         if frame.number != self.frame && frame.number != 0 {
             self.frame = frame.number;
-            let mount = frame.calibration.map_or([0.0, 0.0, 0.0], |c| [c.mount.forward, c.mount.left, c.mount.height]);
+            let mount =
+                frame.calibration.map_or(ubf_core::CameraMount { forward: 0.0, left: 0.0, height: 0.0 }, |c| c.mount);
             let spheres: Vec<serde_json::Value> = frame
                 .landmarks
                 .iter()
                 .map(|l| {
-                    let [x, y, z] = l.point_cam;
-                    // The camera frame: x right, y ahead, z up.
-                    let (wx, wy) = pose.transform_point(y + mount[0], -x + mount[1]);
+                    let [forward, left, z] = mount.cam_to_robot(l.point_cam);
+                    let (wx, wy) = pose.transform_point(forward, left);
                     json!({
-                        "pose": {"position": point((wx, wy), z + mount[2]), "orientation": identity_orientation()},
+                        "pose": {"position": point(wx, wy, z), "orientation": identity_orientation()},
                         "size": {"x": 0.12, "y": 0.12, "z": 0.12},
                         "color": {"r": 0.1, "g": 0.4, "b": 1.0, "a": 0.9},
                     })

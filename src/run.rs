@@ -186,15 +186,16 @@ pub fn run_until(
     let out = outputs.map(|o| o.dir);
     let stopwatch = Stopwatch::start();
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
+    let start_pose = sim.true_pose();
     let tracker = match (&scenario.robot.egomotion, &scenario.robot.camera) {
-        (Some(config), Some(camera)) => Some(Tracker::new(*config, camera.stereo, sim.true_pose(), seed)),
+        (Some(config), Some(camera)) => Some(Tracker::new(*config, camera.stereo, start_pose, seed)),
         _ => None,
     };
     let run_message = RunMessage {
         scenario: scenario.name.clone(),
         seed,
-        start: [sim.true_pose().x, sim.true_pose().y, sim.true_pose().theta],
-        outline: sim.footprint_at(&sim.true_pose()).map(|(x, y)| [x, y]),
+        start: [start_pose.x, start_pose.y, start_pose.theta],
+        outline: sim.footprint_at(&start_pose).map(|(x, y)| [x, y]),
         goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
     };
     let world = WorldMessage::of(sim.world());
@@ -204,14 +205,14 @@ pub fn run_until(
     controller.set_goal(scenario.goal);
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
-    let log = match out {
-        Some(dir) => {
+    let log = match outputs {
+        Some(Outputs { dir, images }) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;
             let path = dir.join("trajectory.csv");
             let columns = Columns { truth: true, hold: false };
             controller.add_sink(Box::new(TrajectoryWriter::create(&path, columns).map_err(output_error(&path))?));
             let mut log = McapLog::create(&dir.join("run.mcap"), &run_message, &world)?;
-            log.log_images(outputs.is_some_and(|o| o.images));
+            log.log_images(images);
             let log = Arc::new(Mutex::new(log));
             controller.add_sink(Box::new(log.clone()));
             Some(log)

@@ -78,7 +78,7 @@ impl TrajectoryWriter {
         let (v, w) = (record.command.velocity(), record.command.rot_velocity().unwrap_or(f64::NAN));
         let layout = &self.layout;
         let winner = layout.winning_leaf(record).map_or("", |i| layout.nodes[i].path.as_str());
-        write!(self.out, "{:.3},", record.time)?;
+        write!(self.out, "{:.3},", record.time())?;
         if self.columns.truth {
             match &record.truth {
                 Some(t) => write!(self.out, "{:.5},{:.5},{:.5},", t.pose.x, t.pose.y, t.pose.theta)?,

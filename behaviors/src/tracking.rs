@@ -87,9 +87,7 @@ fn unit(x: f64, y: f64) -> (f64, f64) {
 
 /// Where an observation is in the world, from the robot's pose (eq. 25–29).
 pub fn world_position(observation: &LandmarkObservation, camera: &StereoCamera, pose: &Pose2) -> (f64, f64) {
-    let [x_cam, y_cam, _] = observation.point_cam;
-    // Camera frame (x right, y ahead) to robot frame (x forward, y left).
-    let (forward, left) = (y_cam + camera.mount.forward, -x_cam + camera.mount.left);
+    let [forward, left, _] = camera.mount.cam_to_robot(observation.point_cam);
     pose.transform_point(forward, left)
 }
 

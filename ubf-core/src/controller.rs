@@ -164,7 +164,6 @@ impl<R: Robot> Controller<R> {
     fn fill_record(&mut self, action: Action, command: Command) {
         let r = &mut self.record;
         r.tick = self.ticks;
-        r.time = r.state.time;
         r.truth = self.robot.ground_truth();
         r.hold = self.robot.hold();
         r.command = command;

@@ -90,8 +90,6 @@ pub struct NodeOutcome {
 pub struct TickRecord {
     /// Tick number, from 0.
     pub tick: u64,
-    /// Seconds since start, from the controller's clock.
-    pub time: f64,
     /// What the robot sensed, as the behaviours saw it: pose, ranges, the
     /// stereo frame, the egomotion estimate, the goal.
     pub state: State,
@@ -112,14 +110,19 @@ impl TickRecord {
     /// Copies `other`, reusing this record's buffers: a sink that keeps
     /// records (or hands them to another thread) allocates nothing once warm.
     pub fn copy_from(&mut self, other: &TickRecord) {
-        let TickRecord { tick, time, state, truth, hold, nodes, command } = other;
+        let TickRecord { tick, state, truth, hold, nodes, command } = other;
         self.tick = *tick;
-        self.time = *time;
         self.state.copy_from(state);
         self.truth = *truth;
         self.hold = *hold;
         self.nodes.clone_from(nodes);
         self.command = *command;
+    }
+
+    /// Seconds since start, from the controller's clock: when the state
+    /// was sensed.
+    pub fn time(&self) -> f64 {
+        self.state.time
     }
 
     /// The root behaviour's action.

@@ -39,7 +39,7 @@ pub struct TracingSink;
 
 impl TickSink for TracingSink {
     fn record(&mut self, r: &TickRecord) -> std::io::Result<()> {
-        tracing::trace!(tick = r.tick, time = r.time, x = r.state.pose.x, y = r.state.pose.y, command = ?r.command, "tick");
+        tracing::trace!(tick = r.tick, time = r.time(), x = r.state.pose.x, y = r.state.pose.y, command = ?r.command, "tick");
         Ok(())
     }
 }

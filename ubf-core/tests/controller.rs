@@ -57,7 +57,7 @@ fn every_tick_records_every_node_and_the_command() {
     assert_eq!(log.records.len(), 4);
 
     let first = &log.records[0];
-    assert_eq!((first.tick, first.time), (0, 0.0));
+    assert_eq!((first.tick, first.time()), (0, 0.0));
     // Fused velocity (3·0.8 + 1·0.4) / 4 = 0.7; only "slow" sets a turn, so
     // the turn is its 0.1 undiluted.
     match first.command {
@@ -72,7 +72,7 @@ fn every_tick_records_every_node_and_the_command() {
     assert_eq!(layout.winning_leaf(first), Some(3));
 
     let last = &log.records[3];
-    assert!((last.time - 0.3).abs() < 1e-12);
+    assert!((last.time() - 0.3).abs() < 1e-12);
     assert_eq!(last.command, Command::Stop);
     assert_eq!(layout.winning_leaf(last), Some(1));
 }
