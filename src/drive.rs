@@ -14,7 +14,7 @@ use ubf_core::{
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
-use ubf_perception::source::{CameraSource, ImageDirectory};
+use ubf_perception::source::{CameraSource, ImageDirectory, SourceError};
 use ubf_perception::StereoCamera;
 use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions, EmergencyStop};
 use ubf_robots::arcos::link;
@@ -63,20 +63,79 @@ pub enum CameraSourceChoice {
 
 /// Opens the source a configuration names; `true` if it is a recording to
 /// be replayed at its own pace.
-fn open_source(camera: &DriveCamera) -> Result<(Box<dyn CameraSource + Send>, bool), String> {
+fn open_source(camera: &DriveCamera) -> Result<(Box<dyn CameraSource + Send>, bool), CameraError> {
     let (raw, paced): (Box<dyn CameraSource + Send>, bool) = match &camera.source {
-        CameraSourceChoice::Directory(dir) => {
-            (Box::new(ImageDirectory::open(Path::new(dir)).map_err(|e| e.to_string())?), true)
-        }
+        CameraSourceChoice::Directory(dir) => (Box::new(ImageDirectory::open(Path::new(dir))?), true),
         CameraSourceChoice::V4l { left, right } => (open_v4l(left, right, &camera.stereo)?, false),
     };
     match &camera.rectify {
         None => Ok((raw, paced)),
         Some(files) => {
-            let rectifier = files.load().map_err(|e| e.to_string())?;
+            let rectifier = files.load()?;
             Ok((Box::new(ubf_perception::rectify::Rectified::new(raw, rectifier)), paced))
         }
     }
+}
+
+/// Why the robot's camera could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum CameraError {
+    /// The recording or the device could not be opened.
+    #[error(transparent)]
+    Source(#[from] SourceError),
+    /// The rectification files are not a usable calibration.
+    #[error(transparent)]
+    Rectify(#[from] RectifyFilesError),
+    /// The file names Video4Linux cameras and this build cannot read them.
+    #[error(
+        "this build cannot read Video4Linux cameras: build with `cargo build --release --features v4l` \
+         (scripts/install-v4l-deps.sh installs what that needs)"
+    )]
+    NoV4l,
+    /// The camera's thread could not be started.
+    #[error(transparent)]
+    Start(RobotError),
+}
+
+/// Why `ubf drive` (or its dry run) ended in failure. Every variant is
+/// reported after the robot has been stopped and its session closed.
+#[derive(Debug, thiserror::Error)]
+pub enum DriveError {
+    /// The camera could not be used (checked before the motors go on).
+    #[error("camera: {0}")]
+    Camera(#[from] CameraError),
+    /// The robot could not be reached or did not complete the handshake.
+    #[error("{connection}: {source}")]
+    Connect {
+        /// The serial device or address tried.
+        connection: String,
+        /// What went wrong.
+        source: RobotError,
+    },
+    /// The session's log could not be created.
+    #[error("{}: {source}", path.display())]
+    Log {
+        /// The log asked for.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// A log writer's thread could not be started.
+    #[error("starting the log writer: {0}")]
+    LogWriter(std::io::Error),
+    /// The robot failed while driving (the dry run: while watching).
+    #[error(transparent)]
+    Robot(#[from] RobotError),
+    /// The tree failed: a behaviour panicked with `on_behavior_panic: Stop`,
+    /// or a sink failed.
+    #[error(transparent)]
+    Controller(ControllerError),
+    /// A bug: the session panicked outside the behaviours.
+    #[error("internal error: {0}")]
+    Panic(String),
+    /// The dry run's report could not be written.
+    #[error("writing: {0}")]
+    Output(std::io::Error),
 }
 
 /// A calibrated, unrectified pair's calibration files, relative to the
@@ -125,22 +184,19 @@ pub enum RectifyFilesError {
 }
 
 #[cfg(feature = "v4l")]
-fn open_v4l(left: &str, right: &str, stereo: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, String> {
+fn open_v4l(left: &str, right: &str, stereo: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, CameraError> {
     let pair = ubf_perception::v4l_source::V4lStereo::open(
         Path::new(left),
         Path::new(right),
         stereo.width_px,
         stereo.height_px,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     Ok(Box::new(pair))
 }
 
 #[cfg(not(feature = "v4l"))]
-fn open_v4l(_: &str, _: &str, _: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, String> {
-    Err("this build cannot read Video4Linux cameras: build with `cargo build --release --features v4l` \
-         (scripts/install-v4l-deps.sh installs what that needs)"
-        .into())
+fn open_v4l(_: &str, _: &str, _: &StereoCamera) -> Result<Box<dyn CameraSource + Send>, CameraError> {
+    Err(CameraError::NoV4l)
 }
 
 /// The robot's stereo camera.
@@ -248,9 +304,9 @@ impl DriveConfig {
 
     /// Opens the camera, if there is one: before connecting, so that a
     /// camera that fails never leaves the motors on.
-    fn open_camera(&self) -> Result<Option<OpenCamera>, String> {
+    fn open_camera(&self) -> Result<Option<OpenCamera>, CameraError> {
         let Some(camera) = &self.camera else { return Ok(None) };
-        let (source, paced) = open_source(camera).map_err(|e| format!("camera: {e}"))?;
+        let (source, paced) = open_source(camera)?;
         Ok(Some(OpenCamera { source, paced }))
     }
 
@@ -261,12 +317,12 @@ impl DriveConfig {
         robot: ArcosRobot,
         camera: Option<OpenCamera>,
         origin: Pose2,
-    ) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, String> {
+    ) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, CameraError> {
         let (Some(open), Some(camera)) = (camera, &self.camera) else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };
         let robot = CameraRobot::new(robot, open.source, camera.stereo, camera.features, open.paced)
-            .map_err(|e| format!("camera: {e}"))?;
+            .map_err(CameraError::Start)?;
         let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, origin, 0));
         Ok(EgomotionRobot::new(robot, tracker))
     }
@@ -428,7 +484,7 @@ pub enum DriveEnd {
 #[derive(Debug)]
 pub struct DriveOutcome {
     /// How it ended, or why it failed.
-    pub end: Result<DriveEnd, String>,
+    pub end: Result<DriveEnd, DriveError>,
     /// The sessions' logs.
     pub logs: Vec<PathBuf>,
 }
@@ -501,7 +557,7 @@ enum SessionEnd {
     Stopped,
     GoalReached,
     LinkLost(String),
-    Failed(String),
+    Failed(DriveError),
 }
 
 /// Runs the tree against the robot until `stop` is set (or the time limit),
@@ -521,7 +577,7 @@ fn drive_sessions(
     stop: &AtomicBool,
     status: Status,
     logs: &mut Vec<PathBuf>,
-) -> Result<DriveEnd, String> {
+) -> Result<DriveEnd, DriveError> {
     let started = Instant::now();
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
     let mut pose = Pose2::default();
@@ -530,14 +586,12 @@ fn drive_sessions(
             return Ok(DriveEnd::Stopped);
         }
         let camera = config.open_camera()?;
-        let robot = match link::open(&config.connection, config.baud).map_err(|e| e.to_string()).and_then(|l| {
-            ArcosRobot::connect(l, model.clone(), &config.connect_options(true, pose)).map_err(|e| e.to_string())
-        }) {
+        let robot = match connect(config, model, true, pose) {
             Ok(robot) => robot,
             Err(e) => {
-                tracing::warn!("connecting to {}: {e}", config.connection);
+                tracing::warn!("connecting: {e}");
                 if config.on_link_loss == OnLinkLoss::Exit {
-                    return Err(format!("{}: {e}", config.connection));
+                    return Err(e);
                 }
                 std::thread::sleep(Duration::from_secs(1));
                 continue;
@@ -551,7 +605,7 @@ fn drive_sessions(
             Ok(robot) => SafetyGuard::new(robot, config.safety),
             Err(e) => {
                 arm_second_interrupt(None);
-                return Err(e);
+                return Err(e.into());
             }
         };
         let root = config.root.build(&BuildContext::new(0));
@@ -564,7 +618,7 @@ fn drive_sessions(
                 run_session(&mut controller, stop, &out_of_time, config.until_goal, status)
             }))
             .unwrap_or_else(|panic| {
-                SessionEnd::Failed(format!("internal error: {}", ubf_core::panic_message(panic.as_ref())))
+                SessionEnd::Failed(DriveError::Panic(ubf_core::panic_message(panic.as_ref()).to_owned()))
             }),
             Err(why) => SessionEnd::Failed(why),
         };
@@ -600,12 +654,13 @@ fn attach_logs<R: Robot>(
     config: &DriveConfig,
     model: &RobotModel,
     logs: &mut Vec<PathBuf>,
-) -> Result<(), String> {
-    let (file, path) = create_fresh_log(&config.log).map_err(|e| format!("{}: {e}", config.log.display()))?;
+) -> Result<(), DriveError> {
+    let (file, path) =
+        create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
     eprintln!("logging to {}", path.display());
     logs.push(path.clone());
     let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true });
-    let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(|e| format!("starting the log writer: {e}"))?;
+    let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
     controller.add_sink(Box::new(sink));
     let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {
         return Ok(());
@@ -676,7 +731,7 @@ fn run_session<R: Robot>(
             Ok(_) => {}
             Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
             Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),
-            Err(e) => break SessionEnd::Failed(e.to_string()),
+            Err(e) => break SessionEnd::Failed(DriveError::Controller(e)),
         }
         if status != Status::Off && shown.elapsed() >= status.every() {
             shown = Instant::now();
@@ -696,20 +751,27 @@ fn run_session<R: Robot>(
 /// and its configuration, then its odometry and nearest sonar echo once a
 /// second until stopped. Output that cannot be written (a closed pipe) ends
 /// the run like Ctrl-C: the session is closed either way.
-pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), String> {
+pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), DriveError> {
     let camera = config.open_camera()?;
-    let link = link::open(&config.connection, config.baud).map_err(|e| format!("{}: {e}", config.connection))?;
-    let robot = ArcosRobot::connect(link, model.clone(), &config.connect_options(false, Pose2::default()))
-        .map_err(|e| e.to_string())?;
+    let robot = connect(config, model, false, Pose2::default())?;
     let mut robot = config.equip(robot, camera, Pose2::default())?;
     let result = show_robot(&mut robot, config, model, stop, &mut std::io::stdout().lock());
-    let closed = robot.shutdown().map_err(|e| e.to_string());
+    let closed = robot.shutdown().map_err(DriveError::Robot);
     match result {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => closed,
-        Err(e) => Err(format!("writing: {e}")),
-        Ok(Err(e)) => Err(e),
+        Err(e) => Err(DriveError::Output(e)),
+        Ok(Err(e)) => Err(e.into()),
         Ok(Ok(())) => closed,
     }
+}
+
+/// Opens the link and completes the handshake, motors on or off, with
+/// odometry starting at `pose`.
+fn connect(config: &DriveConfig, model: &RobotModel, motors: bool, pose: Pose2) -> Result<ArcosRobot, DriveError> {
+    link::open(&config.connection, config.baud)
+        .map_err(RobotError::from)
+        .and_then(|link| ArcosRobot::connect(link, model.clone(), &config.connect_options(motors, pose)))
+        .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })
 }
 
 /// The dry run's report: I/O errors are the output's, the inner ones the
@@ -720,7 +782,7 @@ fn show_robot(
     model: &RobotModel,
     stop: &AtomicBool,
     out: &mut impl std::io::Write,
-) -> std::io::Result<Result<(), String>> {
+) -> std::io::Result<Result<(), RobotError>> {
     let arcos = robot.inner().inner();
     let id = arcos.identity().clone();
     writeln!(out, "robot           {} ({} {})", id.name, id.class, id.subclass)?;
@@ -757,7 +819,7 @@ fn show_robot(
         // Wake often enough to PULSE within the 500 ms; show once a second.
         std::thread::sleep(Duration::from_millis(250));
         if let Err(e) = robot.inner_mut().inner_mut().keep_alive().and_then(|_| robot.sense(&mut state)) {
-            return Ok(Err(e.to_string()));
+            return Ok(Err(e));
         }
         if last_shown.elapsed() < Duration::from_secs(1) {
             continue;

@@ -38,8 +38,7 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
     match shard {
         None => clear_sweep_output(out, overwrite),
         Some(shard) => clear_shard_output(out, shard, overwrite),
-    }
-    .map_err(CliError::bad_input)?;
+    }?;
     let mut items: Vec<SweepItem> = Vec::new();
     for file in files {
         let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
@@ -113,45 +112,70 @@ pub(super) fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Outcome {
     Ok(Exit::Success)
 }
 
+/// Why a sweep's output directory cannot take a new sweep (or shard).
+#[derive(Debug, thiserror::Error)]
+enum OutputError {
+    #[error("--out {}: {source}", dir.display())]
+    Unreadable { dir: PathBuf, source: std::io::Error },
+    #[error(
+        "--out {} is not empty: earlier runs would sit beside the new summary. \
+         Choose another directory, or pass --overwrite to replace an earlier sweep's output",
+        .0.display()
+    )]
+    NotEmpty(PathBuf),
+    #[error("--out {} holds no summary.json, so it is not a sweep's output: not deleting it", .0.display())]
+    NotASweep(PathBuf),
+    #[error("{} exists: this shard has run before. Pass --overwrite to run it again", .0.display())]
+    ShardRan(PathBuf),
+    #[error("clearing {}: {source}", path.display())]
+    Clearing { path: PathBuf, source: std::io::Error },
+}
+
+impl From<OutputError> for CliError {
+    /// The directory's state is the user's to change; failing to read or
+    /// clear it is not.
+    fn from(error: OutputError) -> Self {
+        match error {
+            OutputError::Unreadable { .. } | OutputError::Clearing { .. } => CliError::failed(error),
+            OutputError::NotEmpty(_) | OutputError::NotASweep(_) | OutputError::ShardRan(_) => {
+                CliError::bad_input(error)
+            }
+        }
+    }
+}
+
 /// Makes `out` ready for a sweep: absent or empty, or, with `overwrite`,
 /// an earlier sweep's output (it holds a summary.json), which is removed.
-fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), String> {
-    let shown = out.display();
+fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), OutputError> {
     let mut entries = match std::fs::read_dir(out) {
         Ok(entries) => entries,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(format!("--out {shown}: {e}")),
+        Err(source) => return Err(OutputError::Unreadable { dir: out.to_owned(), source }),
     };
     if entries.next().is_none() {
         return Ok(());
     }
     if !overwrite {
-        return Err(format!(
-            "--out {shown} is not empty: earlier runs would sit beside the new summary. \
-             Choose another directory, or pass --overwrite to replace an earlier sweep's output"
-        ));
+        return Err(OutputError::NotEmpty(out.to_owned()));
     }
     if !out.join("summary.json").is_file() {
-        return Err(format!("--out {shown} holds no summary.json, so it is not a sweep's output: not deleting it"));
+        return Err(OutputError::NotASweep(out.to_owned()));
     }
-    std::fs::remove_dir_all(out).map_err(|e| format!("clearing --out {shown}: {e}"))
+    std::fs::remove_dir_all(out).map_err(|source| OutputError::Clearing { path: out.to_owned(), source })
 }
 
 /// Makes `out` ready for one shard of a sweep: other shards' output may be
 /// there (shards often share a directory), but this shard's record only
 /// with `overwrite`.
-fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), String> {
+fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), OutputError> {
     let record = out.join(shard.record_name());
     if !record.exists() {
         return Ok(());
     }
     if !overwrite {
-        return Err(format!(
-            "{} exists: this shard has run before. Pass --overwrite to run it again",
-            record.display()
-        ));
+        return Err(OutputError::ShardRan(record));
     }
-    std::fs::remove_file(&record).map_err(|e| format!("removing {}: {e}", record.display()))
+    std::fs::remove_file(&record).map_err(|source| OutputError::Clearing { path: record, source })
 }
 
 /// Parses `A..B`, `A..=B` or `N` into a range of seeds.
