@@ -16,6 +16,14 @@
 //! drove, a turn a stretch of frames turning on the spot, and `lever` the
 //! distance from the turn to the end. The heading error across each turn
 //! and the single steps' translation error are reported beside the fit.
+//!
+//! The odometry bridge's heading drift is measured directly instead: the
+//! heading error each bridged step adds, per metre driven. Fitted at the
+//! end point beside the others it came out twelve times larger, because
+//! runs that bridge more are runs whose visual steps are worse too; the
+//! direct figure is what bridging itself costs, and an upper bound on what
+//! of it stays (a later match to a keyframe from before the bridge undoes
+//! it).
 
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -78,6 +86,11 @@ pub struct CostFit {
     /// RMS translation error of single frame-to-frame straight steps, m
     /// (for reference: most of it does not stay).
     pub step_rms_error_m: f64,
+    /// Steps driven on the odometry bridge.
+    pub bridged_steps: usize,
+    /// Heading variance a metre on the odometry bridge adds, rad²/m; `None`
+    /// with fewer than 3 bridged steps (the default is kept).
+    pub bridge_heading_var_per_m: Option<f64>,
 }
 
 impl CostFit {
@@ -87,6 +100,9 @@ impl CostFit {
             step_sigma_per_cv: self.step_sigma_per_cv,
             heading_var_per_rad: self.heading_var_per_rad,
             heading_var_per_turn: self.heading_var_per_turn,
+            bridge_heading_var_per_m: self
+                .bridge_heading_var_per_m
+                .unwrap_or(DecisionCosts::default().bridge_heading_var_per_m),
         }
     }
 }
@@ -227,6 +243,8 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
     // places of its turns, Σ (CV·d)² and its end-point error².
     let mut turns: Vec<(f64, f64)> = Vec::new();
     let mut steps: Vec<(f64, f64)> = Vec::new();
+    // (metres driven, heading error² rad²) of each bridged step.
+    let mut bridged: Vec<(f64, f64)> = Vec::new();
     let mut runs: Vec<RunSummary> = Vec::new();
     for path in paths {
         let frames = read_frames(path)?;
@@ -255,6 +273,10 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                 continue;
             }
             let driven = true_step.x.hypot(true_step.y);
+            if !b.matched && drove_straight(&true_step) {
+                let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
+                bridged.push((driven, error * error));
+            }
             if a.matched && b.matched && drove_straight(&true_step) {
                 if let Some(cv) = b.step_cv {
                     let ego_step = b.ego.relative_to(&a.ego);
@@ -297,6 +319,11 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
         turn_rms_error_deg: mean(&turns, &|t| t.1).sqrt().to_degrees(),
         turn_mean_deg: mean(&turns, &|t| t.0).to_degrees(),
         step_rms_error_m: mean(&steps, &|s| s.1).sqrt(),
+        bridged_steps: bridged.len(),
+        bridge_heading_var_per_m: (bridged.len() >= 3).then(|| {
+            let (metres, variance) = bridged.iter().fold((0.0, 0.0), |(m, v), b| (m + b.0, v + b.1));
+            variance / metres
+        }),
     })
 }
 
@@ -310,11 +337,28 @@ impl std::fmt::Display for CostFit {
             self.turn_mean_deg, self.turn_rms_error_deg
         )?;
         writeln!(f, "steps           RMS translation error {:.4} m", self.step_rms_error_m)?;
+        match self.bridge_heading_var_per_m {
+            Some(v) => writeln!(
+                f,
+                "bridged         {} steps on odometry: heading variance {v:.3e} rad² per metre ({:.2}° per √m)",
+                self.bridged_steps,
+                v.sqrt().to_degrees()
+            )?,
+            None => writeln!(
+                f,
+                "bridged         {} steps on odometry: too few to measure; default kept",
+                self.bridged_steps
+            )?,
+        }
         writeln!(f, "as the decision's costs (paste into ActionAiding(costs: ...)):")?;
         writeln!(
             f,
-            "  (step_sigma_per_cv: {:.4e}, heading_var_per_rad: {:.4e}, heading_var_per_turn: {:.4e})",
-            self.step_sigma_per_cv, self.heading_var_per_rad, self.heading_var_per_turn
+            "  (step_sigma_per_cv: {:.4e}, heading_var_per_rad: {:.4e}, heading_var_per_turn: {:.4e}, \
+             bridge_heading_var_per_m: {:.4e})",
+            self.step_sigma_per_cv,
+            self.heading_var_per_rad,
+            self.heading_var_per_turn,
+            self.costs().bridge_heading_var_per_m
         )
     }
 }
@@ -380,5 +424,52 @@ mod tests {
         .unwrap();
         let e = fit_costs(&[path]).unwrap_err().to_string();
         assert!(e.contains(":2:") && e.contains("ground truth"), "{e}");
+    }
+
+    #[test]
+    fn the_bridge_drift_is_measured_per_metre() {
+        // 0.3 m steps; egomotion fails on frames 6 to 10 and drifts 0.01
+        // rad on each: 1e-4 rad² per 0.3 m.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("trajectory.csv");
+        let mut text =
+            String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
+        let (mut ego_theta, mut failures) = (0.0, 0);
+        for frame in 1..=20 {
+            let x = 0.3 * f64::from(frame);
+            let bridged = (6..=10).contains(&frame);
+            if bridged {
+                ego_theta += 0.01;
+                failures += 1;
+            }
+            let cv = if bridged { String::new() } else { "0.1".into() };
+            text += &format!("0,{x},0,0,{x},0,{ego_theta},{failures},{cv},{frame}\n");
+        }
+        std::fs::write(&path, text).unwrap();
+        // The fit needs turns too: a second log of short legs and turns.
+        let frames = read_frames(&path).unwrap();
+        assert_eq!(frames.iter().filter(|f| !f.matched).count(), 5);
+        let mut logs = vec![path.clone()];
+        let turning = dir.path().join("turning").join("trajectory.csv");
+        std::fs::create_dir_all(turning.parent().unwrap()).unwrap();
+        let mut text =
+            String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
+        // Legs of two 0.3 m steps, each followed by a turn on the spot.
+        let (mut pose, mut frame) = (Pose2::default(), 0);
+        for _ in 0..4 {
+            for step in [Pose2::new(0.3, 0.0, 0.0), Pose2::new(0.3, 0.0, 0.0), Pose2::new(0.0, 0.0, 0.2)] {
+                pose = pose.compose(&step);
+                frame += 1;
+                let (x, y, theta) = (pose.x, pose.y, pose.theta);
+                text += &format!("0,{x},{y},{theta},{x},{y},{theta},0,0.1,{frame}\n");
+            }
+        }
+        std::fs::write(&turning, text).unwrap();
+        logs.push(turning);
+        let fit = fit_costs(&logs).unwrap();
+        assert_eq!(fit.bridged_steps, 5);
+        let measured = fit.bridge_heading_var_per_m.unwrap();
+        assert!((measured - 1e-4 / 0.3).abs() < 1e-12, "{measured}");
+        assert_eq!(fit.costs().bridge_heading_var_per_m, measured);
     }
 }

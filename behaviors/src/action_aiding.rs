@@ -675,17 +675,19 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "what the evaluative techniques minimise: `EndPoint`, the predicted end-point variance (the step's \
                  translation variance plus the heading variance of the turn now and back to the goal bearing, times \
                  the remaining distance squared; the goal bearing is always a candidate, so the robot drives straight \
-                 unless turning pays), or `Cv`, the thesis's step CV with turns free",
+                 unless turning pays, and with too few landmarks predicted there it costs the odometry bridge's \
+                 heading drift instead), or `Cv`, the thesis's step CV with turns free",
             ),
             Field::new(
                 "costs",
                 "costs",
                 "",
-                "(step_sigma_per_cv: 0.90, heading_var_per_rad: 9.3e-6, heading_var_per_turn: 1.2e-5)",
+                "(step_sigma_per_cv: 0.90, heading_var_per_rad: 9.3e-6, heading_var_per_turn: 1.2e-5, \
+                 bridge_heading_var_per_m: 1.17e-5)",
                 "each ≥ 0",
                 "the end-point objective's coefficients, measured: as `ubf model fit-costs` fits them from run logs \
                  (`scripts/fit-costs.sh`); a turn within `heading_tolerance_deg` is steered while driving and costs no \
-                 turn",
+                 turn; `bridge_heading_var_per_m` is the heading variance a metre on the odometry bridge adds",
             ),
             Field::new(
                 "min_landmarks",
@@ -694,7 +696,8 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "4",
                 "",
                 "a heading must keep at least this many landmarks predicted in both images, within range and beyond \
-                 the stereo-matching distance; fewer and egomotion would fail",
+                 the stereo-matching distance; fewer and egomotion would fail (under `EndPoint` the goal bearing \
+                 stays, at the odometry bridge's cost)",
             ),
             Field::new(
                 "max_stereo_viewpoint_deg",

@@ -45,6 +45,11 @@ pub struct DecisionCosts {
     /// Heading variance any turn leaves behind, however small, rad².
     #[serde(default = "DecisionCosts::default_turn_var", deserialize_with = "non_negative")]
     pub heading_var_per_turn: f64,
+    /// Heading variance a metre driven on the odometry bridge (egomotion
+    /// failing) adds, rad²/m: what driving straight at the goal costs where
+    /// too few landmarks are predicted in view.
+    #[serde(default = "DecisionCosts::default_bridge_var", deserialize_with = "non_negative")]
+    pub bridge_heading_var_per_m: f64,
 }
 
 impl DecisionCosts {
@@ -56,6 +61,9 @@ impl DecisionCosts {
     }
     fn default_turn_var() -> f64 {
         HEADING_VAR_PER_TURN
+    }
+    fn default_bridge_var() -> f64 {
+        BRIDGE_HEADING_VAR_PER_M
     }
 
     /// The predicted end-point variance of a step whose landmarks fuse to
@@ -73,6 +81,16 @@ impl DecisionCosts {
     pub fn turn_variance(&self, turned: f64) -> f64 {
         self.heading_var_per_turn + self.heading_var_per_rad * turned
     }
+
+    /// The predicted end-point variance of a step of `step_m` driven on the
+    /// odometry bridge, taken after turning by `turns`, with `remaining_m`
+    /// still to go: the heading variance the bridge and the turns leave,
+    /// carried over the remaining distance (the bridge's own translation
+    /// error over a step is far smaller and left out).
+    pub fn bridged_variance(&self, step_m: f64, turns: [f64; 2], remaining_m: f64) -> f64 {
+        let heading: f64 = turns.iter().filter(|t| **t > 0.0).map(|t| self.turn_variance(*t)).sum();
+        (heading + self.bridge_heading_var_per_m * step_m) * remaining_m * remaining_m
+    }
 }
 
 /// Measured by `scripts/fit-costs.sh`: `ubf model fit-costs` on 120 runs of
@@ -84,6 +102,9 @@ const STEP_SIGMA_PER_CV: f64 = 0.90;
 const HEADING_VAR_PER_RAD: f64 = 9.3e-6;
 /// As above: 0.20° per turn on the spot.
 const HEADING_VAR_PER_TURN: f64 = 1.2e-5;
+/// Measured directly on the 742 bridged steps of `scripts/fit-costs.sh`
+/// with seeds 100..130: 0.20° per √m, the slip the routes' odometry has.
+const BRIDGE_HEADING_VAR_PER_M: f64 = 1.17e-5;
 
 impl Default for DecisionCosts {
     fn default() -> Self {
@@ -91,15 +112,16 @@ impl Default for DecisionCosts {
             step_sigma_per_cv: STEP_SIGMA_PER_CV,
             heading_var_per_rad: HEADING_VAR_PER_RAD,
             heading_var_per_turn: HEADING_VAR_PER_TURN,
+            bridge_heading_var_per_m: BRIDGE_HEADING_VAR_PER_M,
         }
     }
 }
 
 /// The end-point error the decision's model predicts for a path, from what
 /// the robot knew while driving it (odometry and egomotion's step CVs, no
-/// ground truth): each step's translation variance, plus each on-the-spot
-/// turn's heading variance carried over the distance from the turn to the
-/// end. It is the sum the end-point objective minimises one step at a time,
+/// ground truth): each step's translation variance, plus the heading
+/// variance of each on-the-spot turn and each step on the odometry bridge,
+/// carried over the distance from there to the end. It is the sum the end-point objective minimises one step at a time,
 /// so a run's actual error over this σ says how well the model is
 /// calibrated.
 #[derive(Clone, Debug, Default)]
@@ -107,8 +129,9 @@ pub struct EndPointPredictor {
     costs: DecisionCosts,
     /// Summed translation variance of the steps, m².
     step_variance: f64,
-    /// Where each turn was made, and the heading variance it left.
-    turns: Vec<((f64, f64), f64)>,
+    /// Where each turn or bridged step was made, and the heading variance
+    /// it left.
+    headings: Vec<((f64, f64), f64)>,
     last: Option<Pose2>,
     /// Where the turn under way began.
     turning_from: Option<Pose2>,
@@ -149,18 +172,23 @@ impl EndPointPredictor {
         }
         if let Some(from) = self.turning_from.take() {
             let turned = angle_difference(last.theta, from.theta).abs();
-            self.turns.push(((last.x, last.y), self.costs.turn_variance(turned)));
+            self.headings.push(((last.x, last.y), self.costs.turn_variance(turned)));
         }
         let driven = step.x.hypot(step.y);
-        if let Some(cv) = step_cv {
-            self.step_variance += (self.costs.step_sigma_per_cv * cv * driven).powi(2);
+        match step_cv {
+            Some(cv) => self.step_variance += (self.costs.step_sigma_per_cv * cv * driven).powi(2),
+            None if driven > 0.0 => {
+                self.headings.push(((odometry.x, odometry.y), self.costs.bridge_heading_var_per_m * driven));
+            }
+            None => {}
         }
     }
 
     /// The predicted end-point σ for a path ending at `end`, m.
     pub fn sigma(&self, end: (f64, f64)) -> f64 {
-        let turns: f64 = self.turns.iter().map(|((x, y), v)| v * ((end.0 - x).powi(2) + (end.1 - y).powi(2))).sum();
-        (self.step_variance + turns).sqrt()
+        let headings: f64 =
+            self.headings.iter().map(|((x, y), v)| v * ((end.0 - x).powi(2) + (end.1 - y).powi(2))).sum();
+        (self.step_variance + headings).sqrt()
     }
 }
 
@@ -171,7 +199,9 @@ pub enum Objective {
     Cv,
     /// The predicted end-point variance: the step's translation variance
     /// plus the heading variance of the turn it needs, now and back to the
-    /// goal bearing, times the remaining distance squared.
+    /// goal bearing, times the remaining distance squared. Driving at the
+    /// goal stays a candidate where too few landmarks are predicted in view:
+    /// it costs the odometry bridge's heading variance instead.
     EndPoint {
         /// The robot's heading now, rad.
         heading: f64,
@@ -192,17 +222,36 @@ impl Objective {
     fn cost(&self, heading: f64, cv: f64, step_m: f64) -> f64 {
         match *self {
             Objective::Cv => cv,
-            Objective::EndPoint { heading: now, goal_bearing, remaining_m, turn_tolerance, costs } => {
-                let turns = [angle_difference(heading, now), angle_difference(goal_bearing, heading)].map(|t| {
-                    if t.abs() > turn_tolerance {
-                        t.abs()
-                    } else {
-                        0.0
-                    }
-                });
-                costs.end_point_variance(cv, step_m, turns, remaining_m)
+            Objective::EndPoint { remaining_m, costs, .. } => {
+                costs.end_point_variance(cv, step_m, self.turns(heading), remaining_m)
             }
         }
+    }
+
+    /// The cost of driving `heading` on the odometry bridge, where it is
+    /// the goal's bearing and the end-point objective is in use; `None`
+    /// otherwise (the heading is then infeasible without landmarks).
+    fn bridged_cost(&self, heading: f64, step_m: f64) -> Option<f64> {
+        match *self {
+            Objective::EndPoint { goal_bearing, remaining_m, costs, .. } if heading == goal_bearing => {
+                Some(costs.bridged_variance(step_m, self.turns(heading), remaining_m))
+            }
+            _ => None,
+        }
+    }
+
+    /// The turns on the spot `heading` needs, now and back to the goal's
+    /// bearing, rad (0 for those within the turn tolerance, steered while
+    /// driving).
+    fn turns(&self, heading: f64) -> [f64; 2] {
+        let Objective::EndPoint { heading: now, goal_bearing, turn_tolerance, .. } = *self else { return [0.0; 2] };
+        [angle_difference(heading, now), angle_difference(goal_bearing, heading)].map(|t| {
+            if t.abs() > turn_tolerance {
+                t.abs()
+            } else {
+                0.0
+            }
+        })
     }
 }
 
@@ -211,7 +260,8 @@ impl Objective {
 pub struct Decision {
     /// The heading, rad (world).
     pub heading: f64,
-    /// Its fused CV over the landmarks predicted in view.
+    /// Its fused CV over the landmarks predicted in view; infinite when
+    /// too few are, and the step is to be driven on the odometry bridge.
     pub cv: f64,
     /// The objective's value.
     pub cost: f64,
@@ -235,8 +285,10 @@ const BANDS: usize = 4;
 /// one of least `objective` over the landmarks predicted in view after one
 /// projected step. A heading with
 /// fewer than `min_landmarks` in view (egomotion would fail) or with one
-/// nearer than the slant limit is rejected. Ties go to the candidate listed
-/// first. `None` if every heading is rejected.
+/// nearer than the slant limit is rejected, except that under the
+/// end-point objective the goal's bearing with too few in view stays, at
+/// the odometry bridge's cost. Ties go to the candidate listed first.
+/// `None` if every heading is rejected.
 ///
 /// For speed, landmarks are sorted once by distance band and bearing, and
 /// each candidate reads, in each band, only the bearings its field of view
@@ -331,7 +383,10 @@ pub fn best_heading(
     best
 }
 
-/// Keeps `heading` in `best` if its view is feasible and cheaper.
+/// Keeps `heading` in `best` if it is cheaper and its view is feasible:
+/// no landmark too near (`seen` is `None`) and enough in view, or, for the
+/// goal's bearing under the end-point objective, too few in view and the
+/// step driven on the odometry bridge.
 fn consider(
     best: &mut Option<Decision>,
     rules: &DecisionRules,
@@ -339,11 +394,17 @@ fn consider(
     heading: f64,
     seen: Option<Seen>,
 ) {
-    let Some(seen) = seen.filter(|s| s.count >= rules.min_landmarks.max(1) && s.information > 0.0) else { return };
-    let cv = 1.0 / seen.information;
-    let cost = objective.cost(heading, cv, rules.step_m);
+    let Some(seen) = seen else { return };
+    let (cv, cost) = if seen.count >= rules.min_landmarks.max(1) && seen.information > 0.0 {
+        let cv = 1.0 / seen.information;
+        (cv, objective.cost(heading, cv, rules.step_m))
+    } else {
+        let Some(cost) = objective.bridged_cost(heading, rules.step_m) else { return };
+        (f64::INFINITY, cost)
+    };
+    let landmarks = seen.count;
     if best.is_none_or(|b| cost < b.cost) {
-        *best = Some(Decision { heading, cv, cost, landmarks: seen.count });
+        *best = Some(Decision { heading, cv, cost, landmarks });
     }
 }
 
@@ -596,10 +657,16 @@ mod tests {
 
     #[test]
     fn the_predictor_carries_a_turn_over_the_rest_of_the_path() {
-        let costs = DecisionCosts { step_sigma_per_cv: 2.0, heading_var_per_rad: 0.0, heading_var_per_turn: 1e-4 };
+        let costs = DecisionCosts {
+            step_sigma_per_cv: 2.0,
+            heading_var_per_rad: 0.0,
+            heading_var_per_turn: 1e-4,
+            bridge_heading_var_per_m: 1e-3,
+        };
         let mut p = EndPointPredictor::new(costs);
         // 2 m straight in 0.5 m steps at CV 0.1, a 30° turn on the spot in
-        // three frames, then 10 m on.
+        // three frames, then 10 m on, of which one step (the sixth) on the
+        // odometry bridge.
         let mut pose = Pose2::default();
         p.frame(&pose, None);
         for _ in 0..4 {
@@ -611,13 +678,18 @@ mod tests {
             p.frame(&pose, Some(0.1));
         }
         let turned_at = pose;
-        for _ in 0..20 {
+        let mut bridged_at = pose;
+        for k in 0..20 {
             pose = pose.compose(&Pose2::new(0.5, 0.0, 0.0));
-            p.frame(&pose, Some(0.1));
+            let bridged = k == 5;
+            if bridged {
+                bridged_at = pose;
+            }
+            p.frame(&pose, (!bridged).then_some(0.1));
         }
-        let steps = 24.0 * (2.0 * 0.1 * 0.5f64).powi(2);
-        let lever2 = (pose.x - turned_at.x).powi(2) + (pose.y - turned_at.y).powi(2);
-        let expected = (steps + 1e-4 * lever2).sqrt();
+        let steps = 23.0 * (2.0 * 0.1 * 0.5f64).powi(2);
+        let lever2 = |at: Pose2| (pose.x - at.x).powi(2) + (pose.y - at.y).powi(2);
+        let expected = (steps + 1e-4 * lever2(turned_at) + 1e-3 * 0.5 * lever2(bridged_at)).sqrt();
         assert!((p.sigma((pose.x, pose.y)) - expected).abs() < 1e-12, "{} vs {expected}", p.sigma((pose.x, pose.y)));
     }
 
@@ -634,7 +706,12 @@ mod tests {
         let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
         let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
         assert!(cv.heading > 20f64.to_radians(), "{}", cv.heading.to_degrees());
-        let costs = DecisionCosts { step_sigma_per_cv: 1.0, heading_var_per_rad: 1e-5, heading_var_per_turn: 0.0 };
+        let costs = DecisionCosts {
+            step_sigma_per_cv: 1.0,
+            heading_var_per_rad: 1e-5,
+            heading_var_per_turn: 0.0,
+            bridge_heading_var_per_m: 1e-5,
+        };
         let end_point = |remaining_m| Objective::EndPoint {
             heading: 0.0,
             goal_bearing: 0.0,
@@ -646,5 +723,41 @@ mod tests {
         assert_eq!(far.heading, 0.0);
         let near = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &end_point(0.5)).unwrap();
         assert!(near.heading > 20f64.to_radians(), "{}", near.heading.to_degrees());
+    }
+
+    #[test]
+    fn driving_at_the_goal_stays_a_candidate_at_the_bridges_cost() {
+        let t = table();
+        // Nothing ahead; a cluster 40° left. The CV objective must turn: no
+        // landmark, no egomotion. The end-point objective weighs the turn
+        // there and back against driving the step on the odometry bridge.
+        let landmarks: Vec<(f64, f64)> = (0..6).map(|i| (6.0 + 0.5 * f64::from(i), 5.0 + 0.3 * f64::from(i))).collect();
+        let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
+        let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
+        assert!(cv.heading > 10f64.to_radians(), "{}", cv.heading.to_degrees());
+        let end_point = |bridge_heading_var_per_m| Objective::EndPoint {
+            heading: 0.0,
+            goal_bearing: 0.0,
+            remaining_m: 5.0,
+            turn_tolerance: 2f64.to_radians(),
+            costs: DecisionCosts {
+                step_sigma_per_cv: 1.0,
+                heading_var_per_rad: 0.0,
+                heading_var_per_turn: 1e-4,
+                bridge_heading_var_per_m,
+            },
+        };
+        let cheap = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &end_point(1e-5)).unwrap();
+        assert_eq!((cheap.heading, cheap.landmarks), (0.0, 0));
+        assert!(cheap.cv.is_infinite());
+        assert!((cheap.cost - 1e-5 * rules().step_m * 25.0).abs() < 1e-15, "{}", cheap.cost);
+        let dear = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &end_point(1e-2)).unwrap();
+        assert!(dear.heading > 0.0 && dear.landmarks > 0, "{dear:?}");
+        // A landmark too near ahead is an obstacle, not a view: the bridge
+        // does not drive into it.
+        let mut blocked = landmarks.clone();
+        blocked.push((rules().step_m + 0.3, 0.0));
+        let d = best_heading(&t, &rules(), &blocked, (0.0, 0.0), candidates(), &end_point(1e-5)).unwrap();
+        assert_ne!(d.heading, 0.0);
     }
 }
