@@ -22,6 +22,11 @@ dev = load('endpoint.json')
 dev_cv = load('endpoint-cv.json')
 rtt = load('endpoint-rtt.json')
 held = {seed: load(f'endpoint-held-{seed}.json') for seed in (101, 202, 303)}
+held2 = {seed: load(f'endpoint-held-{seed}.json') for seed in (707, 808, 909)}
+costs130 = load('fit-costs-130.json')
+# The coefficients in use: ActionAiding's `costs` default, as it describes it.
+described = next(line for line in open('out/action-aiding.md') if line.startswith('| `costs` |'))
+in_use = {k.strip(): float(v) for k, v in (kv.split(':') for kv in described.split('`')[3].strip('()').split(','))}
 held_cv = load('endpoint-held-101-cv.json')
 env = load('where-aiding-pays.json')
 banks = load('keyframes.json')['scenarios']
@@ -31,7 +36,8 @@ ablation = [(label, load(f'ablation-{k}.json')) for k, label in [
     ('2', '+ feasible, end-point decision (uncalibrated)'),
     ('3', '+ truth at the sensed instant, turn gate'),
     ('4', '+ 8 % outliers (Table 2), odometry gate, fitted costs'),
-]] + [('+ anchor by predicted error, refitted costs: today', dev)]
+    ('5', '+ anchor by predicted error, refitted costs'),
+]] + [('+ straight on the odometry bridge, odometry χ² gate: today', dev)]
 
 out = []
 w = out.append
@@ -53,7 +59,7 @@ pays_early = [c for c in env['cells'] if c['ratio_ci95'][1] < 1.0]
 losses_early = [c for c in env['cells'] if c['ratio_ci95'][0] > 1.0]
 held_ratios = {t: [ratio(d['routes'][rt]['rigid'][t], d['routes'][rt]['rigid']['none']) for d in held.values() for rt in ROUTES] for t in T}
 w("- **Aiding no longer makes navigation worse.** Before this work, switching ActionAiding on multiplied the end-point error by up to 40 (the first table below). The cause was defects, not physics: egomotion threw its motion away after 3 s without a usable frame, the decision accepted headings egomotion could not use and charged nothing for turning, and the end-point error compared poses taken at different instants. With those fixed, every technique ends within a few tenths of a metre of straight driving over 40 m.")
-w(f"- **Where aiding pays, the physical scan pays most.** On nine held-out route-and-layout cases the scan ends at {min(held_ratios['scan']):.2f}–{max(held_ratios['scan']):.2f}× straight driving's error, " + f"and on the environment map (held-out seeds and layout) the best aided technique gains in {len(pays_early)} of {len(env['cells'])} environments with its whole interval below 1 (" + "; ".join(f"{c['factor']} {c['level']}: {c['best']} ×{c['ratio']:.2f}" for c in pays_early) + f") and loses in {len(losses_early)} (" + "; ".join(f"{c['factor']} {c['level']}: {c['best']} ×{c['ratio']:.2f}" for c in losses_early) + f"). Tracking is level with straight driving ({min(held_ratios['tracking']):.2f}–{max(held_ratios['tracking']):.2f}×), mostly inside the confidence intervals, and misses its 1.1× target on some held-out routes.")
+w(f"- **Where aiding pays, the physical scan pays most.** On nine held-out route-and-layout cases the scan ends at {min(held_ratios['scan']):.2f}–{max(held_ratios['scan']):.2f}× straight driving's error, " + f"and on the environment map (held-out seeds and layout) the best aided technique gains in {len(pays_early)} of {len(env['cells'])} environments with its whole interval below 1 (" + "; ".join(f"{c['factor']} {c['level']}: {c['best']} ×{c['ratio']:.2f}" for c in pays_early) + f") and loses in {len(losses_early)} (" + "; ".join(f"{c['factor']} {c['level']}: {c['best']} ×{c['ratio']:.2f}" for c in losses_early) + f"). Tracking is level with straight driving ({min(held_ratios['tracking']):.2f}–{max(held_ratios['tracking']):.2f}× on the first nine held-out cases), and misses its 1.1× target on a few held-out routes (section *Held out*).")
 w("- **The thesis's large gains are not reproduced.** With the noise its own Tables 1 and 2 report, straight driving already ends within 2 % of the distance with either estimator, where the thesis's robot ended 21–45 % off (Tables 5–7); there is little left for aiding to win. Why the thesis's straight runs were so much worse is not known here (section *Why the thesis's gains do not appear*).\n")
 
 w("## What each fix did\n")
@@ -66,9 +72,11 @@ for label, data in ablation:
       + f" | {r['scan']['egomotion_failures']['mean']:.0f} | {r['tracking']['egomotion_failures']['mean']:.1f} |")
 w("")
 w("The first fix carries almost all of the change: the old tracker gave its reference frame up after 3 s without a match, and the motion since with it; with a bank of keyframes and an odometry bridge nothing is dropped, and the scan's sweep costs one rotation estimate (the frame at the chosen heading is matched against the keyframe taken before the sweep). The scan still reports many failed frames: those are frames at the ends of its sweep that share no landmarks with any keyframe; the robot stands still while they are bridged (outage distance in the tables below). The fifth row carries 8 % gross stereo mismatches instead of 2 %, which raises straight driving's error (see Table 2 below), and an odometry gate without which those mismatches occasionally slid a motion metres along the line of sight (seed 1018 of layout 303: 6.2 m of false forward motion in one frame).\n")
-before, today = ablation[-2][1]['routes'][ROUTES[0]]['rigid'], dev['routes'][ROUTES[0]]['rigid']
+before, today = ablation[-3][1]['routes'][ROUTES[0]]['rigid'], ablation[-2][1]['routes'][ROUTES[0]]['rigid']
 change = lambda t: f"{before[t]['endpoint_error_m']['mean']:.2f} to {today[t]['endpoint_error_m']['mean']:.2f} m"
-w(f"The last row changes how a frame's anchor is chosen. The keyframe with the most certain pose, metres back, used to anchor a frame whenever it matched on six landmarks; now the newest keyframe is matched too, and the match predicting the smaller error wins (each keyframe carries its pose covariance, each match the estimator's inverse information; see [perception.md](perception.md#public-datasets), where the same change stopped real KITTI frames landing metres off). The coefficients were refitted for it (next section). On this route straight driving's error went from {change('none')}, the scan's from {change('scan')}, tracking's from {change('tracking')}, and the zig-zag's from {change('zigzag')}.\n")
+w(f"The sixth row changes how a frame's anchor is chosen. The keyframe with the most certain pose, metres back, used to anchor a frame whenever it matched on six landmarks; now the newest keyframe is matched too, and the match predicting the smaller error wins (each keyframe carries its pose covariance, each match the estimator's inverse information; see [perception.md](perception.md#public-datasets), where the same change stopped real KITTI frames landing metres off). The coefficients were refitted for it (next section). On this route straight driving's error went from {change('none')}, the scan's from {change('scan')}, tracking's from {change('tracking')}, and the zig-zag's from {change('zigzag')}.\n")
+before, today = ablation[-2][1]['routes'][ROUTES[0]]['rigid'], dev['routes'][ROUTES[0]]['rigid']
+w(f"The last row makes two changes, found by replaying the runs where tracking ended worst on development layouts 404, 505 and 606 (seeds 2000..2030, kept apart from every table here). First, a heading needs four landmarks predicted in view, and where driving at the goal had fewer, the decision turned away to one that had them, often in the last metre before the goal; the frames after such a turn matched keyframes 9 m back on three or four landmarks and landed decimetres off. Driving at the goal now stays a candidate there, costed as a step on the odometry bridge (its heading drift per metre, measured by `ubf model fit-costs` on the bridged steps of the training logs). On the development layouts that alone took tracking's worst route from 1.27× to 1.00× straight driving. Second, the odometry gate now also weighs a rigid motion's disagreement with odometry by both covariances (the estimate's, and odometry's own error model), rejecting what a χ² test at 99.9 % cannot explain: far landmarks with a mismatch among them agreed on motions 0.9 m longer than the wheels drove, with a claimed σ of 0.14 m. That lowered straight driving's error on the development layouts' route 2→1 from 0.09–0.13 m to 0.07 m. On route 1→2 here straight driving's error went from {change('none')}, the scan's from {change('scan')}, tracking's from {change('tracking')}, and the zig-zag's from {change('zigzag')}.\n")
 
 w("## Noise from the thesis's inputs: Table 2\n")
 w("```sh run\nubf experiment thesis-table2\n```\n")
@@ -86,15 +94,20 @@ w("")
 w(f"Pixel noise alone gives no error beyond 2 m; the tail needs gross mismatches, and {100*best:.0f} % reproduces it. The route scenarios therefore use `outlier_share: {best:.2f}`. The median is higher than the thesis's; the scene cannot be rebuilt exactly, since Table 1 locates only five landmarks, all 34–50 m away, and Table 2's other eight (some with errors of 2–7 cm) are not located in the text. Raising the mismatches from 2 % to 8 % raised straight driving's error on route 1→2 from 0.55 to 0.71 m (first table), and even 1 px of pixel noise, twenty times Table 1's, leaves it near a metre (environment map below): noise is not what separates the thesis's 14 m from our fractions of a metre.\n")
 
 w("## The decision's coefficients, measured\n")
-w("```sh run-slow\nscripts/fit-costs.sh      # runs the routes on seeds 100..110 and calls: ubf model fit-costs out/fit-costs\n```\n")
+w("```sh run-slow\nscripts/fit-costs.sh      # runs the routes on seeds 100..110 and calls: ubf model fit-costs out/fit-costs\nSEEDS=100..130 scripts/fit-costs.sh\n```\n")
 w(f"The end-point objective weighs a step's translation variance against the heading variance a turn leaves, carried over the distance still to go. Both coefficients are fitted to what stays in the end point of {costs['logs']} runs (straight, zig-zag, scan and tracking with the CV objective, so that there are plenty of turns), by non-negative least squares on `e² ≈ σ_cv²·Σ(CV·d)² + Σ_turns (per_turn + per_rad·|turn|)·lever²`:\n")
-w("| coefficient | fitted |")
-w("| --- | --- |")
-w(f"| translation σ per unit step CV per metre | {costs['step_sigma_per_cv']:.3g} |")
-w(f"| heading variance per turn on the spot | {costs['heading_var_per_turn']:.3g} rad² ({(costs['heading_var_per_turn'] ** 0.5) * 57.2958:.2f}°) |")
-w(f"| heading variance per radian turned | {costs['heading_var_per_rad']:.3g} rad² |")
+w("| coefficient | in use | refitted, seeds 100..110 | refitted, seeds 100..130 |")
+w("| --- | --- | --- | --- |")
+for key, name, unit in [
+    ('step_sigma_per_cv', 'translation σ per unit step CV per metre', ''),
+    ('heading_var_per_turn', 'heading variance per turn on the spot', ' rad²'),
+    ('heading_var_per_rad', 'heading variance per radian turned', ' rad²'),
+    ('bridge_heading_var_per_m', 'heading variance per metre on the odometry bridge (measured directly)', ' rad²'),
+]:
+    w(f"| {name} | {in_use[key]:.3g}{unit} | {costs[key] or 0:.3g}{unit} | {costs130[key] or 0:.3g}{unit} |")
 w("")
-w(f"Frame by frame the errors are far larger: across a turn the heading differs from the truth by {costs['turn_rms_error_deg']:.2f}° RMS (turns of {costs['turn_mean_deg']:.0f}° on average), and a single straight step by {costs['step_rms_error_m']:.2f} m. Most of that does not stay: 80 such steps would end about {costs['step_rms_error_m'] * 80 ** 0.5:.1f} m off if their errors added up, and the straight runs end {dev['routes'][ROUTES[0]]['rigid']['none']['endpoint_error_m']['mean']:.2f} m off; in the logs the pose swings from frame to frame as different keyframes anchor it, and swings back. An earlier fit to the per-frame errors put a turn's heading variance at 5.8·10⁻⁴ rad², about 40 times what stays. The fitted coefficients are the defaults of `ActionAiding(costs: ...)`; the thesis-faithful CV objective is `objective: Cv`.\n")
+w(f"The turn and step coefficients in use were fitted on seeds 100..110 with the code of the sixth row of the first table, before the odometry χ² gate; the bridge's drift is measured directly on the {costs130['bridged_steps']} bridged steps of seeds 100..130 ({(costs130['bridge_heading_var_per_m'] ** 0.5) * 57.2958:.2f}° per √m, where the routes' odometry slips 0.2° per √m). Refitted on today's tracker, the split between a turn's fixed and per-radian variance is unstable: the two columns put all of it on one term or the other, because the training turns are mostly of one size (about {costs['turn_mean_deg']:.0f}°). With either refit, tracking on the development layouts turned more (small turns became nearly free, or large ones did) and ended worse than with the coefficients in use, so those were kept; the fit is a measurement, but not a precise one, and the decision is sensitive to it.\n")
+w(f"Frame by frame the errors are far larger: across a turn the heading differs from the truth by {costs['turn_rms_error_deg']:.2f}° RMS (turns of {costs['turn_mean_deg']:.0f}° on average), and a single straight step by {costs['step_rms_error_m']:.2f} m. Most of that does not stay: 80 such steps would end about {costs['step_rms_error_m'] * 80 ** 0.5:.1f} m off if their errors added up, and the straight runs end {dev['routes'][ROUTES[0]]['rigid']['none']['endpoint_error_m']['mean']:.2f} m off; in the logs the pose swings from frame to frame as different keyframes anchor it, and swings back. An earlier fit to the per-frame errors put a turn's heading variance at 5.8·10⁻⁴ rad², about 40 times what stays. The coefficients in use are the defaults of `ActionAiding(costs: ...)`; the thesis-faithful CV objective is `objective: Cv`.\n")
 
 w("## End-point error: Tables 5–7 and 10\n")
 w("```sh run\nubf experiment thesis-endpoint                           # seeds 0..30, each route's own layout\nubf experiment thesis-endpoint --objective cv            # the thesis's CV-only decision\nubf experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101   # held out (also 202, 303)\n```\n")
@@ -116,19 +129,24 @@ for route in ROUTES:
         w(f"| {t} | {cell(c)} | {ratio(c, r['none']):.2f} | {c['predicted_sigma_m']['mean']:.2f} | {c['actual_over_predicted']:.2f} | {c['egomotion_failures']['mean']:.1f} | {c['outage_m']['mean']:.2f} | {c['time_overhead_pct']['mean']:.0f} | {s2[t]['endpoint_error_m']['mean']:.2f} | {ratio(s2[t], s2['none']):.2f} | {thesis_ep[route][t]} |")
     w("")
 
-w("### Held out: seeds 1000..1030 in three layouts nobody tuned on\n")
-w("Rigid estimator, end-point objective: mean error (m) of each aided technique over straight driving's in the same layout and seeds.\n")
-w("| layout | route | none m | zig-zag × | scan × | tracking × | tracking failures / run |")
+w("### Held out: layouts and seeds nobody tuned on\n")
+w("Rigid estimator, end-point objective: mean error (m) of each aided technique over straight driving's in the same layout and seeds. The first three layouts (seeds 1000..1030) have been reported since the keyframe bank; the last change was developed on other layouts (404, 505, 606, seeds 2000..2030), and layouts 707, 808 and 909 (seeds 3000..3030) were first run after it. A tracking ratio beyond 1.1 is in bold, and so is a failure count beyond 5.\n")
+w("| layout | route | none m | zig-zag × | scan × | tracking × [95 % CI of tracking m] | tracking failures / run |")
 w("| --- | --- | --- | --- | --- | --- | --- |")
-for seed, data in held.items():
+every_held = {**held, **held2}
+bold = lambda text, over: f"**{text}**" if over else text
+for seed, data in every_held.items():
     for route in ROUTES:
         r = data['routes'][route]['rigid']
-        w(f"| {seed} | {SHORT[route]} | {r['none']['endpoint_error_m']['mean']:.3f} | {ratio(r['zigzag'], r['none']):.2f} | {ratio(r['scan'], r['none']):.2f} | {ratio(r['tracking'], r['none']):.2f} | {r['tracking']['egomotion_failures']['mean']:.1f} |")
+        tr, fails = ratio(r['tracking'], r['none']), r['tracking']['egomotion_failures']['mean']
+        ci = r['tracking']['endpoint_error_m']['ci95']
+        w(f"| {seed} | {SHORT[route]} | {r['none']['endpoint_error_m']['mean']:.3f} | {ratio(r['zigzag'], r['none']):.2f} | {ratio(r['scan'], r['none']):.2f} | {bold(f'{tr:.2f}', tr > 1.1)} [{ci[0]:.3f}, {ci[1]:.3f}] | {bold(f'{fails:.1f}', fails > 5)} |")
 w("")
-worst_scan = max(ratio(d['routes'][rt]['rigid']['scan'], d['routes'][rt]['rigid']['none']) for d in held.values() for rt in ROUTES)
-worst_track = max(ratio(d['routes'][rt]['rigid']['tracking'], d['routes'][rt]['rigid']['none']) for d in held.values() for rt in ROUTES)
-most_fail = max(d['routes'][rt]['rigid']['tracking']['egomotion_failures']['mean'] for d in held.values() for rt in ROUTES)
-w(f"**Against the targets.** The scan stays within {worst_scan:.2f}× straight driving on every held-out route (target 1.5×). Tracking's worst held-out route is {worst_track:.2f}× (target 1.1×): **missed** on some routes, by 0.01–0.1 m in absolute terms and mostly inside the confidence intervals, which at 30 seeds are ±20–40 % of these small errors. Tracking's egomotion failures stay at or below {most_fail:.1f} per run (target 5). We did not tune toward the target: the coefficients were fitted once, on seeds 100..110, and these rows were run after.\n")
+cases = [(seed, rt, d['routes'][rt]['rigid']) for seed, d in every_held.items() for rt in ROUTES]
+worst_scan = max(ratio(r['scan'], r['none']) for _, _, r in cases)
+missed = [(seed, rt, ratio(r['tracking'], r['none'])) for seed, rt, r in cases if ratio(r['tracking'], r['none']) > 1.1]
+failing = [(seed, rt, r['tracking']['egomotion_failures']['mean']) for seed, rt, r in cases if r['tracking']['egomotion_failures']['mean'] > 5]
+w(f"**Against the targets.** The scan stays within {worst_scan:.2f}× straight driving on every held-out route (target 1.5×). Tracking is within 1.1× on {len(cases) - len(missed)} of {len(cases)} held-out cases and **misses** on " + "; ".join(f"layout {seed} route {SHORT[rt]} ({x:.2f}×)" for seed, rt, x in missed) + f". Its egomotion failures stay at or below 5 per run on {len(cases) - len(failing)} of {len(cases)} and **exceed** it on " + "; ".join(f"layout {seed} route {SHORT[rt]} ({x:.1f})" for seed, rt, x in failing) + ". Replaying the worst runs shows the same weakness behind both misses: the pose swings from frame to frame as keyframes metres apart take turns anchoring it (on layout 808 route 1→2, seed 3010, by up to 0.5 m while the robot stood still near the goal; the turn controller chased the swinging heading, took it for a stuck turn and went the long way round, circling for 160 s and failing 207 frames facing the open lobby; on layout 101 route 2→1, seed 1001, after a 7.7° turn 6 m out the pose swung by up to 0.6 m between frames and kept 0.45 m of along-track error to the end, where straight driving ended 0.03 m off). A tracker that weighs each visual estimate against the odometry bridge by their covariances, instead of taking the best visual match as the pose, would address both; it is not built. On routes 2→1 and feature-poor tracking now ends exactly where straight driving does in most layouts: it finds no heading worth a turn and drives the same path. We did not tune toward the target: the coefficients were fitted on seeds 100..110 (the bridge's drift on 100..130), the change was developed on layouts no table here uses, and these rows were run after.\n")
 r = held_cv['routes']
 w(f"**The thesis's CV objective on the same held-out runs** (layout 101) turns far more (tracking {r[ROUTES[0]]['rigid']['tracking']['time_overhead_pct']['mean']:.0f} % longer than straight on route 1→2, against {held[101]['routes'][ROUTES[0]]['rigid']['tracking']['time_overhead_pct']['mean']:.0f} % with the end-point objective) and ends at " + ", ".join(f"{ratio(r[rt]['rigid']['tracking'], r[rt]['rigid']['none']):.2f}×" for rt in ROUTES) + " straight driving's error with tracking and " + ", ".join(f"{ratio(r[rt]['rigid']['scan'], r[rt]['rigid']['none']):.2f}×" for rt in ROUTES) + " with the scan.\n")
 
