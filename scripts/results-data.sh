@@ -29,6 +29,11 @@ done
 for layout in 707 808 909; do
     "$ubf" experiment thesis-endpoint --seeds 3000..3030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
 done
+# A third, run once a later idea (shorter last steps) had been tried on it
+# and dropped: it is reported with the code as committed.
+for layout in 1111 1212 1313; do
+    "$ubf" experiment thesis-endpoint --seeds 6000..6030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
+done
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
 "$ubf" experiment where-aiding-pays --plot docs/where-aiding-pays.png --json > out/where-aiding-pays.json
 # Route 1->2 with a one-frame keyframe bank (frame-to-frame matching)
