@@ -54,7 +54,7 @@ def ratio(a, b):
 
 
 w("# Results: action aiding on the simulator, beside the thesis\n")
-w("Every number on this page comes from the commands shown, on the committed code, and the page is written by `scripts/results-page.py` from their output (`scripts/results-data.sh` runs them), so no number is copied by hand. The thesis's numbers stand beside ours. Nothing was tuned towards the thesis's outcome tables (4–11): the simulator is calibrated to its input measurements only (Table 1's pixel noise, Table 2's share of gross mismatches, its frame rate, speeds and geometry), and the decision's coefficients are measured from our own run logs on seeds kept apart from every figure below.\n")
+w("Every table on this page comes from the commands shown, on the committed code, and the page is written by `scripts/results-page.py` from their output (`scripts/results-data.sh` runs them), so no table is copied by hand; the prose's diagnoses quote single development runs (named by layout and seed, reproducible with `ubf run`) that the page does not regenerate. The thesis's numbers stand beside ours. Nothing was tuned towards the thesis's outcome tables (4–11): the simulator is calibrated to its input measurements only (Table 1's pixel noise, Table 2's share of gross mismatches, its frame rate, speeds and geometry), and the decision's coefficients are measured from our own run logs on seeds kept apart from every figure below.\n")
 w("## In short\n")
 pays_early = [c for c in env['cells'] if c['ratio_ci95'][1] < 1.0]
 losses_early = [c for c in env['cells'] if c['ratio_ci95'][0] > 1.0]
