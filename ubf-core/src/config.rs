@@ -74,7 +74,22 @@ pub fn ron_options() -> ron::Options {
 /// Reads a value from RON text. Documents that contain behaviour trees are
 /// read with [`crate::Registry::from_ron`] instead.
 pub fn from_ron<T: DeserializeOwned>(text: &str) -> Result<T, RonError> {
-    ron_options().from_str(text).map_err(RonError::from)
+    ron_options().from_str(text).map_err(|e| with_hint(RonError::from(e), text))
+}
+
+/// The error, with a hint where the dialect differs from plain RON: with
+/// newtype variants unwrapped, `Some((field: ..))` is read as a struct named
+/// `Some`, and the parser's complaint names neither.
+fn with_hint(mut error: RonError, text: &str) -> RonError {
+    // The line up to and including the character the parser stopped at.
+    let before: String =
+        text.lines().nth(error.line.saturating_sub(1)).unwrap_or_default().chars().take(error.column).collect();
+    let compact: String = before.chars().filter(|c| !c.is_whitespace()).collect();
+    if compact.ends_with("Some((") {
+        error.message += "; write an optional setting as `Some(field: ..)` or just `(field: ..)`, without the inner \
+                          parentheses";
+    }
+    error
 }
 
 fn number_where<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str) -> Result<f64, D::Error> {

@@ -152,3 +152,27 @@ fn ten_thousand_children_load_with_unique_names_including_taken_suffixes() {
     let unique: std::collections::HashSet<&&str> = names.iter().collect();
     assert_eq!(unique.len(), 10_000);
 }
+
+#[test]
+fn an_optional_setting_in_double_parentheses_gets_a_hint() {
+    // The dialect unwraps newtype variants, so `Some((..))` is not read;
+    // the error says how to write it instead.
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    struct Inner {
+        a: f64,
+    }
+    #[derive(Debug, Deserialize)]
+    #[allow(dead_code)]
+    struct Outer {
+        inner: Option<Inner>,
+    }
+    let error = ubf_core::config::from_ron::<Outer>("(inner: Some((a: 1.0)))").unwrap_err();
+    assert!(error.message.contains("`Some(field: ..)`"), "{error}");
+    assert_eq!((error.line, error.column), (1, 14));
+    let read = ubf_core::config::from_ron::<Outer>("(inner: Some(a: 1.0))").unwrap();
+    assert!(read.inner.is_some());
+    // Errors elsewhere carry no hint.
+    let other = ubf_core::config::from_ron::<Outer>("(inner: (b: 1.0))").unwrap_err();
+    assert!(!other.message.contains("Some(field"), "{other}");
+}
