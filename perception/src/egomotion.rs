@@ -813,6 +813,17 @@ impl Tracker {
             Some((anchor, estimate)) => {
                 let keyframe = &self.keyframes[anchor];
                 let pose = keyframe.pose.compose(&estimate.motion.as_pose());
+                // What a replay needs to see why a frame landed where it did.
+                let odometric = odometry.relative_to(&keyframe.odometry);
+                tracing::debug!(
+                    frame = frame.number,
+                    anchor_time = keyframe.time,
+                    landmarks = estimate.landmarks,
+                    visual = ?(estimate.motion.forward, estimate.motion.left, estimate.motion.yaw.to_degrees()),
+                    odometric = ?(odometric.x, odometric.y, odometric.theta.to_degrees()),
+                    sigma = ?estimate.covariance.map(|c| (c[(0, 0)].sqrt(), c[(1, 1)].sqrt(), c[(2, 2)].sqrt().to_degrees())),
+                    "egomotion matched"
+                );
                 let bridges = keyframe.bridges;
                 if let Some(motion_cov) = &estimate.covariance {
                     self.covariance =
