@@ -367,6 +367,9 @@ impl std::fmt::Display for CostFit {
 mod tests {
     use super::*;
 
+    /// The columns the fit reads, as `ubf run` writes them.
+    const HEADER: &str = "time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n";
+
     #[test]
     fn least_squares_recover_coefficients_and_keep_them_non_negative() {
         let xs = [[1.0, 0.0, 2.0], [0.5, 3.0, 1.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0], [0.0, 2.0, 5.0]];
@@ -389,8 +392,7 @@ mod tests {
         // inherit.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("trajectory.csv");
-        let mut text =
-            String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
+        let mut text = String::from(HEADER);
         let (mut truth, mut ego, mut frame) = (Pose2::default(), Pose2::default(), 0);
         let mut push = |t: &Pose2, e: &Pose2, frame: u32| {
             text += &format!("0,{},{},{},{},{},{},0,0.1,{frame}\n", t.x, t.y, t.theta, e.x, e.y, e.theta);
@@ -417,11 +419,7 @@ mod tests {
         assert!((fit.turn_mean_deg - 0.5f64.to_degrees()).abs() < 1e-6, "{fit:?}");
         assert!(fit.step_rms_error_m < 0.01, "steps inherit only the turns' error: {fit:?}");
         // A log without ground truth is refused with its line.
-        std::fs::write(
-            &path,
-            "time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n0,,,,1,2,3,0,,1\n",
-        )
-        .unwrap();
+        std::fs::write(&path, format!("{HEADER}0,,,,1,2,3,0,,1\n")).unwrap();
         let e = fit_costs(&[path]).unwrap_err().to_string();
         assert!(e.contains(":2:") && e.contains("ground truth"), "{e}");
     }
@@ -432,8 +430,7 @@ mod tests {
         // rad on each: 1e-4 rad² per 0.3 m.
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("trajectory.csv");
-        let mut text =
-            String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
+        let mut text = String::from(HEADER);
         let (mut ego_theta, mut failures) = (0.0, 0);
         for frame in 1..=20 {
             let x = 0.3 * f64::from(frame);
@@ -452,8 +449,7 @@ mod tests {
         let mut logs = vec![path.clone()];
         let turning = dir.path().join("turning").join("trajectory.csv");
         std::fs::create_dir_all(turning.parent().unwrap()).unwrap();
-        let mut text =
-            String::from("time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n");
+        let mut text = String::from(HEADER);
         // Legs of two 0.3 m steps, each followed by a turn on the spot.
         let (mut pose, mut frame) = (Pose2::default(), 0);
         for _ in 0..4 {

@@ -97,8 +97,9 @@ pub enum CameraError {
     Start(RobotError),
 }
 
-/// Why `ubf drive` (or its dry run) ended in failure. Every variant is
-/// reported after the robot has been stopped and its session closed.
+/// Why `ubf drive` (or its dry run) ended in failure. A robot that was
+/// reached has been stopped and its session closed before this is
+/// reported.
 #[derive(Debug, thiserror::Error)]
 pub enum DriveError {
     /// The camera could not be used (checked before the motors go on).

@@ -73,8 +73,7 @@ impl DecisionCosts {
     /// carried over the remaining distance.
     pub fn end_point_variance(&self, cv: f64, step_m: f64, turns: [f64; 2], remaining_m: f64) -> f64 {
         let step = (self.step_sigma_per_cv * cv * step_m).powi(2);
-        let heading: f64 = turns.iter().filter(|t| **t > 0.0).map(|t| self.turn_variance(*t)).sum();
-        step + heading * remaining_m * remaining_m
+        step + self.turns_variance(turns) * remaining_m * remaining_m
     }
 
     /// The heading variance a turn on the spot of `turned` rad leaves, rad².
@@ -88,8 +87,12 @@ impl DecisionCosts {
     /// carried over the remaining distance (the bridge's own translation
     /// error over a step is far smaller and left out).
     pub fn bridged_variance(&self, step_m: f64, turns: [f64; 2], remaining_m: f64) -> f64 {
-        let heading: f64 = turns.iter().filter(|t| **t > 0.0).map(|t| self.turn_variance(*t)).sum();
-        (heading + self.bridge_heading_var_per_m * step_m) * remaining_m * remaining_m
+        (self.turns_variance(turns) + self.bridge_heading_var_per_m * step_m) * remaining_m * remaining_m
+    }
+
+    /// The heading variance `turns` (0 for none) leave, rad².
+    fn turns_variance(&self, turns: [f64; 2]) -> f64 {
+        turns.iter().filter(|t| **t > 0.0).map(|t| self.turn_variance(*t)).sum()
     }
 }
 
@@ -121,9 +124,9 @@ impl Default for DecisionCosts {
 /// the robot knew while driving it (odometry and egomotion's step CVs, no
 /// ground truth): each step's translation variance, plus the heading
 /// variance of each on-the-spot turn and each step on the odometry bridge,
-/// carried over the distance from there to the end. It is the sum the end-point objective minimises one step at a time,
-/// so a run's actual error over this σ says how well the model is
-/// calibrated.
+/// carried over the distance from there to the end. It is the sum the
+/// end-point objective minimises one step at a time, so a run's actual error
+/// over this σ says how well the model is calibrated.
 #[derive(Clone, Debug, Default)]
 pub struct EndPointPredictor {
     costs: DecisionCosts,

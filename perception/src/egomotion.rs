@@ -123,10 +123,10 @@ pub struct Simple2dConfig {
     #[serde(deserialize_with = "non_negative")]
     pub rotation_threshold_deg: f64,
     /// Rotation compensation RC (eq. 60); the thesis left it at 1.
-    #[serde(default = "one", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub rc: f64,
     /// Translation compensation TC (eq. 61); the thesis left it at 1.
-    #[serde(default = "one", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub tc: f64,
     /// The fixes the estimator needs to survive a robot that turns: the
     /// motion type taken from the commanded phase (a turn on the spot, or a
@@ -135,19 +135,10 @@ pub struct Simple2dConfig {
     /// near-triangulated outlier cannot capture the estimate), and a
     /// range-consistency gate around the median. `false` is the estimator
     /// exactly as §4.4.7 describes it.
-    #[serde(default = "yes")]
     pub robust: bool,
     /// Pixel noise assumed when scaling the threshold and the gate, px.
     #[serde(deserialize_with = "positive")]
     pub pixel_sigma: f64,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-fn yes() -> bool {
-    true
 }
 
 impl Default for Simple2dConfig {
@@ -201,13 +192,10 @@ impl Default for EstimatorKind {
 #[serde(default, deny_unknown_fields)]
 pub struct EgomotionConfig {
     /// The estimator.
-    #[serde(default)]
     pub estimator: EstimatorKind,
     /// The error model weighting landmarks and giving step CVs.
-    #[serde(default)]
     pub model: ErrorModelKind,
     /// Descriptor matching between frames.
-    #[serde(default)]
     pub matching: MatchConfig,
     /// Reference frames (keyframes) kept from distinct viewpoints, each a
     /// frame new ones can be matched against.
@@ -813,14 +801,17 @@ impl Tracker {
             Some((anchor, estimate)) => {
                 let keyframe = &self.keyframes[anchor];
                 let pose = keyframe.pose.compose(&estimate.motion.as_pose());
-                // What a replay needs to see why a frame landed where it did.
-                let odometric = odometry.relative_to(&keyframe.odometry);
+                // What a replay needs to see why a frame landed where it did
+                // (the fields are only evaluated with debug logging on).
                 tracing::debug!(
                     frame = frame.number,
                     anchor_time = keyframe.time,
                     landmarks = estimate.landmarks,
                     visual = ?(estimate.motion.forward, estimate.motion.left, estimate.motion.yaw.to_degrees()),
-                    odometric = ?(odometric.x, odometric.y, odometric.theta.to_degrees()),
+                    odometric = ?{
+                        let o = odometry.relative_to(&keyframe.odometry);
+                        (o.x, o.y, o.theta.to_degrees())
+                    },
                     sigma = ?estimate.covariance.map(|c| (c[(0, 0)].sqrt(), c[(1, 1)].sqrt(), c[(2, 2)].sqrt().to_degrees())),
                     "egomotion matched"
                 );
