@@ -255,8 +255,11 @@ enum Phase {
 struct TurnWatch {
     since: f64,
     best: f64,
-    /// Going the long way round, after the short way stuck.
-    reversed: bool,
+    /// Going the long way round, after the short way stuck: the direction
+    /// (+1 counter-clockwise), fixed when chosen. Recomputing it from the
+    /// heading error each tick would flip it where the error wraps past
+    /// ±180°, and the robot would rock there instead of turning.
+    long_way: Option<f64>,
 }
 
 /// Seconds without a degree of progress after which a turn is stuck.
@@ -264,7 +267,7 @@ const STUCK_S: f64 = 5.0;
 
 impl TurnWatch {
     fn new() -> Self {
-        TurnWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, reversed: false }
+        TurnWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, long_way: None }
     }
 
     /// Takes in the angle still to turn at `now`; whether the turn is stuck.
@@ -559,19 +562,24 @@ impl Behavior for ActionAiding {
                         // Stuck the short way round: try the long way; stuck
                         // both ways, steer while driving instead, as a go-to
                         // beside collision avoidance does.
-                        let remaining =
-                            if self.watch.reversed { std::f64::consts::TAU - error.abs() } else { error.abs() };
+                        let remaining = match self.watch.long_way {
+                            Some(direction) => (direction * error).rem_euclid(std::f64::consts::TAU),
+                            None => error.abs(),
+                        };
                         if self.watch.stuck(state.time, remaining) {
-                            if self.watch.reversed {
+                            if self.watch.long_way.is_some() {
                                 self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
                                 continue;
                             }
-                            self.watch.reversed = true;
+                            self.watch.long_way = Some(-error.signum());
                         }
-                        let w = if self.watch.reversed {
-                            -error.signum() * self.config.max_turn_deg.to_radians()
-                        } else {
-                            self.turn_towards(&pose, heading)
+                        // The long way at full rate until the heading is
+                        // the short way on in the same direction.
+                        let w = match self.watch.long_way {
+                            Some(direction) if direction * error <= 0.0 => {
+                                direction * self.config.max_turn_deg.to_radians()
+                            }
+                            _ => self.turn_towards(&pose, heading),
                         };
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
@@ -768,5 +776,31 @@ mod tests {
         let stepping = aa.gen_action(&s);
         assert_eq!(stepping.motion.velocity, Some(0.6));
         assert_eq!(aa.decisions(), 1);
+    }
+
+    #[test]
+    fn a_blocked_turn_goes_the_long_way_round_without_rocking_at_180_degrees() {
+        let mut aa = ActionAiding::new(ActionAidingConfig::with_technique(Technique::None), &BuildContext::new(0));
+        // The goal is behind and a little to the left: the short way is
+        // counter-clockwise.
+        let mut s = state(None);
+        s.goal = Some(Goal { x: -10.0, y: 1.0, tolerance: 0.2 });
+        let first = aa.gen_action(&s).motion.rot_velocity.unwrap();
+        assert!(first > 0.0);
+        // Held still for longer than a stuck turn is given: the long way,
+        // clockwise.
+        s.time = STUCK_S + 1.0;
+        assert!(aa.gen_action(&s).motion.rot_velocity.unwrap() < 0.0);
+        // Turning clockwise, the heading error grows past 180° and wraps;
+        // the turn keeps its direction through it and on to the heading.
+        let goal_bearing = (1.0_f64).atan2(-10.0);
+        for (i, theta) in
+            [-0.5_f64, -1.5, -2.5, -3.0, goal_bearing - std::f64::consts::TAU + 0.3].into_iter().enumerate()
+        {
+            s.time = STUCK_S + 1.5 + i as f64;
+            s.pose = Pose2::new(0.0, 0.0, theta);
+            let w = aa.gen_action(&s).motion.rot_velocity.unwrap();
+            assert!(w < 0.0, "at {theta} rad the turn went {w} rad/s");
+        }
     }
 }
