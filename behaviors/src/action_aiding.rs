@@ -245,6 +245,11 @@ enum Phase {
     Turn { heading: f64 },
     /// Driving one step along the heading.
     Step { heading: f64, from: (f64, f64) },
+    /// The last stretch: steering at the goal every tick, as a go-to does,
+    /// until it is reached. A fixed heading would pass a goal that odometry
+    /// or a nudge from collision avoidance put off the line, and turning
+    /// back to it on the spot beside a wall can be blocked both ways.
+    Approach,
 }
 
 /// Watches a turn on the spot for progress. Beside another behaviour that
@@ -283,6 +288,22 @@ impl TurnWatch {
             return true;
         }
         false
+    }
+
+    /// The angle still to turn to close a heading `error`: the short way,
+    /// or on round the long way once that was chosen.
+    fn to_turn(&self, error: f64) -> f64 {
+        match self.long_way {
+            Some(direction) => (direction * error).rem_euclid(std::f64::consts::TAU),
+            None => error.abs(),
+        }
+    }
+
+    /// The rotation rate while going the long way round: full rate until
+    /// the heading is the short way on in the same direction; `None` then,
+    /// or when going the short way.
+    fn long_way_rate(&self, error: f64, max: f64) -> Option<f64> {
+        self.long_way.filter(|direction| direction * error <= 0.0).map(|direction| direction * max)
     }
 }
 
@@ -512,28 +533,29 @@ impl Behavior for ActionAiding {
                         Technique::ZigZag => 2.0 * self.config.zigzag_max_offset_m,
                         _ => self.config.step_m,
                     };
-                    let heading = if distance <= final_approach {
-                        to_goal
-                    } else {
-                        match self.config.technique {
-                            Technique::None => to_goal,
-                            Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
-                            Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
-                            Technique::Scan => {
-                                // Sweep the allowable headings: within the
-                                // angle limits and clear of walls.
-                                let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
-                                let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
-                                self.list.clear();
-                                self.phase = Phase::Scan {
-                                    edges: [to_goal + high, to_goal + low],
-                                    leg: 0,
-                                    centre: to_goal,
-                                    from: pose.theta,
-                                };
-                                self.watch = TurnWatch::new();
-                                continue;
-                            }
+                    if distance <= final_approach {
+                        self.phase = Phase::Approach;
+                        self.watch = TurnWatch::new();
+                        continue;
+                    }
+                    let heading = match self.config.technique {
+                        Technique::None => to_goal,
+                        Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
+                        Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
+                        Technique::Scan => {
+                            // Sweep the allowable headings: within the
+                            // angle limits and clear of walls.
+                            let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
+                            let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
+                            self.list.clear();
+                            self.phase = Phase::Scan {
+                                edges: [to_goal + high, to_goal + low],
+                                leg: 0,
+                                centre: to_goal,
+                                from: pose.theta,
+                            };
+                            self.watch = TurnWatch::new();
+                            continue;
                         }
                     };
                     self.phase = Phase::Turn { heading };
@@ -562,25 +584,17 @@ impl Behavior for ActionAiding {
                         // Stuck the short way round: try the long way; stuck
                         // both ways, steer while driving instead, as a go-to
                         // beside collision avoidance does.
-                        let remaining = match self.watch.long_way {
-                            Some(direction) => (direction * error).rem_euclid(std::f64::consts::TAU),
-                            None => error.abs(),
-                        };
-                        if self.watch.stuck(state.time, remaining) {
+                        if self.watch.stuck(state.time, self.watch.to_turn(error)) {
                             if self.watch.long_way.is_some() {
                                 self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
                                 continue;
                             }
                             self.watch.long_way = Some(-error.signum());
                         }
-                        // The long way at full rate until the heading is
-                        // the short way on in the same direction.
-                        let w = match self.watch.long_way {
-                            Some(direction) if direction * error <= 0.0 => {
-                                direction * self.config.max_turn_deg.to_radians()
-                            }
-                            _ => self.turn_towards(&pose, heading),
-                        };
+                        let w = self
+                            .watch
+                            .long_way_rate(error, self.config.max_turn_deg.to_radians())
+                            .unwrap_or_else(|| self.turn_towards(&pose, heading));
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
                     self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
@@ -593,6 +607,33 @@ impl Behavior for ActionAiding {
                     return Action::with_vote(vote)
                         .velocity(self.config.speed)
                         .rot_velocity(self.turn_towards(&pose, heading));
+                }
+                Phase::Approach => {
+                    let error = angle_difference(to_goal, pose.theta);
+                    // Progress is turning towards the goal or closing on it
+                    // (a step's length counting as a radian). Blocked (by
+                    // collision avoidance turning the other way at a wall,
+                    // say), go the long way round, which turns away from
+                    // the obstacle too; blocked that way, the short way.
+                    let remaining = self.watch.to_turn(error) + distance / self.config.step_m;
+                    if self.watch.stuck(state.time, remaining) {
+                        self.watch.long_way = match self.watch.long_way {
+                            None => Some(-error.signum()),
+                            Some(_) => None,
+                        };
+                    }
+                    if let Some(w) = self.watch.long_way_rate(error, self.config.max_turn_deg.to_radians()) {
+                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
+                    }
+                    // Facing away from the goal, turn on the spot; near it,
+                    // slow in proportion to the distance, so that the turn
+                    // rate always outpaces the goal's bearing and the robot
+                    // cannot orbit it.
+                    let alignment = error.cos().max(0.0);
+                    let ramp = (distance / self.config.step_m).min(1.0);
+                    return Action::with_vote(vote)
+                        .velocity(self.config.speed * alignment * ramp)
+                        .rot_velocity(self.turn_towards(&pose, to_goal));
                 }
             }
         }
