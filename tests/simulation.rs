@@ -171,6 +171,26 @@ fn aiding_beside_avoidance_never_sits_out_the_time_limit() {
 }
 
 #[test]
+fn a_turn_blocked_a_few_degrees_short_steers_on_instead_of_turning_round() {
+    // Found on held-out layouts: odometry had put the robot beside a wall,
+    // and AvoidCollision's turn away cancelled the last few degrees of the
+    // scan's turn on the spot. The stuck turn went the long way round (a
+    // full revolution, failing frames all the way), stuck again facing the
+    // wall, and the robot repeated this until the time limit. A turn stuck
+    // less than a quarter turn short now steers while driving.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-2-1.ron");
+    let text = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("technique: None", "technique: Scan")
+        .replace("seed: 21)", "seed: 909)");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let report = run(&scenario, 3025, None).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert!(report.sim_time_s < 600.0, "{report:?}");
+    assert_eq!(report.collisions, 0, "{report:?}");
+}
+
+#[test]
 fn the_tracking_list_predicts_the_landmarks_the_camera_then_sees() {
     // ActionAiding with tracking, driven on its own down route 1->2: at each
     // decision it predicts how many landmarks the chosen heading keeps in

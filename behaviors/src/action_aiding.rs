@@ -581,11 +581,14 @@ impl Behavior for ActionAiding {
                 Phase::Turn { heading } => {
                     let error = angle_difference(heading, pose.theta);
                     if error.abs() > self.config.heading_tolerance_deg.to_radians() {
-                        // Stuck the short way round: try the long way; stuck
-                        // both ways, steer while driving instead, as a go-to
-                        // beside collision avoidance does.
+                        // Stuck the short way round: less than a quarter
+                        // turn from the heading, steer while driving, as a
+                        // go-to beside collision avoidance does (a full
+                        // revolution to close a few degrees would fail every
+                        // frame on the way); further, try the long way, and
+                        // stuck that way too, steer while driving.
                         if self.watch.stuck(state.time, self.watch.to_turn(error)) {
-                            if self.watch.long_way.is_some() {
+                            if self.watch.long_way.is_some() || error.abs() < std::f64::consts::FRAC_PI_2 {
                                 self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
                                 continue;
                             }
