@@ -292,7 +292,7 @@ impl TurnWatch {
 
     /// The angle still to turn to close a heading `error`: the short way,
     /// or on round the long way once that was chosen.
-    fn to_turn(&self, error: f64) -> f64 {
+    fn angle_left(&self, error: f64) -> f64 {
         match self.long_way {
             Some(direction) => (direction * error).rem_euclid(std::f64::consts::TAU),
             None => error.abs(),
@@ -587,7 +587,7 @@ impl Behavior for ActionAiding {
                         // revolution to close a few degrees would fail every
                         // frame on the way); further, try the long way, and
                         // stuck that way too, steer while driving.
-                        if self.watch.stuck(state.time, self.watch.to_turn(error)) {
+                        if self.watch.stuck(state.time, self.watch.angle_left(error)) {
                             if self.watch.long_way.is_some() || error.abs() < std::f64::consts::FRAC_PI_2 {
                                 self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
                                 continue;
@@ -618,7 +618,7 @@ impl Behavior for ActionAiding {
                     // collision avoidance turning the other way at a wall,
                     // say), go the long way round, which turns away from
                     // the obstacle too; blocked that way, the short way.
-                    let remaining = self.watch.to_turn(error) + distance / self.config.step_m;
+                    let remaining = self.watch.angle_left(error) + distance / self.config.step_m;
                     if self.watch.stuck(state.time, remaining) {
                         self.watch.long_way = match self.watch.long_way {
                             None => Some(-error.signum()),
