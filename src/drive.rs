@@ -660,7 +660,7 @@ fn attach_logs<R: Robot>(
         create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
     eprintln!("logging to {}", path.display());
     logs.push(path.clone());
-    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true });
+    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan: false });
     let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
     controller.add_sink(Box::new(sink));
     let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {

@@ -390,8 +390,7 @@ impl McapLog {
         let frame = &state.stereo;
         if frame.number != self.frame && frame.number != 0 {
             self.frame = frame.number;
-            let mount =
-                frame.calibration.map_or(ubf_core::CameraMount { forward: 0.0, left: 0.0, height: 0.0 }, |c| c.mount);
+            let mount = frame.calibration.map_or(ubf_core::CameraMount::ahead(0.0, 0.0, 0.0), |c| c.mount);
             let spheres: Vec<serde_json::Value> = frame
                 .landmarks
                 .iter()

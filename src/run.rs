@@ -209,7 +209,8 @@ pub fn run_until(
         Some(Outputs { dir, images }) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;
             let path = dir.join("trajectory.csv");
-            let columns = Columns { truth: true, hold: false };
+            let camera_pan = scenario.robot.camera.as_ref().is_some_and(|c| c.pan_tilt.is_some());
+            let columns = Columns { truth: true, hold: false, camera_pan };
             controller.add_sink(Box::new(TrajectoryWriter::create(&path, columns).map_err(output_error(&path))?));
             let mut log = McapLog::create(&dir.join("run.mcap"), &run_message, &world)?;
             log.log_images(images);

@@ -32,6 +32,10 @@ pub struct Columns {
     /// `hold`: why the safety guard held the robot still (`stale_data`,
     /// `contact`), empty when it did not.
     pub hold: bool,
+    /// `camera_pan_cmd,camera_pan`: where the tree pointed a camera on a
+    /// pan-tilt unit and where the unit's encoders read it, rad from the
+    /// heading (empty when not set).
+    pub camera_pan: bool,
 }
 
 impl TrajectoryWriter {
@@ -61,6 +65,9 @@ impl TrajectoryWriter {
         write!(self.out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,cmd_velocity,cmd_rot_velocity,winner")?;
         if self.columns.hold {
             write!(self.out, ",hold")?;
+        }
+        if self.columns.camera_pan {
+            write!(self.out, ",camera_pan_cmd,camera_pan")?;
         }
         for node in layout.nodes.iter().skip(1) {
             write!(self.out, ",vote:{}", node.path)?;
@@ -100,6 +107,17 @@ impl TrajectoryWriter {
             match record.hold {
                 Some(Hold::StaleData) => write!(self.out, ",stale_data")?,
                 Some(Hold::Contact) => write!(self.out, ",contact")?,
+                None => write!(self.out, ",")?,
+            }
+        }
+        if self.columns.camera_pan {
+            let root = &record.nodes[0].action;
+            match root.motion.camera_pan.filter(|_| root.is_voting()) {
+                Some(pan) => write!(self.out, ",{pan:.5}")?,
+                None => write!(self.out, ",")?,
+            }
+            match record.state.camera_aim {
+                Some(aim) => write!(self.out, ",{:.5}", aim.pan)?,
                 None => write!(self.out, ",")?,
             }
         }

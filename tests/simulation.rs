@@ -264,3 +264,35 @@ fn the_safety_guard_latches_a_stop_on_the_simulators_contact_too() {
     assert!(tick < 500 && at.distance_to(end.x, end.y) < 0.05, "held from tick {tick} at {at:?}, ended at {end:?}");
     assert_eq!(controller.robot().inner().collisions(), 1);
 }
+
+#[test]
+fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
+    // The robot drives 20 m straight while its camera sweeps ±60°: each
+    // frame's landmarks are lifted by the angle the unit's encoders read,
+    // so the egomotion heading stays on the true one.
+    let scenario = load("camera-sweep.ron");
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&scenario, 1, Some(dir.path())).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (truth, ego, commanded, measured) =
+        (column("true_theta"), column("ego_theta"), column("camera_pan_cmd"), column("camera_pan"));
+    let (mut worst_heading, mut widest_pan) = (0.0_f64, 0.0_f64);
+    for line in lines {
+        let row: Vec<&str> = line.split(',').collect();
+        let value = |i: usize| row[i].parse::<f64>().unwrap();
+        worst_heading = worst_heading.max((value(ego) - value(truth)).abs());
+        widest_pan = widest_pan.max(value(measured).abs());
+        // The unit follows the sweep within its rate limit.
+        assert!((value(commanded) - value(measured)).abs() < 20f64.to_radians(), "{line}");
+    }
+    assert!(widest_pan > 55f64.to_radians(), "the camera swept {:.1}°", widest_pan.to_degrees());
+    assert!(worst_heading < 2f64.to_radians(), "heading off by {:.2}°", worst_heading.to_degrees());
+    assert!(report.endpoint_error_m.unwrap() < 0.5, "{report:?}");
+    // Lifted as if the camera looked ahead, no frame matches (every motion
+    // looks like a turn no robot makes) and the run is driven on odometry.
+    assert!(report.egomotion_failures.unwrap() * 2 < report.egomotion_steps.unwrap(), "{report:?}");
+}

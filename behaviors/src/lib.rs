@@ -7,6 +7,7 @@
 //! | `AvoidCollision` | [`AvoidCollision`]: keep clear of what the sonar sees |
 //! | `ActionAiding` | [`ActionAiding`]: steer for the least uncertain egomotion (thesis ch. 3) |
 //! | `InjectFault` | [`InjectFault`]: panic on purpose, to rehearse a failing behaviour |
+//! | `SweepCamera` | [`SweepCamera`]: sweep a camera on a pan-tilt unit from side to side |
 //!
 //! [`register`] adds them all to a [`Registry`].
 
@@ -19,6 +20,7 @@ pub mod decision;
 mod fault;
 mod go_to;
 mod stop;
+mod sweep_camera;
 pub mod tracking;
 
 pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, PredictionCheck, Technique};
@@ -26,6 +28,7 @@ pub use avoid::{AvoidCollision, AvoidCollisionConfig};
 pub use fault::{InjectFault, InjectFaultConfig};
 pub use go_to::{GoTo, GoToConfig};
 pub use stop::{Stop, StopConfig};
+pub use sweep_camera::{SweepCamera, SweepCameraConfig};
 
 use ubf_core::config::Checked;
 use ubf_core::Registry;
@@ -38,4 +41,5 @@ pub fn register(registry: &mut Registry) -> &mut Registry {
         .register("AvoidCollision", |c: &Checked<AvoidCollisionConfig>, _| AvoidCollision::new(c.0.clone()))
         .register("ActionAiding", |c: &ActionAidingConfig, ctx| ActionAiding::new(c.clone(), ctx))
         .register("InjectFault", |c: &InjectFaultConfig, _| InjectFault::new(c.clone()))
+        .register("SweepCamera", |c: &SweepCameraConfig, _| SweepCamera::new(c.clone()))
 }

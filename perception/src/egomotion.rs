@@ -25,7 +25,9 @@ use rand::seq::index::sample;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{angle_difference, Command, Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame, Turn};
+use ubf_core::{
+    angle_difference, CameraMount, Command, Descriptor, EgomotionState, LandmarkObservation, Pose2, StereoFrame, Turn,
+};
 
 /// A planar motion of the robot between two frames, in the earlier frame's
 /// robot frame.
@@ -660,6 +662,15 @@ struct Keyframe {
     /// The covariance of its pose (x, y, heading) from the visual estimates
     /// chained into it.
     covariance: Matrix3<f64>,
+    /// Where the camera looked on the robot (a pan-tilt unit's measured
+    /// angles), to lift its landmarks into the robot frame.
+    mount: CameraMount,
+}
+
+/// Where the camera looked in the world by the robot's `odometry`: its
+/// heading turned by the mount's pan.
+fn view_heading(odometry: &Pose2, mount: &CameraMount) -> f64 {
+    odometry.theta + mount.pan_deg.to_radians()
 }
 
 /// The covariance of `pose ∘ motion`, to first order, from the covariances
@@ -828,7 +839,7 @@ impl Tracker {
                 if let Some(since) = self.outage_since.take() {
                     self.state.outage_s += frame.time - since;
                 }
-                if self.frame_to_frame() || self.distinct(odometry) {
+                if self.frame_to_frame() || self.distinct(odometry, &self.mount_of(frame)) {
                     self.add_keyframe(frame, pose, *odometry, bridges);
                 }
             }
@@ -848,7 +859,7 @@ impl Tracker {
                 // A frame nothing matches, from a new viewpoint, anchors the
                 // frames after it (through the odometry bridge) once the old
                 // keyframes are out of sight.
-                if frame.landmarks.len() >= 3 && self.distinct(odometry) {
+                if frame.landmarks.len() >= 3 && self.distinct(odometry, &self.mount_of(frame)) {
                     let bridges = self.keyframes.iter().map(|k| k.bridges).min().unwrap_or_default();
                     self.add_keyframe(frame, pose, *odometry, bridges + 1);
                 }
@@ -866,11 +877,12 @@ impl Tracker {
 
     /// Whether a frame taken at `odometry` is far enough from every
     /// keyframe, in position or heading, to be one.
-    fn distinct(&self, odometry: &Pose2) -> bool {
+    fn distinct(&self, odometry: &Pose2, mount: &CameraMount) -> bool {
         let (spacing, turn) = (self.config.keyframe_spacing_m, self.config.keyframe_spacing_deg.to_radians());
+        let view = view_heading(odometry, mount);
         self.keyframes.iter().all(|k| {
             k.odometry.distance_to(odometry.x, odometry.y) >= spacing
-                || angle_difference(odometry.theta, k.odometry.theta).abs() >= turn
+                || angle_difference(view, view_heading(&k.odometry, &k.mount)).abs() >= turn
         })
     }
 
@@ -897,7 +909,14 @@ impl Tracker {
             odometry,
             bridges,
             covariance: self.covariance,
+            mount: self.mount_of(frame),
         });
+    }
+
+    /// The mount `frame` was taken with: its calibration's (on a pan-tilt
+    /// unit, the measured angles then), else the tracker's camera's.
+    fn mount_of(&self, frame: &StereoFrame) -> CameraMount {
+        frame.calibration.map_or(self.camera.mount, |c| c.mount)
     }
 
     /// The anchor and the match to it: the first good match (at least
@@ -918,8 +937,12 @@ impl Tracker {
     /// becomes a position error.
     fn best_estimate(&mut self, frame: &StereoFrame, odometry: &Pose2) -> Option<(usize, Estimate)> {
         let fov = self.camera.horizontal_fov();
+        let view = view_heading(odometry, &self.mount_of(frame));
         let mut order: Vec<usize> = (0..self.keyframes.len())
-            .filter(|&i| angle_difference(odometry.theta, self.keyframes[i].odometry.theta).abs() < fov)
+            .filter(|&i| {
+                let k = &self.keyframes[i];
+                angle_difference(view, view_heading(&k.odometry, &k.mount)).abs() < fov
+            })
             .collect();
         let newest = order.iter().copied().max_by(|&a, &b| self.keyframes[a].time.total_cmp(&self.keyframes[b].time));
         if self.frame_to_frame() {
@@ -974,16 +997,28 @@ impl Tracker {
     fn estimate_from(&mut self, index: usize, frame: &StereoFrame, odometry: &Pose2) -> Option<Estimate> {
         let keyframe = &self.keyframes[index];
         match_frames(&keyframe.landmarks, &frame.landmarks, &self.config.matching, &mut self.matches);
-        let mount = self.camera.mount;
+        // Each frame's landmarks are lifted by the mount it was taken with,
+        // so a pan of the camera between them is not read as a turn of the
+        // robot.
+        let (mount_before, mount_after) = (keyframe.mount, self.mount_of(frame));
+        let fixed = mount_before.looks_ahead() && mount_after.looks_ahead();
+        let ahead = CameraMount::ahead(self.camera.mount.forward, self.camera.mount.left, self.camera.mount.height);
         self.pairs.clear();
         for &(i, j) in &self.matches {
             let (before, after) = (keyframe.landmarks[i].point_cam, frame.landmarks[j].point_cam);
             let cv = self.table.cv(after[0], after[1]);
             self.pairs.push(match self.config.estimator {
-                EstimatorKind::Simple2d(_) => Pair { before, after, cv },
+                EstimatorKind::Simple2d(_) if fixed => Pair { before, after, cv },
+                // The simplified estimator reads motion in the frame of a
+                // camera looking straight ahead.
+                EstimatorKind::Simple2d(_) => Pair {
+                    before: ahead.robot_to_cam(mount_before.cam_to_robot(before)),
+                    after: ahead.robot_to_cam(mount_after.cam_to_robot(after)),
+                    cv,
+                },
                 // The rigid estimator works in the robot frame.
                 EstimatorKind::Rigid(_) => {
-                    Pair { before: mount.cam_to_robot(before), after: mount.cam_to_robot(after), cv }
+                    Pair { before: mount_before.cam_to_robot(before), after: mount_after.cam_to_robot(after), cv }
                 }
             });
         }
@@ -995,11 +1030,12 @@ impl Tracker {
             EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng)
                 .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance))),
         }?;
-        // Frames that share landmarks cannot have turned further apart than
-        // the view is wide, nor faster than the robot turns (§4.4.6).
-        let max_turn = (self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians())
-            .min(self.camera.horizontal_fov());
-        if motion.yaw.abs() > max_turn {
+        // Frames that share landmarks cannot have looked further apart than
+        // the view is wide, nor can the robot have turned faster than it
+        // turns (§4.4.6).
+        let max_turn = self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians();
+        let looked = motion.yaw + (mount_after.pan_deg - mount_before.pan_deg).to_radians();
+        if motion.yaw.abs() > max_turn || looked.abs() > self.camera.horizontal_fov() {
             return None;
         }
         // Far landmarks fix a bearing well and a range poorly, so a wrong
@@ -1100,6 +1136,44 @@ mod tests {
         assert!((end.theta - truth.theta).abs() < 1e-6);
         assert_eq!(state.failures, 0);
         assert!(state.journey_cv > 0.0);
+    }
+
+    #[test]
+    fn a_camera_panning_on_a_robot_driving_straight_is_not_read_as_a_turn() {
+        // The robot drives 6 m straight down the corridor while a pan-tilt
+        // unit sweeps the pair between 60° left and right; each frame's
+        // calibration carries the unit's angle at the frame.
+        let corridor: Vec<[f64; 3]> = (0..40)
+            .map(|i| [-4.0 + 1.1 * i as f64, if i % 2 == 0 { 2.0 } else { -2.0 }, 0.4 + 0.04 * i as f64])
+            .collect();
+        let sweep = |k: usize| 60f64.to_radians() * (k as f64 * std::f64::consts::TAU / 16.0).sin();
+        let run = |told: &dyn Fn(usize) -> f64| {
+            let fixed = StereoCamera::default();
+            let mut tracker = Tracker::new(EgomotionConfig::default(), fixed, Pose2::default(), 1);
+            for k in 0..25 {
+                let pose = Pose2::new(0.25 * k as f64, 0.0, 0.0);
+                let looking = StereoCamera { mount: fixed.mount.aimed(sweep(k), 0.0), ..fixed };
+                let calibration = StereoCamera { mount: fixed.mount.aimed(told(k), 0.0), ..fixed };
+                let f = StereoFrame {
+                    number: k as u64 + 1,
+                    time: k as f64 * 0.5,
+                    landmarks: frame(&corridor, pose, &looking),
+                    calibration: Some(calibration),
+                    images: None,
+                };
+                tracker.update(&f, &pose);
+            }
+            tracker.state()
+        };
+        let measured = run(&sweep);
+        let end = measured.pose.unwrap();
+        assert!(end.distance_to(6.0, 0.0) < 1e-6 && end.theta.abs() < 1e-6, "{measured:?}");
+        assert_eq!(measured.failures, 0, "{measured:?}");
+        // Told the camera looked ahead throughout, the tracker takes the
+        // sweep for turns of the robot, and rejects them or ends far off.
+        let blind = run(&|_| 0.0);
+        let off = blind.pose.unwrap();
+        assert!(blind.failures > 5 || off.theta.abs() > 0.2 || off.distance_to(6.0, 0.0) > 0.5, "{blind:?}");
     }
 
     #[test]

@@ -133,7 +133,7 @@ fn read_calibration(path: &Path) -> Result<StereoCamera, SourceError> {
         baseline_m: baseline,
         // The midpoint of the pair sits half a baseline right of the left
         // camera, which is the robot frame's origin.
-        mount: CameraMount { forward: 0.0, left: -baseline / 2.0, height: CAMERA_HEIGHT_M },
+        mount: CameraMount::ahead(0.0, -baseline / 2.0, CAMERA_HEIGHT_M),
         principal_point: Some(PrincipalPoint { x: p0[2], y: p0[6] }),
         disparity_offset_px: p1[2] - p0[2],
     };

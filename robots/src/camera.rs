@@ -153,6 +153,9 @@ impl<R: Robot> Robot for CameraRobot<R> {
     fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
         self.inner.ground_truth()
     }
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        self.inner.aim_camera(pan)
+    }
 
     fn hold(&self) -> Option<ubf_core::Hold> {
         self.inner.hold()

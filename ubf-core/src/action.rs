@@ -18,6 +18,9 @@ pub struct Motion {
     pub max_velocity: Option<f64>,
     /// Limit: the largest rotational speed allowed, rad/s.
     pub max_rot_velocity: Option<f64>,
+    /// Where to point a camera on a pan-tilt unit, radians counter-clockwise
+    /// from the robot's heading. Robots with a fixed camera ignore it.
+    pub camera_pan: Option<f64>,
 }
 
 /// One fusable command channel of a [`Motion`]. Limits are not channels: they
@@ -30,15 +33,17 @@ pub enum Channel {
     RotVelocity,
     /// [`Motion::heading`].
     Heading,
+    /// [`Motion::camera_pan`].
+    CameraPan,
 }
 
 impl Channel {
     /// Every command channel, in a fixed order.
-    pub const ALL: [Channel; 3] = [Channel::Velocity, Channel::RotVelocity, Channel::Heading];
+    pub const ALL: [Channel; 4] = [Channel::Velocity, Channel::RotVelocity, Channel::Heading, Channel::CameraPan];
 
     /// Whether the channel is a direction, to be combined on the circle.
     pub fn is_direction(self) -> bool {
-        matches!(self, Channel::Heading)
+        matches!(self, Channel::Heading | Channel::CameraPan)
     }
 }
 
@@ -49,6 +54,7 @@ impl Motion {
             Channel::Velocity => self.velocity,
             Channel::RotVelocity => self.rot_velocity,
             Channel::Heading => self.heading,
+            Channel::CameraPan => self.camera_pan,
         }
     }
 
@@ -58,6 +64,7 @@ impl Motion {
             Channel::Velocity => self.velocity = value,
             Channel::RotVelocity => self.rot_velocity = value,
             Channel::Heading => self.heading = value,
+            Channel::CameraPan => self.camera_pan = value,
         }
     }
 
@@ -104,6 +111,7 @@ impl Action {
                 heading: None,
                 max_velocity: None,
                 max_rot_velocity: None,
+                camera_pan: None,
             },
             stop: false,
         }
@@ -154,6 +162,12 @@ impl Action {
     /// Sets the absolute heading, rad.
     pub const fn heading(mut self, heading: f64) -> Self {
         self.motion.heading = Some(heading);
+        self
+    }
+
+    /// Sets where to point the camera, rad from the heading.
+    pub const fn camera_pan(mut self, pan: f64) -> Self {
+        self.motion.camera_pan = Some(pan);
         self
     }
 

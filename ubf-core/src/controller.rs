@@ -137,6 +137,9 @@ impl<R: Robot> Controller<R> {
         };
         let command = Command::from_action(&action, &self.robot.limits());
         self.robot.act(&command)?;
+        if let Some(pan) = action.motion.camera_pan.filter(|p| p.is_finite() && action.is_voting()) {
+            self.robot.aim_camera(pan)?;
+        }
         self.fill_record(action, command);
         for sink in &mut self.sinks {
             sink.record(&self.record)?;

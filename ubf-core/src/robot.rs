@@ -45,6 +45,16 @@ pub trait Robot: Send {
         None
     }
 
+    /// Points the camera `pan` radians counter-clockwise from the heading,
+    /// on a robot whose camera rides a pan-tilt unit ([`crate::PanTilt`]);
+    /// a robot with a fixed camera ignores it (the default). The controller
+    /// calls it after [`Robot::act`] whenever the winning action sets
+    /// [`crate::Motion::camera_pan`].
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        let _ = pan;
+        Ok(())
+    }
+
     /// Why the robot is holding still this tick instead of obeying its
     /// commands (a safety guard's verdict); `None` (the default) when it
     /// obeys.
@@ -78,6 +88,9 @@ impl<R: Robot + ?Sized> Robot for Box<R> {
     }
     fn ground_truth(&self) -> Option<GroundTruth> {
         (**self).ground_truth()
+    }
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        (**self).aim_camera(pan)
     }
     fn hold(&self) -> Option<Hold> {
         (**self).hold()
@@ -179,6 +192,9 @@ impl<R: Robot> Robot for VelocityLimiter<R> {
     }
     fn ground_truth(&self) -> Option<GroundTruth> {
         self.inner.ground_truth()
+    }
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        self.inner.aim_camera(pan)
     }
     fn hold(&self) -> Option<Hold> {
         self.inner.hold()

@@ -145,6 +145,9 @@ impl<R: Robot> Robot for SafetyGuard<R> {
     fn ground_truth(&self) -> Option<crate::GroundTruth> {
         self.inner.ground_truth()
     }
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        self.inner.aim_camera(pan)
+    }
 }
 
 #[cfg(test)]

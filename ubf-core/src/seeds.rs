@@ -22,6 +22,8 @@ pub enum Stream<'a> {
     Sonar,
     /// The simulated camera's pixel noise and mismatches.
     Camera,
+    /// The simulated pan-tilt unit's encoder noise.
+    PanTilt,
     /// A behaviour, by its path in the tree (`root/aid/scan`), so that
     /// adding a behaviour elsewhere in the tree does not change this one's
     /// draws.
@@ -38,6 +40,7 @@ impl Stream<'_> {
             Stream::Motion => 2,
             Stream::Sonar => 3,
             Stream::Camera => 4,
+            Stream::PanTilt => 5,
             Stream::Behavior(path) => fnv1a(path.as_bytes()),
         }
     }

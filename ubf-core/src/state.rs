@@ -119,6 +119,9 @@ pub struct State {
     /// What egomotion has made of the stereo frames, if the robot runs an
     /// estimator.
     pub egomotion: EgomotionState,
+    /// The camera's pan-tilt unit's measured angles this tick; `None` when
+    /// the camera is fixed.
+    pub camera_aim: Option<crate::Aim>,
     /// Seconds since the robot last delivered fresh sensor data; zero when the
     /// data is from this tick. Lets a behaviour notice a lost sensor stream.
     pub sensor_age: f64,
@@ -145,6 +148,7 @@ impl State {
             battery_volts,
             stereo,
             egomotion,
+            camera_aim,
             sensor_age,
             goal: _,
         } = other;
@@ -159,6 +163,7 @@ impl State {
         self.battery_volts = *battery_volts;
         self.stereo.copy_from(stereo);
         self.egomotion = *egomotion;
+        self.camera_aim = *camera_aim;
         self.sensor_age = *sensor_age;
     }
 

@@ -14,7 +14,14 @@ use crate::config::{finite, positive};
 use crate::StereoPixels;
 use serde::{Deserialize, Serialize};
 
-/// Where the camera pair sits on the robot, looking straight ahead.
+/// Where the camera pair sits on the robot and where it looks.
+///
+/// A pair bolted on looks where `pan_deg` and `tilt_deg` say, straight ahead
+/// by default. On a pan-tilt unit the angles are the unit's measured ones at
+/// the frame: the simulator and `ubf drive` write them into each frame's
+/// calibration, so everything that lifts a landmark into the robot frame
+/// (egomotion, the tracking list, the logs) follows the camera. Both axes
+/// pass through the pair's centre, at (`forward`, `left`, `height`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CameraMount {
@@ -28,23 +35,63 @@ pub struct CameraMount {
     /// Metres above the floor.
     #[serde(deserialize_with = "finite")]
     pub height: f64,
+    /// Where the optical axes point, degrees counter-clockwise from the
+    /// robot's heading.
+    #[serde(default, deserialize_with = "finite", skip_serializing_if = "is_zero")]
+    pub pan_deg: f64,
+    /// Degrees above the horizontal.
+    #[serde(default, deserialize_with = "finite", skip_serializing_if = "is_zero")]
+    pub tilt_deg: f64,
 }
 
 impl CameraMount {
+    /// A pair at (`forward`, `left`, `height`) looking straight ahead.
+    pub const fn ahead(forward: f64, left: f64, height: f64) -> Self {
+        CameraMount { forward, left, height, pan_deg: 0.0, tilt_deg: 0.0 }
+    }
+
+    /// The same mount looking `pan` and `tilt` radians (a pan-tilt unit's
+    /// measured angles).
+    pub fn aimed(self, pan: f64, tilt: f64) -> Self {
+        CameraMount { pan_deg: pan.to_degrees(), tilt_deg: tilt.to_degrees(), ..self }
+    }
+
+    /// Whether the optical axes point straight ahead, level.
+    pub fn looks_ahead(&self) -> bool {
+        self.pan_deg == 0.0 && self.tilt_deg == 0.0
+    }
+
     /// A point in the robot frame, in the camera frame.
     pub fn robot_to_cam(&self, p: [f64; 3]) -> [f64; 3] {
-        [-(p[1] - self.left), p[0] - self.forward, p[2] - self.height]
+        let d = [p[0] - self.forward, p[1] - self.left, p[2] - self.height];
+        if self.looks_ahead() {
+            return [-d[1], d[0], d[2]];
+        }
+        let (sp, cp) = self.pan_deg.to_radians().sin_cos();
+        let (st, ct) = self.tilt_deg.to_radians().sin_cos();
+        // Undo the pan about the vertical, then the tilt about the pair's
+        // baseline.
+        let (ahead, left) = (cp * d[0] + sp * d[1], -sp * d[0] + cp * d[1]);
+        let (along, up) = (ct * ahead + st * d[2], -st * ahead + ct * d[2]);
+        [-left, along, up]
     }
 
     /// A point in the camera frame, in the robot frame.
     pub fn cam_to_robot(&self, p: [f64; 3]) -> [f64; 3] {
-        [p[1] + self.forward, -p[0] + self.left, p[2] + self.height]
+        if self.looks_ahead() {
+            return [p[1] + self.forward, -p[0] + self.left, p[2] + self.height];
+        }
+        let (sp, cp) = self.pan_deg.to_radians().sin_cos();
+        let (st, ct) = self.tilt_deg.to_radians().sin_cos();
+        let (along, left, up) = (p[1], -p[0], p[2]);
+        let (ahead, z) = (ct * along - st * up, st * along + ct * up);
+        [cp * ahead - sp * left + self.forward, sp * ahead + cp * left + self.left, z + self.height]
     }
 }
 
 impl Default for CameraMount {
     fn default() -> Self {
-        CameraMount { forward: 0.0, left: 0.0, height: 1.0 }
+        CameraMount::ahead(0.0, 0.0, 1.0)
     }
 }
 
@@ -243,14 +290,35 @@ mod tests {
 
     #[test]
     fn mount_round_trips() {
-        let mount = CameraMount { forward: 0.2, left: -0.1, height: 1.1 };
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(a, b)| (a - b).abs() < 1e-12);
+        let ahead = CameraMount::ahead(0.2, -0.1, 1.1);
         let p = [3.0, 1.0, 0.4];
-        let back = mount.cam_to_robot(mount.robot_to_cam(p));
-        assert!(p.iter().zip(back).all(|(a, b)| (a - b).abs() < 1e-12));
+        assert!(close(ahead.cam_to_robot(ahead.robot_to_cam(p)), p));
         // A point ahead of the robot is ahead of the camera (y), and one to
         // the robot's left is to the camera's left (negative x).
-        let ahead_left = mount.robot_to_cam([5.0, 1.0, 1.1]);
+        let ahead_left = ahead.robot_to_cam([5.0, 1.0, 1.1]);
         assert!(ahead_left[1] > 0.0 && ahead_left[0] < 0.0);
+        for (pan, tilt) in [(0.7, 0.0), (-1.2, 0.3), (3.0, -0.5)] {
+            let aimed = ahead.aimed(pan, tilt);
+            assert!(close(aimed.cam_to_robot(aimed.robot_to_cam(p)), p));
+        }
+    }
+
+    #[test]
+    fn a_panned_and_tilted_mount_looks_where_it_is_aimed() {
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(a, b)| (a - b).abs() < 1e-12);
+        let mount = CameraMount::ahead(0.2, 0.0, 1.0);
+        // Panned 90° left, a point 3 m to the robot's left of the pair is
+        // 3 m down the optical axis; one ahead of the robot is to the
+        // camera's right.
+        let left = mount.aimed(std::f64::consts::FRAC_PI_2, 0.0);
+        assert!(close(left.robot_to_cam([0.2, 3.0, 1.0]), [0.0, 3.0, 0.0]));
+        assert!(close(left.robot_to_cam([1.2, 0.0, 1.0]), [1.0, 0.0, 0.0]));
+        // Tilted 90° up, a point above the pair is down the optical axis.
+        let up = mount.aimed(0.0, std::f64::consts::FRAC_PI_2);
+        assert!(close(up.robot_to_cam([0.2, 0.0, 4.0]), [0.0, 3.0, 0.0]));
+        // Angles of zero are the fixed mount exactly.
+        assert_eq!(mount.aimed(0.0, 0.0), mount);
     }
 
     #[test]

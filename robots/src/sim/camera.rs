@@ -4,6 +4,7 @@
 //! growing depth error of real stereo comes out of the triangulation.
 
 use super::geometry::Segment;
+use super::pan_tilt::PanTiltConfig;
 use super::render::{RenderConfig, Renderer};
 use super::world::{World, WorldLandmark};
 use rand::Rng;
@@ -11,8 +12,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use std::sync::Arc;
-use ubf_core::config::{non_negative, positive, unit_interval};
-use ubf_core::{Descriptor, LandmarkObservation, Pose2, StereoImages, StereoPixels};
+use ubf_core::config::{non_negative, positive, unit_interval, Check};
+use ubf_core::{Aim, CameraMount, Descriptor, LandmarkObservation, Pose2, StereoImages, StereoPixels};
 use ubf_perception::features::StereoPipeline;
 use ubf_perception::StereoCamera;
 
@@ -64,6 +65,11 @@ pub struct SimCameraConfig {
     /// pipeline finds is what there is.
     #[serde(default)]
     pub images: Option<RenderConfig>,
+    /// A pan-tilt unit under the pair; none (a fixed camera) by default.
+    /// Each frame then looks where the unit truly points, and its
+    /// calibration carries the angles the unit's encoders read.
+    #[serde(default)]
+    pub pan_tilt: Option<PanTiltConfig>,
 }
 
 impl SimCameraConfig {
@@ -92,6 +98,15 @@ impl SimCameraConfig {
         if self.rate_hz > 1000.0 {
             return Err(format!("camera: rate_hz {}: at most 1000 frames a second", self.rate_hz));
         }
+        let held_tilt = self.pan_tilt.map_or(0.0, |unit| unit.tilt_deg);
+        if let Some(unit) = &self.pan_tilt {
+            unit.check()?;
+        }
+        if self.images.is_some() && (held_tilt != 0.0 || self.stereo.mount.tilt_deg != 0.0) {
+            return Err("camera: the renderer draws level views only; a tilted camera needs the geometric model \
+                        (no `images`)"
+                .into());
+        }
         if self.descriptor_noise_bits > 256 {
             return Err(format!("camera: descriptor_noise_bits {}: a descriptor has 256", self.descriptor_noise_bits));
         }
@@ -114,6 +129,7 @@ impl Default for SimCameraConfig {
             max_incidence_deg: 75.0,
             descriptor_noise_bits: 4,
             images: None,
+            pan_tilt: None,
         }
     }
 }
@@ -178,11 +194,13 @@ impl SimCamera {
     }
 
     /// If a frame is due at `time`, takes it from the true `pose` into `out`
-    /// and returns its number.
+    /// and returns its number. `aim` is where a pan-tilt unit truly points
+    /// the pair (`None` for a fixed camera).
     pub fn capture(
         &mut self,
         time: f64,
         pose: &Pose2,
+        aim: Option<Aim>,
         world: &World,
         rng: &mut ChaCha8Rng,
         out: &mut Vec<LandmarkObservation>,
@@ -203,7 +221,8 @@ impl SimCamera {
                 let seed = rng.random();
                 (Renderer::new(world, stereo, render, seed), StereoPipeline::new(stereo, render.features))
             });
-            let (left, right) = renderer.render(pose, self.frames);
+            let pan = aim.map_or(0.0, |a| a.pan);
+            let (left, right) = renderer.render(pose, pan, self.frames);
             // The renderer makes images of the calibrated size, which is all
             // the pipeline can refuse.
             out.extend(pipeline.process(&left, &right).unwrap_or_default());
@@ -212,8 +231,12 @@ impl SimCamera {
             self.last_images = Some(Arc::new(images));
             return Some(self.frames);
         }
+        let mount = match aim {
+            Some(a) => self.config.stereo.mount.aimed(a.pan, a.tilt),
+            None => self.config.stereo.mount,
+        };
         for landmark in &world.landmarks {
-            if let Some(observation) = self.observe(landmark, time, pose, world, rng) {
+            if let Some(observation) = self.observe(landmark, time, pose, &mount, world, rng) {
                 out.push(observation);
             }
         }
@@ -230,13 +253,13 @@ impl SimCamera {
         landmark: &WorldLandmark,
         time: f64,
         pose: &Pose2,
+        mount: &CameraMount,
         world: &World,
         rng: &mut ChaCha8Rng,
     ) -> Option<LandmarkObservation> {
         let c = &self.config;
         let stereo = &c.stereo;
         let (p_world, normal) = world.landmark_at(landmark, time);
-        let mount = &stereo.mount;
         let (cam_x, cam_y) = pose.transform_point(mount.forward, mount.left);
         let to_landmark = (p_world[0] - cam_x, p_world[1] - cam_y);
         let range = to_landmark.0.hypot(to_landmark.1);
@@ -338,7 +361,9 @@ mod tests {
 
     fn frame(config: SimCameraConfig, world: &World, pose: Pose2, seed: u64) -> Vec<LandmarkObservation> {
         let mut out = Vec::new();
-        SimCamera::new(config).capture(0.0, &pose, world, &mut ChaCha8Rng::seed_from_u64(seed), &mut out).unwrap();
+        SimCamera::new(config)
+            .capture(0.0, &pose, None, world, &mut ChaCha8Rng::seed_from_u64(seed), &mut out)
+            .unwrap();
         out
     }
 

@@ -11,6 +11,7 @@
 mod body;
 mod camera;
 pub mod geometry;
+mod pan_tilt;
 pub mod render;
 mod sonar;
 mod world;
@@ -18,6 +19,7 @@ mod world;
 pub(crate) use body::approach;
 pub use body::{integrate, MotionProfile, OdometryErrors, StartPose};
 pub use camera::{descriptor_from, SimCameraConfig};
+pub use pan_tilt::{PanTiltConfig, SimPanTilt};
 pub use sonar::{Sonar, SonarConfig};
 pub use world::{
     Anchor, BoxConfig, CorridorConfig, FeaturelessConfig, LandmarkConfig, PersonConfig, RandomLandmarks, Side,
@@ -32,7 +34,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::{positive, Check};
 use ubf_core::seeds::{rng, Stream};
-use ubf_core::{Bumpers, Command, Limits, Pose2, Robot, RobotError, State};
+use ubf_core::{Aim, Bumpers, Command, Limits, PanTilt, Pose2, Robot, RobotError, State};
 use ubf_perception::egomotion::EgomotionConfig;
 
 /// The simulated robot's settings, as written in a scenario file. The
@@ -119,6 +121,7 @@ pub struct SimRobot {
     world: World,
     sonar: Sonar,
     camera: Option<SimCamera>,
+    pan_tilt: Option<SimPanTilt>,
     period: f64,
     time: f64,
     reach: f64,
@@ -158,6 +161,11 @@ impl SimRobot {
             world,
             sonar: Sonar::new(config.sonar.clone(), units),
             camera: config.camera.clone().map(SimCamera::new),
+            pan_tilt: config
+                .camera
+                .as_ref()
+                .and_then(|c| c.pan_tilt)
+                .map(|unit| SimPanTilt::new(unit, rng(seed, Stream::PanTilt))),
             period,
             time: 0.0,
             reach: footprint.radius(),
@@ -241,12 +249,23 @@ impl Robot for SimRobot {
         state.motors_enabled = true;
         state.estop = false;
         state.sensor_age = 0.0;
+        // A frame looks where the unit truly points; its calibration says
+        // where the encoders read it pointing.
+        let aim = self.pan_tilt.as_ref().map(SimPanTilt::true_aim);
+        state.camera_aim = match &mut self.pan_tilt {
+            Some(unit) => Some(unit.measured()?),
+            None => None,
+        };
         if let Some(camera) = &mut self.camera {
             let landmarks = &mut state.stereo.landmarks;
-            if let Some(number) = camera.capture(self.time, &pose, &self.world, &mut self.camera_rng, landmarks) {
+            if let Some(number) = camera.capture(self.time, &pose, aim, &self.world, &mut self.camera_rng, landmarks) {
+                let mut calibration = camera.config().stereo;
+                if let Some(measured) = state.camera_aim {
+                    calibration.mount = calibration.mount.aimed(measured.pan, measured.tilt);
+                }
                 state.stereo.number = number;
                 state.stereo.time = self.time;
-                state.stereo.calibration = Some(camera.config().stereo);
+                state.stereo.calibration = Some(calibration);
                 state.stereo.images = camera.last_images().cloned();
             }
         }
@@ -273,8 +292,21 @@ impl Robot for SimRobot {
             self.bumpers = Bumpers::default();
             self.stalled = false;
         }
+        if let Some(unit) = &mut self.pan_tilt {
+            unit.advance(self.period);
+        }
         self.time += self.period;
         Ok(())
+    }
+
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        match &mut self.pan_tilt {
+            Some(unit) => {
+                let tilt = unit.true_aim().tilt;
+                unit.command(Aim { pan, tilt })
+            }
+            None => Ok(()),
+        }
     }
 
     fn shutdown(&mut self) -> Result<(), RobotError> {
