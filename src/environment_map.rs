@@ -12,7 +12,7 @@
 //! its gain is reported from those runs only, so that choosing the best of
 //! three does not flatter it.
 
-use crate::experiment::{load_route, variant, ExperimentError};
+use crate::experiment::{load_route, variant, Aid, ExperimentError};
 use crate::run::{run, RunReport};
 use crate::scenario::Scenario;
 use crate::sweep::run_parallel;
@@ -167,7 +167,8 @@ fn factors() -> Vec<(&'static str, Vec<Level>)> {
     ]
 }
 
-const AIDED: [Technique; 3] = [Technique::ZigZag, Technique::Scan, Technique::Tracking];
+const AIDED: [Aid; 4] =
+    [Aid::robot(Technique::ZigZag), Aid::robot(Technique::Scan), Aid::robot(Technique::Tracking), Aid::CAMERA];
 
 fn mean_sd(values: &[f64]) -> (f64, f64) {
     let n = values.len().max(1) as f64;
@@ -237,7 +238,7 @@ pub fn where_aiding_pays(
                 r.seed = Some(layout_seed);
             }
             let pair = [
-                variant(registry, &held, Technique::None, offset, objective, rigid)?,
+                variant(registry, &held, Aid::robot(Technique::None), offset, objective, rigid)?,
                 variant(registry, &held, AIDED[best], offset, objective, rigid)?,
             ];
             let tasks: Vec<(usize, u64)> = (0..2).flat_map(|i| held_out.clone().map(move |s| (i, s))).collect();

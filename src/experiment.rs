@@ -12,13 +12,53 @@ use crate::sweep::{run_parallel, stats, FieldStats};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
-use ubf_behaviors::{DecisionObjective, Technique};
+use ubf_behaviors::{DecisionObjective, Steer, Technique};
 use ubf_core::{BehaviorSpec, Registry};
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
-use ubf_robots::sim::MotionProfile;
+use ubf_robots::sim::{MotionProfile, PanTiltConfig};
 
 /// The techniques, in the thesis's order.
 pub const TECHNIQUES: [Technique; 4] = [Technique::None, Technique::ZigZag, Technique::Scan, Technique::Tracking];
+
+/// A way of aiding as the experiments compare them: a technique, and what
+/// it steers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Aid {
+    /// The technique.
+    pub technique: Technique,
+    /// The robot, or a camera on a pan-tilt unit.
+    pub steer: Steer,
+}
+
+impl Aid {
+    /// The technique steering the robot, the camera fixed.
+    pub const fn robot(technique: Technique) -> Self {
+        Aid { technique, steer: Steer::Robot }
+    }
+
+    /// A camera on a pan-tilt unit steered by the evaluative decision, the
+    /// robot straight at the goal.
+    pub const CAMERA: Aid = Aid { technique: Technique::Tracking, steer: Steer::Camera };
+
+    /// Its name in reports: the technique's, or `camera`.
+    pub fn name(self) -> &'static str {
+        match self.steer {
+            Steer::Robot => self.technique.name(),
+            Steer::Camera => "camera",
+            Steer::Both => "tracking+camera",
+        }
+    }
+}
+
+/// What the end-point experiment compares: every technique steering the
+/// robot with a fixed camera, and camera steering.
+pub const ENDPOINT_AIDS: [Aid; 5] = [
+    Aid::robot(Technique::None),
+    Aid::robot(Technique::ZigZag),
+    Aid::robot(Technique::Scan),
+    Aid::robot(Technique::Tracking),
+    Aid::CAMERA,
+];
 
 /// Why an experiment could not run.
 #[derive(Debug, thiserror::Error)]
@@ -51,13 +91,17 @@ pub fn load_route(registry: &Registry, index: usize) -> Result<(Scenario, f64), 
 pub fn variant(
     registry: &Registry,
     base: &Scenario,
-    technique: Technique,
+    aid: Aid,
     zigzag_offset: f64,
     objective: DecisionObjective,
     estimator: EstimatorKind,
 ) -> Result<Scenario, ExperimentError> {
-    let technique_name = format!("{technique:?}");
-    let settings = format!(", zigzag_max_offset_m: {zigzag_offset:.1}, objective: {objective:?}");
+    let technique_name = format!("{:?}", aid.technique);
+    let steer = match aid.steer {
+        Steer::Robot => String::new(),
+        other => format!(", steer: {other:?}"),
+    };
+    let settings = format!(", zigzag_max_offset_m: {zigzag_offset:.1}, objective: {objective:?}{steer}");
     let tree = format!(
         "Composite(arbiter: CommandFusion, children: [(behavior: Stop(), weight: 1.0), \
          (behavior: AvoidCollision(), weight: 2.0), (behavior: ActionAiding(technique: {technique_name}{settings}))])"
@@ -69,7 +113,11 @@ pub fn variant(
     if let Some(egomotion) = &mut scenario.robot.egomotion {
         egomotion.estimator = estimator;
     }
-    scenario.name = format!("{}-{}", base.name, technique.name());
+    // Steering a camera needs a unit to turn it: a small serial head.
+    if let (true, Some(camera)) = (aid.steer != Steer::Robot, scenario.robot.camera.as_mut()) {
+        camera.pan_tilt.get_or_insert_with(PanTiltConfig::default);
+    }
+    scenario.name = format!("{}-{}", base.name, aid.name());
     Ok(scenario)
 }
 
@@ -128,7 +176,7 @@ pub fn thesis_table4(
     let rigid = EstimatorKind::Rigid(RigidConfig::default());
     let scenarios: Vec<Scenario> = TECHNIQUES
         .iter()
-        .map(|&t| variant(registry, &base, t, TABLE4_ZIGZAG_M, objective, rigid))
+        .map(|&t| variant(registry, &base, Aid::robot(t), TABLE4_ZIGZAG_M, objective, rigid))
         .collect::<Result<_, _>>()?;
     let tasks: Vec<(u64, usize)> = seeds.flat_map(|c| (0..TECHNIQUES.len()).map(move |t| (c, t))).collect();
     let reports = run_parallel(&tasks, jobs, |&(corridor, t)| run(&scenarios[t], corridor, None));
@@ -278,13 +326,8 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
             base.robot.motion = profile;
         }
         for (estimator, kind) in estimators {
-            for technique in TECHNIQUES {
-                scenarios.push((
-                    label,
-                    estimator,
-                    technique.name(),
-                    variant(registry, &base, technique, zigzag, objective, kind)?,
-                ));
+            for aid in ENDPOINT_AIDS {
+                scenarios.push((label, estimator, aid.name(), variant(registry, &base, aid, zigzag, objective, kind)?));
             }
         }
     }
@@ -539,13 +582,13 @@ impl std::fmt::Display for Endpoint {
                     "path +%",
                     "time +%"
                 )?;
-                for t in TECHNIQUES {
-                    let Some(c) = techniques.get(t.name()) else { continue };
+                for aid in ENDPOINT_AIDS {
+                    let Some(c) = techniques.get(aid.name()) else { continue };
                     let e = &c.endpoint_error_m;
                     writeln!(
                         f,
                         "{:>9} {:>7.2} {:>16} {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
-                        t.name(),
+                        aid.name(),
                         e.mean,
                         e.ci95.map_or("(n too small)".to_owned(), |[l, h]| format!("[{l:>6.2}, {h:>6.2}]")),
                         c.endpoint_error_pct.mean,

@@ -296,3 +296,28 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
     // looks like a turn no robot makes) and the run is driven on odometry.
     assert!(report.egomotion_failures.unwrap() * 2 < report.egomotion_steps.unwrap(), "{report:?}");
 }
+
+#[test]
+fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
+    // ActionAiding steering a camera on a pan-tilt unit down route 1->2:
+    // the robot keeps to the straight line at the goal (no detour, no time
+    // spent turning), while the camera looks where the tracking list's
+    // landmarks are.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
+    let text = std::fs::read_to_string(path)
+        .unwrap()
+        .replace("technique: None", "technique: Tracking, steer: Camera")
+        .replace("camera: (", "camera: (pan_tilt: (), ");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&scenario, 3, Some(dir.path())).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert!(report.path_overhead_pct.unwrap() < 1.0, "{report:?}");
+    assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
+    let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let pan = header.iter().position(|h| *h == "camera_pan").unwrap();
+    let widest = lines.map(|l| l.split(',').nth(pan).unwrap().parse::<f64>().unwrap().abs()).fold(0.0, f64::max);
+    assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
+}

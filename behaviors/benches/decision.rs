@@ -1,13 +1,13 @@
 //! One evaluative decision: 73 candidate headings over 1 000 tracked
 //! landmarks, with the end-point objective (30 m to go) and with the
-//! thesis's CV objective, and the share of it spent indexing the landmarks
-//! (no candidates). Run with `cargo bench -p ubf-behaviors --bench decision`.
+//! thesis's CV objective, the same for 73 directions of a steerable camera,
+//! and the share of it spent indexing the landmarks (no candidates). Run with `cargo bench -p ubf-behaviors --bench decision`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
-use ubf_behaviors::decision::{best_heading, DecisionCosts, DecisionRules, Objective};
+use ubf_behaviors::decision::{best_heading, best_look, DecisionCosts, DecisionRules, Objective};
 use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
 
@@ -48,6 +48,11 @@ fn decision(c: &mut Criterion) {
     // The thesis's objective: no heading can be skipped for its turns.
     c.bench_function("decision/73_headings_1000_landmarks_cv_objective", |b| {
         b.iter(|| black_box(best_heading(&table, &rules, &landmarks, at, candidates.iter().copied(), &Objective::Cv)))
+    });
+    // A steerable camera: 73 looks while the robot keeps its course (no
+    // look can be skipped for its turns either).
+    c.bench_function("decision/73_looks_1000_landmarks", |b| {
+        b.iter(|| black_box(best_look(&table, &rules, &landmarks, at, 0.0, candidates.iter().copied(), &objective)))
     });
     c.bench_function("decision/indexing_only", |b| {
         b.iter(|| black_box(best_heading(&table, &rules, &landmarks, at, std::iter::empty(), &objective)))

@@ -2,13 +2,13 @@
 //! stereo egomotion is least uncertain.
 
 use crate::clearance::{echo_points, free_distance};
-use crate::decision::{best_heading, DecisionCosts, DecisionRules, Objective};
+use crate::decision::{best_heading, best_look, DecisionCosts, DecisionRules, Objective};
 use crate::tracking::{TrackingConfig, TrackingList};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use ubf_core::config::{non_negative, positive};
-use ubf_core::{angle_difference, Action, Behavior, BuildContext, Pose2, State};
+use ubf_core::{angle_difference, wrap_angle, Action, Behavior, BuildContext, Pose2, State};
 use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
 
@@ -52,6 +52,24 @@ pub enum DecisionObjective {
     /// The thesis's objective (§3.5.2.2): the step's fused CV alone, turns
     /// free. For thesis-faithful runs.
     Cv,
+}
+
+/// What action aiding steers to put landmarks where egomotion is least
+/// uncertain.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Steer {
+    /// The robot, by its technique; the camera looks ahead.
+    #[default]
+    Robot,
+    /// A camera on a pan-tilt unit, chosen at every frame by the evaluative
+    /// decision over the tracking list, while the robot drives straight at
+    /// the goal (the technique does not turn it). The unit's angle is read
+    /// far more precisely than a turn of the robot is estimated (thesis
+    /// §5.3.4).
+    Camera,
+    /// Both: the technique turns the robot, and the camera looks where the
+    /// decision says from the heading the robot takes.
+    Both,
 }
 
 /// Settings of [`ActionAiding`], as written in a scenario file.
@@ -138,6 +156,13 @@ pub struct ActionAidingConfig {
     /// The step CV at which the vote is halfway between the two.
     #[serde(default = "ActionAidingConfig::default_vote_cv", deserialize_with = "positive")]
     pub vote_half_cv: f64,
+    /// What is steered: the robot, a camera on a pan-tilt unit, or both.
+    #[serde(default)]
+    pub steer: Steer,
+    /// Camera steering: the farthest the camera looks either side of the
+    /// robot's heading, °.
+    #[serde(default = "ActionAidingConfig::default_max_pan", deserialize_with = "positive")]
+    pub max_pan_deg: f64,
 }
 
 impl ActionAidingConfig {
@@ -200,6 +225,9 @@ impl ActionAidingConfig {
     fn default_vote_cv() -> f64 {
         0.5
     }
+    fn default_max_pan() -> f64 {
+        90.0
+    }
 
     /// The defaults with this technique.
     pub fn with_technique(technique: Technique) -> Self {
@@ -228,6 +256,8 @@ impl ActionAidingConfig {
             vote_min: Self::default_vote_min(),
             vote_max: Self::default_vote_max(),
             vote_half_cv: Self::default_vote_cv(),
+            steer: Steer::default(),
+            max_pan_deg: Self::default_max_pan(),
         }
     }
 }
@@ -334,6 +364,8 @@ pub struct ActionAiding {
     predicted: Option<usize>,
     seen: Option<usize>,
     check: PredictionCheck,
+    /// Camera steering: where the camera is to look (world), once chosen.
+    look: Option<f64>,
 }
 
 /// How the tracking list's predictions compare with what the camera then
@@ -380,6 +412,7 @@ impl ActionAiding {
             predicted: None,
             seen: None,
             check: PredictionCheck::default(),
+            look: None,
         }
     }
 
@@ -435,11 +468,8 @@ impl ActionAiding {
     /// whose heading egomotion last fixed was `facing`; without a feasible
     /// heading, the goal's bearing `centre`.
     fn evaluate(&mut self, pose: &Pose2, facing: f64, centre: f64, remaining_m: f64) -> f64 {
+        self.refresh_positions();
         let Some((camera, table)) = &self.camera else { return centre };
-        // The tracking list has dropped the landmarks seen from too far round
-        // to be recognised from here.
-        self.positions.clear();
-        self.positions.extend(self.list.confirmed().map(|l| l.position));
         let rules = self.rules(camera);
         let objective = match self.config.objective {
             DecisionObjective::Cv => Objective::Cv,
@@ -456,6 +486,54 @@ impl ActionAiding {
         self.predicted = decision.map(|d| d.landmarks);
         self.seen = None;
         decision.map_or(centre, |d| d.heading)
+    }
+
+    /// The confirmed landmarks of the tracking list, which has dropped those
+    /// seen from too far round to be recognised from here.
+    fn refresh_positions(&mut self) {
+        self.positions.clear();
+        self.positions.extend(self.list.confirmed().map(|l| l.position));
+    }
+
+    /// How the robot itself is steered: by the technique, except that with
+    /// only the camera steered it drives straight at the goal.
+    fn robot_technique(&self) -> Technique {
+        match self.config.steer {
+            Steer::Camera => Technique::None,
+            Steer::Robot | Steer::Both => self.config.technique,
+        }
+    }
+
+    /// Camera steering: where the camera should look from `pose` while the
+    /// robot keeps on along `course`, among directions within `max_pan_deg`
+    /// of the course and half the field of view of where it looks now, so
+    /// that consecutive frames share half their view; by the end-point
+    /// objective, which charges a look nothing (the robot does not turn).
+    /// Without a feasible look, straight along the course.
+    fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64) -> f64 {
+        let Some((camera, table)) = &self.camera else { return course };
+        let rules = self.rules(camera);
+        let objective = match self.config.objective {
+            DecisionObjective::Cv => Objective::Cv,
+            DecisionObjective::EndPoint => Objective::EndPoint {
+                heading: course,
+                goal_bearing: course,
+                remaining_m,
+                turn_tolerance: self.config.heading_tolerance_deg.to_radians(),
+                costs: self.config.costs,
+            },
+        };
+        let now = self.look.unwrap_or(course);
+        let (max_pan, reach) = (self.config.max_pan_deg.to_radians(), rules.half_fov);
+        let step = self.config.angle_step_deg.to_radians();
+        let n = (max_pan / step).floor() as i32;
+        // The course first, so that ties look ahead.
+        let looks = std::iter::once(0.0)
+            .chain((1..=n).flat_map(|k| [f64::from(k) * step, -f64::from(k) * step]))
+            .map(|pan| course + pan)
+            .filter(|look| angle_difference(*look, now).abs() <= reach);
+        best_look(table, &rules, &self.positions, (pose.x, pose.y), course, looks, &objective)
+            .map_or(course, |d| d.heading)
     }
 
     fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {
@@ -489,6 +567,33 @@ impl ActionAiding {
 
 impl Behavior for ActionAiding {
     fn gen_action(&mut self, state: &State) -> Action {
+        let action = self.drive(state);
+        match self.look {
+            Some(look) if action.is_voting() && self.config.steer != Steer::Robot => {
+                action.camera_pan(wrap_angle(look - state.pose.theta))
+            }
+            _ => action,
+        }
+    }
+
+    fn name(&self) -> &str {
+        "ActionAiding"
+    }
+
+    fn reset(&mut self) {
+        self.phase = Phase::Decide;
+        self.list.clear();
+        self.look = None;
+        self.path = None;
+        self.last_frame = 0;
+        self.decisions = 0;
+    }
+}
+
+impl ActionAiding {
+    /// The robot's action this tick (the camera's direction is added by
+    /// [`Behavior::gen_action`]).
+    fn drive(&mut self, state: &State) -> Action {
         let Some(goal) = state.goal else { return Action::none() };
         if state.goal_reached() {
             return Action::none();
@@ -504,11 +609,24 @@ impl Behavior for ActionAiding {
                     self.camera = Some((camera, table));
                 }
                 let scanning = matches!(self.phase, Phase::Scan { .. });
-                if self.config.technique == Technique::Tracking || scanning {
+                let steering_camera = self.config.steer != Steer::Robot;
+                if self.config.technique == Technique::Tracking || scanning || steering_camera {
                     self.list.observe(&frame.landmarks, calibration, &pose);
                 }
                 if matches!(self.phase, Phase::Step { .. }) {
                     self.seen = Some(frame.landmarks.len());
+                }
+                if steering_camera {
+                    // Where the robot is headed: the step's heading, or
+                    // the goal on the last stretch.
+                    let course = match self.phase {
+                        Phase::Turn { heading } | Phase::Step { heading, .. } => heading,
+                        Phase::Approach => (goal.y - pose.y).atan2(goal.x - pose.x),
+                        Phase::Decide | Phase::Scan { .. } => pose.theta,
+                    };
+                    self.list.prune(&pose);
+                    self.refresh_positions();
+                    self.look = Some(self.choose_look(&pose, course, pose.distance_to(goal.x, goal.y)));
                 }
             }
         }
@@ -527,9 +645,10 @@ impl Behavior for ActionAiding {
                     if self.config.technique == Technique::Tracking {
                         self.list.prune(&pose);
                     }
+                    let technique = self.robot_technique();
                     // The last stretch is straight at the goal: a zig-zag leg
                     // would pass it by a lateral offset.
-                    let final_approach = match self.config.technique {
+                    let final_approach = match technique {
                         Technique::ZigZag => 2.0 * self.config.zigzag_max_offset_m,
                         _ => self.config.step_m,
                     };
@@ -538,7 +657,7 @@ impl Behavior for ActionAiding {
                         self.watch = TurnWatch::new();
                         continue;
                     }
-                    let heading = match self.config.technique {
+                    let heading = match technique {
                         Technique::None => to_goal,
                         Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
                         Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
@@ -641,18 +760,6 @@ impl Behavior for ActionAiding {
             }
         }
         Action::with_vote(vote).velocity(0.0).rot_velocity(0.0)
-    }
-
-    fn name(&self) -> &str {
-        "ActionAiding"
-    }
-
-    fn reset(&mut self) {
-        self.phase = Phase::Decide;
-        self.list.clear();
-        self.path = None;
-        self.last_frame = 0;
-        self.decisions = 0;
     }
 }
 
@@ -772,6 +879,23 @@ impl ubf_core::Describe for ActionAidingConfig {
             Field::new("vote_min", "number", "", "0.3", "≥ 0", "vote with egomotion certain (step CV near 0)"),
             Field::new("vote_max", "number", "", "1.0", "≥ 0", "vote as the step CV grows without bound"),
             Field::new("vote_half_cv", "number", "", "0.5", "> 0", "the step CV at which the vote is halfway between"),
+            Field::new(
+                "steer",
+                "steer",
+                "",
+                "Robot",
+                "",
+                "what is steered: `Robot` (by the technique), `Camera` (a camera on a pan-tilt unit, chosen every \
+                 frame by the evaluative decision, while the robot drives straight at the goal) or `Both`",
+            ),
+            Field::new(
+                "max_pan_deg",
+                "number",
+                "°",
+                "90",
+                "> 0",
+                "camera steering: the farthest the camera looks either side of the heading",
+            ),
         ]
     }
 }

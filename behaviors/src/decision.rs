@@ -305,6 +305,39 @@ pub fn best_heading(
     candidates: impl IntoIterator<Item = f64>,
     objective: &Objective,
 ) -> Option<Decision> {
+    best_view(table, rules, landmarks, position, None, candidates, objective)
+}
+
+/// The best direction for a steerable camera to look among `looks` (world
+/// angles) while the robot steps along `driving`: as [`best_heading`], but
+/// the step is projected along the robot's course and the view turned to
+/// each candidate, so the landmarks are the camera's, not the heading's.
+/// The decision's `heading` is the direction to look. Under the end-point
+/// objective give the robot's heading and the goal's bearing as `driving`:
+/// the robot does not turn, and the look costs no turn.
+pub fn best_look(
+    table: &CvTable,
+    rules: &DecisionRules,
+    landmarks: &[(f64, f64)],
+    position: (f64, f64),
+    driving: f64,
+    looks: impl IntoIterator<Item = f64>,
+    objective: &Objective,
+) -> Option<Decision> {
+    best_view(table, rules, landmarks, position, Some(driving), looks, objective)
+}
+
+/// [`best_heading`] and [`best_look`]: the step along `driving`, or along
+/// each candidate when `None`.
+fn best_view(
+    table: &CvTable,
+    rules: &DecisionRules,
+    landmarks: &[(f64, f64)],
+    position: (f64, f64),
+    driving: Option<f64>,
+    candidates: impl IntoIterator<Item = f64>,
+    objective: &Objective,
+) -> Option<Decision> {
     use std::f64::consts::TAU;
     let bucket_width = TAU / BUCKETS as f64;
     // For an angle in [0, 2π].
@@ -358,11 +391,13 @@ pub fn best_heading(
     for heading in candidates {
         // A heading whose turns alone cost more than the best so far cannot
         // win, whatever it sees.
-        if best.is_some_and(|b| objective.cost(heading, 0.0, rules.step_m) >= b.cost) {
+        let turned_to = driving.unwrap_or(heading);
+        if best.is_some_and(|b| objective.cost(turned_to, 0.0, rules.step_m) >= b.cost) {
             continue;
         }
-        // Eq. 40–43: the robot projected one step ahead along the heading.
-        let view = View::new(rules, heading);
+        // Eq. 40–43: the robot projected one step ahead along the heading
+        // (or its course, for a camera looking elsewhere).
+        let view = View::new(rules, heading, turned_to);
         let centre = bucket_of(heading.rem_euclid(TAU));
         let mut seen = view.information(table, nearby);
         for (band, &span) in spans.iter().enumerate() {
@@ -381,7 +416,7 @@ pub fn best_heading(
             };
             seen = runs.iter().try_fold(sum, |sum, run| Some(sum.add(view.information(table, run)?)));
         }
-        consider(&mut best, rules, objective, heading, seen);
+        consider(&mut best, rules, objective, heading, turned_to, seen);
     }
     best
 }
@@ -390,19 +425,23 @@ pub fn best_heading(
 /// no landmark too near (`seen` is `None`) and enough in view, or, for the
 /// goal's bearing under the end-point objective, too few in view and the
 /// step driven on the odometry bridge.
+///
+/// `heading` is the candidate; `turned_to` the robot's heading it implies
+/// (the candidate itself, or the course a steerable camera's robot keeps).
 fn consider(
     best: &mut Option<Decision>,
     rules: &DecisionRules,
     objective: &Objective,
     heading: f64,
+    turned_to: f64,
     seen: Option<Seen>,
 ) {
     let Some(seen) = seen else { return };
     let (cv, cost) = if seen.count >= rules.min_landmarks.max(1) && seen.information > 0.0 {
         let cv = 1.0 / seen.information;
-        (cv, objective.cost(heading, cv, rules.step_m))
+        (cv, objective.cost(turned_to, cv, rules.step_m))
     } else {
-        let Some(cost) = objective.bridged_cost(heading, rules.step_m) else { return };
+        let Some(cost) = objective.bridged_cost(turned_to, rules.step_m) else { return };
         (f64::INFINITY, cost)
     };
     let landmarks = seen.count;
@@ -449,7 +488,9 @@ impl Seen {
 struct View {
     sin: f64,
     cos: f64,
+    /// The projected step along the view and across it (to the right), m.
     step: f64,
+    step_across: f64,
     tan_half: f64,
     half_baseline: f64,
     min_slant2: f64,
@@ -458,12 +499,15 @@ struct View {
 }
 
 impl View {
-    fn new(rules: &DecisionRules, heading: f64) -> Self {
+    /// Looking along `heading` after a step along `course`.
+    fn new(rules: &DecisionRules, heading: f64, course: f64) -> Self {
         let (sin, cos) = heading.sin_cos();
+        let (across, along) = (heading - course).sin_cos();
         View {
             sin,
             cos,
-            step: rules.step_m,
+            step: rules.step_m * along,
+            step_across: rules.step_m * across,
             tan_half: rules.half_fov.tan(),
             half_baseline: rules.baseline_m / 2.0,
             min_slant2: rules.min_slant_m.powi(2),
@@ -483,7 +527,7 @@ impl View {
             // Eq. 44–48 without trigonometry: depth along the heading from
             // the projected position, lateral offset to the right.
             let depth = dx * self.cos + dy * self.sin - self.step;
-            let lateral = dx * self.sin - dy * self.cos;
+            let lateral = dx * self.sin - dy * self.cos - self.step_across;
             if depth <= 0.0 || lateral.abs() > depth * self.tan_half {
                 continue;
             }
@@ -517,8 +561,8 @@ pub fn best_heading_exhaustive(
     let offsets: Vec<(f64, f64)> = landmarks.iter().map(|&(x, y)| (x - position.0, y - position.1)).collect();
     let mut best = None;
     for heading in candidates {
-        let seen = View::new(rules, heading).information(table, &offsets);
-        consider(&mut best, rules, objective, heading, seen);
+        let seen = View::new(rules, heading, heading).information(table, &offsets);
+        consider(&mut best, rules, objective, heading, heading, seen);
     }
     best
 }
@@ -560,6 +604,35 @@ mod tests {
         assert!((d.heading - straight_at).abs() > 15f64.to_radians(), "{}", d.heading.to_degrees());
         assert!(d.cv < 1.0 / t.information(0.0, 10.0));
         assert_eq!(d.landmarks, 1);
+    }
+
+    #[test]
+    fn a_steerable_camera_looks_at_landmarks_the_heading_would_miss() {
+        let t = table();
+        // Landmarks only on a wall 3 m to the left, from 1 to 4 m ahead:
+        // out of the view along the course (more than 30° off it); the
+        // robot keeps driving along x.
+        let landmarks: Vec<(f64, f64)> = (2..=8).map(|x| (f64::from(x) / 2.0, 3.0)).collect();
+        let ahead = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0], &Objective::Cv);
+        let looks = (-18..=18).map(|i| f64::from(i) * 5f64.to_radians());
+        let look = best_look(&t, &rules(), &landmarks, (0.0, 0.0), 0.0, looks, &Objective::Cv).unwrap();
+        assert!(look.heading > 20f64.to_radians(), "{}", look.heading.to_degrees());
+        assert!(look.landmarks > ahead.map_or(0, |d| d.landmarks));
+        // Looking along the course is the same view as heading along it.
+        let along = best_look(&t, &rules(), &landmarks, (0.0, 0.0), 0.3, [0.3], &Objective::Cv).unwrap();
+        assert_eq!(Some(along), best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.3], &Objective::Cv));
+        // Under the end-point objective a look costs no turn: the robot
+        // keeps its course.
+        let end_point = Objective::EndPoint {
+            heading: 0.0,
+            goal_bearing: 0.0,
+            remaining_m: 30.0,
+            turn_tolerance: 2f64.to_radians(),
+            costs: DecisionCosts::default(),
+        };
+        let looks = (-18..=18).map(|i| f64::from(i) * 5f64.to_radians());
+        let chosen = best_look(&t, &rules(), &landmarks, (0.0, 0.0), 0.0, looks, &end_point).unwrap();
+        assert_eq!(chosen.cost, end_point.cost(0.0, chosen.cv, rules().step_m));
     }
 
     #[test]

@@ -23,7 +23,7 @@ mod stop;
 mod sweep_camera;
 pub mod tracking;
 
-pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, PredictionCheck, Technique};
+pub use action_aiding::{ActionAiding, ActionAidingConfig, DecisionObjective, PredictionCheck, Steer, Technique};
 pub use avoid::{AvoidCollision, AvoidCollisionConfig};
 pub use fault::{InjectFault, InjectFaultConfig};
 pub use go_to::{GoTo, GoToConfig};
