@@ -133,24 +133,24 @@ w("Three routes mirror §4.4.2: 40.7 m towards far landmarks (the corridor opens
 span = {t: [dev['routes'][rt]['rigid'][t]['actual_over_predicted'] for rt in ROUTES] for t in T}
 w("The model's prediction of the end-point error (act/pred) ranges, over the three routes, " + "; ".join(f"{t} {min(span[t]):.2f}–{max(span[t]):.2f}" for t in T) + ": right to within a factor of about two for straight driving and tracking, pessimistic for the scan and, on two routes, the zig-zag.\n")
 thesis_ep = {
-    ROUTES[0]: {'none': '14.04', 'zigzag': '10.03', 'scan': '3.94', 'tracking': '3.94'},
-    ROUTES[1]: {'none': '8.64', 'zigzag': '5.70', 'scan': '2.24', 'tracking': '2.24'},
-    ROUTES[2]: {'none': '9.19', 'zigzag': 'failed', 'scan': '2.24', 'tracking': '2.24'},
+    ROUTES[0]: {'none': '14.04', 'zigzag': '10.03', 'scan': '3.94', 'tracking': '3.94', 'camera': '—'},
+    ROUTES[1]: {'none': '8.64', 'zigzag': '5.70', 'scan': '2.24', 'tracking': '2.24', 'camera': '—'},
+    ROUTES[2]: {'none': '9.19', 'zigzag': 'failed', 'scan': '2.24', 'tracking': '2.24', 'camera': '—'},
 }
 for route in ROUTES:
     w(f"### {route}, seeds 0..30\n")
     w("| technique | rigid: error m [95 % CI] | × straight | pred. σ m | act/pred | failures | outage m | time + % | simple 2D: error m | × straight | thesis m (eval.) |")
     w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     r, s2 = dev['routes'][route]['rigid'], dev['routes'][route]['simple2d']
-    for t in T:
+    for t in T + ['camera']:
         c = r[t]
         w(f"| {t} | {cell(c)} | {ratio(c, r['none']):.2f} | {c['predicted_sigma_m']['mean']:.2f} | {c['actual_over_predicted']:.2f} | {c['egomotion_failures']['mean']:.1f} | {c['outage_m']['mean']:.2f} | {c['time_overhead_pct']['mean']:.0f} | {s2[t]['endpoint_error_m']['mean']:.2f} | {ratio(s2[t], s2['none']):.2f} | {thesis_ep[route][t]} |")
     w("")
 
 w("### Held out: layouts and seeds nobody tuned on\n")
 w("Rigid estimator, end-point objective: mean error (m) of each aided technique over straight driving's in the same layout and seeds. Every set shows the committed code. The first three layouts (seeds 1000..1030) have been reported since the keyframe bank. The odometry bridge and χ² gate were developed on other layouts (404, 505, 606, seeds 2000..2030), and layouts 707, 808 and 909 (seeds 3000..3030) were first run after them. Layouts 1111, 1212 and 1313 (seeds 6000..6030) were first run to check a later idea (ending the last step beside the goal instead of a full step on), which was dropped (on layout 1111 route 1→2 it multiplied tracking's failures and its time many times over). The end-game fixes were developed on the development layouts and on three single runs replayed from the second and third sets (808 seed 3010, 1111 seed 6001, 909 seed 3025), so those sets are no longer clean; layouts 1414, 1515 and 1616 (seeds 7000..7030) were first run after the fixes. A tracking ratio beyond 1.1 is in bold, and so is a failure count beyond 5.\n")
-w("| layout | route | none m | zig-zag × | scan × | tracking × [95 % CI of tracking m] | tracking failures / run |")
-w("| --- | --- | --- | --- | --- | --- | --- |")
+w("| layout | route | none m | zig-zag × | scan × | tracking × [95 % CI of tracking m] | tracking failures / run | camera × |")
+w("| --- | --- | --- | --- | --- | --- | --- | --- |")
 every_held = {**held, **held2, **held3, **held4}
 bold = lambda text, over: f"**{text}**" if over else text
 for seed, data in every_held.items():
@@ -158,7 +158,7 @@ for seed, data in every_held.items():
         r = data['routes'][route]['rigid']
         tr, fails = ratio(r['tracking'], r['none']), r['tracking']['egomotion_failures']['mean']
         ci = r['tracking']['endpoint_error_m']['ci95']
-        w(f"| {seed} | {SHORT[route]} | {r['none']['endpoint_error_m']['mean']:.3f} | {ratio(r['zigzag'], r['none']):.2f} | {ratio(r['scan'], r['none']):.2f} | {bold(f'{tr:.2f}', tr > 1.1)} [{ci[0]:.3f}, {ci[1]:.3f}] | {bold(f'{fails:.1f}', fails > 5)} |")
+        w(f"| {seed} | {SHORT[route]} | {r['none']['endpoint_error_m']['mean']:.3f} | {ratio(r['zigzag'], r['none']):.2f} | {ratio(r['scan'], r['none']):.2f} | {bold(f'{tr:.2f}', tr > 1.1)} [{ci[0]:.3f}, {ci[1]:.3f}] | {bold(f'{fails:.1f}', fails > 5)} | {ratio(r['camera'], r['none']):.2f} |")
 w("")
 cases = [(seed, rt, d['routes'][rt]['rigid']) for seed, d in every_held.items() for rt in ROUTES]
 worst_scan = max(ratio(r['scan'], r['none']) for _, _, r in cases)
@@ -167,6 +167,18 @@ failing = [(seed, rt, r['tracking']['egomotion_failures']['mean']) for seed, rt,
 w(f"**Against the targets.** The scan stays within {worst_scan:.2f}× straight driving on every held-out route (target 1.5×). Tracking is within 1.1× on {len(cases) - len(missed)} of {len(cases)} held-out cases and **misses** on " + "; ".join(f"layout {seed} route {SHORT[rt]} ({x:.2f}×)" for seed, rt, x in missed) + f". Its egomotion failures stay at or below 5 per run on {len(cases) - len(failing)} of {len(cases)} and **exceed** it on " + "; ".join(f"layout {seed} route {SHORT[rt]} ({x:.1f})" for seed, rt, x in failing) + f". The end-game fixes (last row of the first table) took tracking's failures on layout 808 route 1→2 from 15.2 per run to {held2[808]['routes'][ROUTES[0]]['rigid']['tracking']['egomotion_failures']['mean']:.1f}, and on layout 707 from 5.2 to {held2[707]['routes'][ROUTES[0]]['rigid']['tracking']['egomotion_failures']['mean']:.1f}; before them, in that layout's four runs with most failures (207, 128, 38 and 25), 385 of the 398 came within 2 m of the goal, where the robot, having passed the goal just outside the tolerance, turned back and circled it. On layout 101 route 2→1 (seed 1001), after a 7.7° turn 6 m out, the egomotion pose swung by up to 0.6 m from frame to frame as keyframes metres apart took turns anchoring it, and kept 0.45 m of along-track error to the end, where straight driving ended 0.03 m off. But matching frame to frame, where no anchors alternate, leaves tracking as far behind on that layout (0.237 against 0.147 m, 1.61×, against 1.52× with the bank): the swings are not the cause of this miss, and the cause is not known. Fusing each visual motion with odometry's by their covariances steadies the pose (on the development layouts it took straight driving's error from 0.07–0.48 m to 0.02–0.04 m, with this simulator's odometry, whose wheel scale is exact), but with a wheel 1 % short it made route 2→1 three times worse (0.06 to 0.21 m), so it is not part of the product. On routes 2→1 and feature-poor tracking now ends exactly where straight driving does in most layouts: it finds no heading worth a turn and drives the same path. We did not tune toward the target: the coefficients were fitted on seeds 100..110 (the bridge's drift on 100..130), the change was developed on layouts no table here uses, and these rows were run after.\n")
 r = held_cv['routes']
 w(f"**The thesis's CV objective on the same held-out runs** (layout 101) turns far more (tracking {r[ROUTES[0]]['rigid']['tracking']['time_overhead_pct']['mean']:.0f} % longer than straight on route 1→2, against {held[101]['routes'][ROUTES[0]]['rigid']['tracking']['time_overhead_pct']['mean']:.0f} % with the end-point objective) and ends at " + ", ".join(f"{ratio(r[rt]['rigid']['tracking'], r[rt]['rigid']['none']):.2f}×" for rt in ROUTES) + " straight driving's error with tracking and " + ", ".join(f"{ratio(r[rt]['rigid']['scan'], r[rt]['rigid']['none']):.2f}×" for rt in ROUTES) + " with the scan.\n")
+
+w("### Steering a camera instead of the robot\n")
+w("The *camera* column is ActionAiding with `steer: Camera`: the robot drives straight at the goal, as straight driving does, while a camera on a simulated pan-tilt unit (`pan_tilt: ()`: ±150°, 60°/s, encoders to 0.05° with 0.02° noise) looks, frame by frame, where the evaluative decision over the tracking list says, within half the field of view of its last look (see [perception.md](perception.md#a-camera-on-a-pan-tilt-unit)). Every other column has the camera fixed, looking ahead. It was built on the development layouts 404, 505 and 606 (seeds 2000..2030); every held-out row above was its first run.\n")
+cam = {rt: [ratio(d['routes'][rt]['rigid']['camera'], d['routes'][rt]['rigid']['none']) for d in every_held.values()] for rt in ROUTES}
+gm = lambda xs: __import__('math').exp(sum(__import__('math').log(x) for x in xs) / len(xs))
+w("| route | camera × straight, geometric mean over the 12 held-out layouts | layouts where it gains (< 0.9×) | where it loses (> 1.1×) | range |")
+w("| --- | --- | --- | --- | --- |")
+for rt in ROUTES:
+    xs = cam[rt]
+    w(f"| {SHORT[rt]} | {gm(xs):.2f} | {sum(x < 0.9 for x in xs)} | {sum(x > 1.1 for x in xs)} | {min(xs):.2f}–{max(xs):.2f} |")
+w("")
+w(f"Where the landmarks ahead are far (route 1→2), looking at the side walls pays, much as turning the robot to them does (tracking); where the landmarks ahead are already near (route 2→1) or the side is a long featureless wall, moving the camera costs more than it gains. Two explanations of the losses were tested on development layout 505, where the camera ended 1.21× and 1.18× straight driving on routes 2→1 and feature-poor. Perfect encoders (no noise, no steps) left 1.19× and 1.13×: the unit's angle error is not the cause. Limiting the look's change to 5° per frame instead of 30° gave 1.00× and 1.12×, but 2.5° gave 1.17× and 1.58×, and 10° 1.67× and 1.10×: no trend, so the pace of the camera is not shown to be the cause either, and the rule stays at half the field of view. Why steering the camera loses there is not settled. The decision values a look by the step's predicted CV alone (a look costs no turn); it does not value keeping the keyframes' landmarks in view, which is what the tracker anchors on.\n")
 
 w("### The thesis's simplified estimator\n")
 w("```sh run\nubf experiment thesis-endpoint --rotate-then-translate   # the thesis's decoupled motion (§4.4.5)\n```\n")
@@ -184,7 +196,7 @@ if stuck:
 
 w("## Where aiding pays\n")
 w("```sh run-slow\nubf experiment where-aiding-pays --plot docs/where-aiding-pays.png\n```\n")
-w(f"One factor of route 1→2 varied at a time; for each environment the best aided technique is chosen on seeds {env['development_seeds'][0]}..{env['development_seeds'][1]} and its error measured, beside straight driving's, on seeds {env['held_out_seeds'][0]}..{env['held_out_seeds'][1]} in held-out layout {env['held_out_layout_seed']} (so choosing the best of three does not flatter it). Rigid estimator, end-point objective. Below 1 aiding pays.\n")
+w(f"One factor of route 1→2 varied at a time; for each environment the best aided technique is chosen on seeds {env['development_seeds'][0]}..{env['development_seeds'][1]} and its error measured, beside straight driving's, on seeds {env['held_out_seeds'][0]}..{env['held_out_seeds'][1]} in held-out layout {env['held_out_layout_seed']} (so choosing the best of four, the zig-zag, the scan, tracking and camera steering, does not flatter it). Rigid estimator, end-point objective. Below 1 aiding pays.\n")
 w("![Where aiding pays](where-aiding-pays.png)\n")
 w("| factor | level | best aided | straight m | aided m | ratio [95 % CI] |")
 w("| --- | --- | --- | --- | --- | --- |")
