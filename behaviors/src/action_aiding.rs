@@ -464,6 +464,21 @@ impl ActionAiding {
         out
     }
 
+    /// What the decision minimises for a robot heading `facing` with the
+    /// goal at `goal_bearing`, `remaining_m` away.
+    fn objective(&self, facing: f64, goal_bearing: f64, remaining_m: f64) -> Objective {
+        match self.config.objective {
+            DecisionObjective::Cv => Objective::Cv,
+            DecisionObjective::EndPoint => Objective::EndPoint {
+                heading: facing,
+                goal_bearing,
+                remaining_m,
+                turn_tolerance: self.config.heading_tolerance_deg.to_radians(),
+                costs: self.config.costs,
+            },
+        }
+    }
+
     /// Chooses the heading from the tracking list for a robot at `pose`
     /// whose heading egomotion last fixed was `facing`; without a feasible
     /// heading, the goal's bearing `centre`.
@@ -471,16 +486,7 @@ impl ActionAiding {
         self.refresh_positions();
         let Some((camera, table)) = &self.camera else { return centre };
         let rules = self.rules(camera);
-        let objective = match self.config.objective {
-            DecisionObjective::Cv => Objective::Cv,
-            DecisionObjective::EndPoint => Objective::EndPoint {
-                heading: facing,
-                goal_bearing: centre,
-                remaining_m,
-                turn_tolerance: self.config.heading_tolerance_deg.to_radians(),
-                costs: self.config.costs,
-            },
-        };
+        let objective = self.objective(facing, centre, remaining_m);
         let candidates = self.candidates(pose, centre);
         let decision = best_heading(table, &rules, &self.positions, (pose.x, pose.y), candidates, &objective);
         self.predicted = decision.map(|d| d.landmarks);
@@ -513,16 +519,7 @@ impl ActionAiding {
     fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64) -> f64 {
         let Some((camera, table)) = &self.camera else { return course };
         let rules = self.rules(camera);
-        let objective = match self.config.objective {
-            DecisionObjective::Cv => Objective::Cv,
-            DecisionObjective::EndPoint => Objective::EndPoint {
-                heading: course,
-                goal_bearing: course,
-                remaining_m,
-                turn_tolerance: self.config.heading_tolerance_deg.to_radians(),
-                costs: self.config.costs,
-            },
-        };
+        let objective = self.objective(course, course, remaining_m);
         let now = self.look.unwrap_or(course);
         let (max_pan, reach) = (self.config.max_pan_deg.to_radians(), rules.half_fov);
         let step = self.config.angle_step_deg.to_radians();
