@@ -226,7 +226,7 @@ fn where_aiding_pays_maps_every_environment_and_draws_it() {
     for c in cells {
         let (ratio, ci) = (c["ratio"].as_f64().unwrap(), c["ratio_ci95"].as_array().unwrap());
         assert!(ratio > 0.0 && ci[0].as_f64().unwrap() <= ratio && ratio <= ci[1].as_f64().unwrap(), "{c}");
-        assert!(["zigzag", "scan", "tracking"].contains(&c["best"].as_str().unwrap()), "{c}");
+        assert!(["zigzag", "scan", "tracking", "camera"].contains(&c["best"].as_str().unwrap()), "{c}");
     }
     // One base cell per factor, all the same environment.
     let base: Vec<_> = cells.iter().filter(|c| c["base"] == true).collect();

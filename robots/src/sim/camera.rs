@@ -398,6 +398,20 @@ mod tests {
     }
 
     #[test]
+    fn a_tilted_camera_needs_the_geometric_model() {
+        let unit = PanTiltConfig { tilt_deg: 10.0, ..PanTiltConfig::default() };
+        let rendered = SimCameraConfig {
+            images: Some(RenderConfig::default()),
+            pan_tilt: Some(unit),
+            ..SimCameraConfig::default()
+        };
+        assert!(rendered.check().unwrap_err().contains("level views only"));
+        assert_eq!(SimCameraConfig { images: None, ..rendered.clone() }.check(), Ok(()));
+        let panned = PanTiltConfig { tilt_deg: 0.0, ..unit };
+        assert_eq!(SimCameraConfig { pan_tilt: Some(panned), ..rendered }.check(), Ok(()));
+    }
+
+    #[test]
     fn walls_occlude() {
         let mut world = world_with(vec![(10.0, 0.0, 1.0, None)]);
         world.segments.push(Segment::new((5.0, -1.0), (5.0, 1.0)));
