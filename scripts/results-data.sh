@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every command docs/results.md reports, leaving their output in out/
-# for scripts/results-page.py. About 8 minutes on two cores.
+# for scripts/results-page.py. About 14 minutes on two cores.
 #
 #   scripts/results-data.sh && python3 scripts/results-page.py
 #
@@ -20,28 +20,28 @@ SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs
 "$ubf" experiment thesis-endpoint --json > out/endpoint.json
 "$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
 "$ubf" experiment thesis-endpoint --rotate-then-translate --json > out/endpoint-rtt.json
-for layout in 101 202 303; do
-    "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
-done
+# The end-point experiment on held-out layouts: held_out SEEDS LAYOUT...
+held_out() {
+    local seeds=$1 layout
+    shift
+    for layout in "$@"; do
+        "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
+    done
+}
+held_out 1000..1030 101 202 303
 # A second held-out set, first run after the change it checks (straight on
 # the odometry bridge, the odometry χ² gate) was developed on layouts
 # 404, 505 and 606 with seeds 2000..2030.
-for layout in 707 808 909; do
-    "$ubf" experiment thesis-endpoint --seeds 3000..3030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
-done
+held_out 3000..3030 707 808 909
 # A third, run once a later idea (shorter last steps) had been tried on it
 # and dropped: it is reported with the code as committed.
-for layout in 1111 1212 1313; do
-    "$ubf" experiment thesis-endpoint --seeds 6000..6030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
-done
+held_out 6000..6030 1111 1212 1313
 # A fourth, first run after the end-game fixes (a turn keeps its way round,
 # the last stretch steers at the goal, a turn stuck a few degrees short
 # steers on), which were found on the development layouts and on single
 # runs of the second and third sets (808 seed 3010, 1111 seed 6001, 909
 # seed 3025).
-for layout in 1414 1515 1616; do
-    "$ubf" experiment thesis-endpoint --seeds 7000..7030 --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
-done
+held_out 7000..7030 1414 1515 1616
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
 "$ubf" experiment where-aiding-pays --plot docs/where-aiding-pays.png --json > out/where-aiding-pays.json
 # Route 1->2 with a one-frame keyframe bank (frame-to-frame matching)

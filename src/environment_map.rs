@@ -10,7 +10,8 @@
 //! aided technique with the least mean end-point error is then run, beside
 //! straight driving, on held-out seeds in a held-out landmark layout, and
 //! its gain is reported from those runs only, so that choosing the best of
-//! three does not flatter it.
+//! four (the zig-zag, the scan, tracking and camera steering) does not
+//! flatter it.
 
 use crate::experiment::{load_route, variant, Aid, ExperimentError};
 use crate::run::{run, RunReport};

@@ -10,6 +10,21 @@ fn load(name: &str) -> Scenario {
     Scenario::load(&ubf::registry(), &path).unwrap()
 }
 
+/// The scenario file `name` with each `(from, to)` edit made to its text.
+fn edited(name: &str, edits: &[(&str, &str)]) -> Scenario {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(name);
+    let text = edits.iter().fold(std::fs::read_to_string(path).unwrap(), |text, (from, to)| text.replace(from, to));
+    Scenario::from_ron(&ubf::registry(), &text).unwrap()
+}
+
+/// Every row's value in the column `name` of a run's `trajectory.csv`.
+fn trajectory_column(dir: &Path, name: &str) -> Vec<f64> {
+    let csv = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let column = lines.next().unwrap().split(',').position(|h| h == name).unwrap();
+    lines.map(|l| l.split(',').nth(column).unwrap().parse().unwrap()).collect()
+}
+
 #[test]
 fn goes_round_a_box_to_the_goal_without_touching_anything_in_30_seeds() {
     let scenario = load("corridor-box.ron");
@@ -157,12 +172,10 @@ fn aiding_beside_avoidance_never_sits_out_the_time_limit() {
     // spot and AvoidCollision's turn away from a wall cancelled under
     // CommandFusion, and the robot sat until the time limit. A stuck turn
     // now goes the long way round, then steers while driving.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-2-1.ron");
-    let text = std::fs::read_to_string(path)
-        .unwrap()
-        .replace("technique: None", "technique: Tracking, objective: Cv")
-        .replace("seed: 21)", "seed: 101)");
-    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let scenario = edited(
+        "thesis/route-2-1.ron",
+        &[("technique: None", "technique: Tracking, objective: Cv"), ("seed: 21)", "seed: 101)")],
+    );
     for seed in [1021, 1022] {
         let report = run(&scenario, seed, None).unwrap();
         assert_eq!(report.end, EndReason::GoalReached, "seed {seed}: {report:?}");
@@ -178,12 +191,8 @@ fn a_turn_blocked_a_few_degrees_short_steers_on_instead_of_turning_round() {
     // full revolution, failing frames all the way), stuck again facing the
     // wall, and the robot repeated this until the time limit. A turn stuck
     // less than a quarter turn short now steers while driving.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-2-1.ron");
-    let text = std::fs::read_to_string(path)
-        .unwrap()
-        .replace("technique: None", "technique: Scan")
-        .replace("seed: 21)", "seed: 909)");
-    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let scenario =
+        edited("thesis/route-2-1.ron", &[("technique: None", "technique: Scan"), ("seed: 21)", "seed: 909)")]);
     let report = run(&scenario, 3025, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert!(report.sim_time_s < 600.0, "{report:?}");
@@ -274,20 +283,14 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 1, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
-    let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (truth, ego, commanded, measured) =
-        (column("true_theta"), column("ego_theta"), column("camera_pan_cmd"), column("camera_pan"));
-    let (mut worst_heading, mut widest_pan) = (0.0_f64, 0.0_f64);
-    for line in lines {
-        let row: Vec<&str> = line.split(',').collect();
-        let value = |i: usize| row[i].parse::<f64>().unwrap();
-        worst_heading = worst_heading.max((value(ego) - value(truth)).abs());
-        widest_pan = widest_pan.max(value(measured).abs());
+    let column = |name| trajectory_column(dir.path(), name);
+    let (truth, ego) = (column("true_theta"), column("ego_theta"));
+    let (commanded, measured) = (column("camera_pan_cmd"), column("camera_pan"));
+    let worst_heading = ego.iter().zip(&truth).map(|(e, t)| (e - t).abs()).fold(0.0, f64::max);
+    let widest_pan = measured.iter().map(|p| p.abs()).fold(0.0, f64::max);
+    for (tick, (c, m)) in commanded.iter().zip(&measured).enumerate() {
         // The unit follows the sweep within its rate limit.
-        assert!((value(commanded) - value(measured)).abs() < 20f64.to_radians(), "{line}");
+        assert!((c - m).abs() < 20f64.to_radians(), "tick {tick}: commanded {c}, measured {m}");
     }
     assert!(widest_pan > 55f64.to_radians(), "the camera swept {:.1}°", widest_pan.to_degrees());
     assert!(worst_heading < 2f64.to_radians(), "heading off by {:.2}°", worst_heading.to_degrees());
@@ -303,21 +306,15 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     // the robot keeps to the straight line at the goal (no detour, no time
     // spent turning), while the camera looks where the tracking list's
     // landmarks are.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
-    let text = std::fs::read_to_string(path)
-        .unwrap()
-        .replace("technique: None", "technique: Tracking, steer: Camera")
-        .replace("camera: (", "camera: (pan_tilt: (), ");
-    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    let scenario = edited(
+        "thesis/route-1-2.ron",
+        &[("technique: None", "technique: Tracking, steer: Camera"), ("camera: (", "camera: (pan_tilt: (), ")],
+    );
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 3, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert!(report.path_overhead_pct.unwrap() < 1.0, "{report:?}");
     assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
-    let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let pan = header.iter().position(|h| *h == "camera_pan").unwrap();
-    let widest = lines.map(|l| l.split(',').nth(pan).unwrap().parse::<f64>().unwrap().abs()).fold(0.0, f64::max);
+    let widest = trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs()).fold(0.0, f64::max);
     assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
 }

@@ -596,6 +596,8 @@ impl ActionAiding {
             return Action::none();
         }
         let pose = state.pose;
+        let to_goal = (goal.y - pose.y).atan2(goal.x - pose.x);
+        let distance = pose.distance_to(goal.x, goal.y);
         let frame = &state.stereo;
         if frame.number != self.last_frame {
             self.last_frame = frame.number;
@@ -618,18 +620,16 @@ impl ActionAiding {
                     // the goal on the last stretch.
                     let course = match self.phase {
                         Phase::Turn { heading } | Phase::Step { heading, .. } => heading,
-                        Phase::Approach => (goal.y - pose.y).atan2(goal.x - pose.x),
+                        Phase::Approach => to_goal,
                         Phase::Decide | Phase::Scan { .. } => pose.theta,
                     };
                     self.list.prune(&pose);
                     self.refresh_positions();
-                    self.look = Some(self.choose_look(&pose, course, pose.distance_to(goal.x, goal.y)));
+                    self.look = Some(self.choose_look(&pose, course, distance));
                 }
             }
         }
         echo_points(state, &mut self.echoes);
-        let to_goal = (goal.y - pose.y).atan2(goal.x - pose.x);
-        let distance = pose.distance_to(goal.x, goal.y);
         let vote = self.vote(state);
         // Two passes at most: a finished phase hands over within the tick.
         for _ in 0..3 {

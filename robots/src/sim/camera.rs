@@ -215,14 +215,18 @@ impl SimCamera {
         }
         self.frames += 1;
         out.clear();
+        // Where the pair truly is: the unit's angles replace the mount's.
+        let mount = match aim {
+            Some(a) => self.config.stereo.mount.aimed(a.pan, a.tilt),
+            None => self.config.stereo.mount,
+        };
         if let Some(render) = self.config.images {
             let stereo = self.config.stereo;
             let (renderer, pipeline) = self.rendered.get_or_insert_with(|| {
                 let seed = rng.random();
                 (Renderer::new(world, stereo, render, seed), StereoPipeline::new(stereo, render.features))
             });
-            let pan = aim.map_or(0.0, |a| a.pan);
-            let (left, right) = renderer.render(pose, pan, self.frames);
+            let (left, right) = renderer.render_from(pose, &mount, self.frames);
             // The renderer makes images of the calibrated size, which is all
             // the pipeline can refuse.
             out.extend(pipeline.process(&left, &right).unwrap_or_default());
@@ -231,10 +235,6 @@ impl SimCamera {
             self.last_images = Some(Arc::new(images));
             return Some(self.frames);
         }
-        let mount = match aim {
-            Some(a) => self.config.stereo.mount.aimed(a.pan, a.tilt),
-            None => self.config.stereo.mount,
-        };
         for landmark in &world.landmarks {
             if let Some(observation) = self.observe(landmark, time, pose, &mount, world, rng) {
                 out.push(observation);

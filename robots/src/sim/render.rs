@@ -17,7 +17,7 @@ use super::world::{Anchor, Side, World};
 use image::GrayImage;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
-use ubf_core::Pose2;
+use ubf_core::{CameraMount, Pose2};
 use ubf_perception::features::FeatureConfig;
 use ubf_perception::source::{CameraSource, SourceError, StereoPair};
 use ubf_perception::StereoCamera;
@@ -156,13 +156,17 @@ impl Renderer {
         &self.camera
     }
 
-    /// The left and right images from a robot at `pose` with the pair
-    /// panned `pan` radians from its mount's direction; `frame` varies the
+    /// The left and right images from a robot at `pose`; `frame` varies the
     /// noise from one frame to the next.
-    pub fn render(&self, pose: &Pose2, pan: f64, frame: u64) -> (GrayImage, GrayImage) {
-        let mount = &self.camera.mount;
+    pub fn render(&self, pose: &Pose2, frame: u64) -> (GrayImage, GrayImage) {
+        self.render_from(pose, &self.camera.mount, frame)
+    }
+
+    /// The same, with the pair where `mount` puts it: a pan-tilt unit's
+    /// angle at the frame (level views only: its tilt is not drawn).
+    pub fn render_from(&self, pose: &Pose2, mount: &CameraMount, frame: u64) -> (GrayImage, GrayImage) {
         let centre = pose.transform_point(mount.forward, mount.left);
-        let (s, c) = (pose.theta + mount.pan_deg.to_radians() + pan).sin_cos();
+        let (s, c) = (pose.theta + mount.pan_deg.to_radians()).sin_cos();
         // The camera frame's x points to the robot's right.
         let right = (s, -c);
         let half = self.camera.baseline_m / 2.0;
@@ -291,7 +295,7 @@ impl CameraSource for RenderedPath {
     fn next_pair(&mut self) -> Result<Option<StereoPair>, SourceError> {
         let Some(&(time, pose)) = self.path.get(self.next) else { return Ok(None) };
         self.next += 1;
-        let (left, right) = self.renderer.render(&pose, 0.0, self.next as u64);
+        let (left, right) = self.renderer.render(&pose, self.next as u64);
         Ok(Some(StereoPair { time, left, right }))
     }
 }
@@ -326,10 +330,24 @@ mod tests {
         let world = corridor_world();
         let renderer = Renderer::new(&world, StereoCamera::default(), RenderConfig::default(), 7);
         let pose = Pose2::new(1.0, 0.2, 0.1);
-        let (a, b) = renderer.render(&pose, 0.0, 3);
-        assert_eq!((a.clone(), b.clone()), renderer.render(&pose, 0.0, 3));
-        assert_ne!(a, renderer.render(&pose, 0.0, 4).0, "the noise changes from frame to frame");
+        let (a, b) = renderer.render(&pose, 3);
+        assert_eq!((a.clone(), b.clone()), renderer.render(&pose, 3));
+        assert_ne!(a, renderer.render(&pose, 4).0, "the noise changes from frame to frame");
         assert_ne!(a, b, "the two eyes differ");
+    }
+
+    #[test]
+    fn a_panned_pair_sees_what_the_robot_turned_as_far_would() {
+        // With the pair over the centre of rotation, panning it by 0.4 rad
+        // is the same view as turning the robot by 0.4 rad.
+        let world = corridor_world();
+        let renderer = Renderer::new(&world, StereoCamera::default(), RenderConfig::default(), 7);
+        let panned = renderer.camera().mount.aimed(0.4, 0.0);
+        assert_eq!(
+            renderer.render_from(&Pose2::new(1.0, 0.2, 0.1), &panned, 3),
+            renderer.render(&Pose2::new(1.0, 0.2, 0.5), 3)
+        );
+        assert_ne!(renderer.render(&Pose2::new(1.0, 0.2, 0.1), 3), renderer.render(&Pose2::new(1.0, 0.2, 0.5), 3));
     }
 
     #[test]
@@ -340,7 +358,7 @@ mod tests {
         let camera = StereoCamera::default();
         let renderer = Renderer::new(&world, camera, RenderConfig::default(), 7);
         let pose = Pose2::new(0.5, 0.0, 0.0);
-        let (left, right) = renderer.render(&pose, 0.0, 0);
+        let (left, right) = renderer.render(&pose, 0);
         let landmarks = StereoPipeline::new(camera, FeatureConfig::default()).process(&left, &right).unwrap();
         assert!(landmarks.len() > 40, "{}", landmarks.len());
         let (mut on_walls, mut lateral_errors) = (0, Vec::new());
@@ -373,7 +391,7 @@ mod tests {
         let path = vec![(0.0, Pose2::new(0.5, 0.0, 0.0)), (0.5, Pose2::new(0.8, 0.0, 0.0))];
         let mut source = RenderedPath::new(renderer.clone(), path);
         let first = source.next_pair().unwrap().unwrap();
-        assert_eq!((first.left, first.right), renderer.render(&Pose2::new(0.5, 0.0, 0.0), 0.0, 1));
+        assert_eq!((first.left, first.right), renderer.render(&Pose2::new(0.5, 0.0, 0.0), 1));
         assert_eq!(source.next_pair().unwrap().unwrap().time, 0.5);
         assert!(source.next_pair().unwrap().is_none());
     }
@@ -384,7 +402,7 @@ mod tests {
         world.landmarks.clear();
         let camera = StereoCamera::default();
         let (left, right) =
-            Renderer::new(&world, camera, RenderConfig::default(), 7).render(&Pose2::new(0.5, 0.0, 0.0), 0.0, 0);
+            Renderer::new(&world, camera, RenderConfig::default(), 7).render(&Pose2::new(0.5, 0.0, 0.0), 0);
         let landmarks = StereoPipeline::new(camera, FeatureConfig::default()).process(&left, &right).unwrap();
         // The far end's corners with the floor and ceiling at most.
         assert!(landmarks.len() <= 6, "{}", landmarks.len());
