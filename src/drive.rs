@@ -21,6 +21,7 @@ use ubf_robots::arcos::link;
 use ubf_robots::camera::CameraRobot;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::model::RobotModel;
+use ubf_robots::ptu::{Ptu, PtuConfig};
 
 /// Which robot model a configuration names.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -95,6 +96,9 @@ pub enum CameraError {
     /// The camera's thread could not be started.
     #[error(transparent)]
     Start(RobotError),
+    /// The pan-tilt head could not be reached or set up.
+    #[error(transparent)]
+    PanTilt(RobotError),
 }
 
 /// Why `ubf drive` (or its dry run) ended in failure. A robot that was
@@ -218,6 +222,10 @@ pub struct DriveCamera {
     /// (`stereo` keeps only its `mount`).
     #[serde(default)]
     pub rectify: Option<RectifyFiles>,
+    /// The pan-tilt head the pair rides on (a FLIR PTU), for trees that
+    /// steer the camera (`ActionAiding(steer: Camera)`).
+    #[serde(default)]
+    pub pan_tilt: Option<PtuConfig>,
 }
 
 /// A robot configuration file: `RobotConfig(...)`.
@@ -303,12 +311,13 @@ impl DriveConfig {
         1.0
     }
 
-    /// Opens the camera, if there is one: before connecting, so that a
-    /// camera that fails never leaves the motors on.
+    /// Opens the camera and its pan-tilt head, if there are: before
+    /// connecting, so that a camera that fails never leaves the motors on.
     fn open_camera(&self) -> Result<Option<OpenCamera>, CameraError> {
         let Some(camera) = &self.camera else { return Ok(None) };
         let (source, paced) = open_source(camera)?;
-        Ok(Some(OpenCamera { source, paced }))
+        let pan_tilt = camera.pan_tilt.clone().map(Ptu::connect).transpose().map_err(CameraError::PanTilt)?;
+        Ok(Some(OpenCamera { source, paced, pan_tilt }))
     }
 
     /// `robot` with the opened camera and the egomotion tracker (starting
@@ -322,8 +331,11 @@ impl DriveConfig {
         let (Some(open), Some(camera)) = (camera, &self.camera) else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };
-        let robot = CameraRobot::new(robot, open.source, camera.stereo, camera.features, open.paced)
+        let mut robot = CameraRobot::new(robot, open.source, camera.stereo, camera.features, open.paced)
             .map_err(CameraError::Start)?;
+        if let Some(unit) = open.pan_tilt {
+            robot = robot.with_pan_tilt(Box::new(unit));
+        }
         let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, origin, 0));
         Ok(EgomotionRobot::new(robot, tracker))
     }
@@ -467,6 +479,7 @@ fn arm_second_interrupt(emergency: Option<EmergencyStop>) {
 struct OpenCamera {
     source: Box<dyn CameraSource + Send>,
     paced: bool,
+    pan_tilt: Option<Ptu>,
 }
 
 /// How a drive ended.
@@ -748,9 +761,15 @@ fn run_session<R: Robot>(
     ended
 }
 
+/// How far, ° (left), and for how long, s, the dry run turns a pan-tilt
+/// head before aiming it ahead: long enough to watch which way it went.
+const PAN_CHECK_DEG: f64 = 20.0;
+const PAN_CHECK_S: f64 = 3.0;
+
 /// `--dry-run`: connect without enabling the motors, print who the robot is
 /// and its configuration, then its odometry and nearest sonar echo once a
-/// second until stopped. Output that cannot be written (a closed pipe) ends
+/// second until stopped; a pan-tilt head is turned left and back, its
+/// commanded and measured angles shown. Output that cannot be written (a closed pipe) ends
 /// the run like Ctrl-C: the session is closed either way.
 pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), DriveError> {
     let camera = config.open_camera()?;
@@ -813,13 +832,26 @@ fn show_robot(
     let limits = robot.limits();
     writeln!(out, "limits in use   {:.2} m/s, {:.0}°/s", limits.max_velocity, limits.max_rot_velocity.to_degrees())?;
     writeln!(out, "motors          left disabled (dry run)")?;
+    let pan_tilt = config.camera.as_ref().and_then(|c| c.pan_tilt.as_ref());
+    if let Some(unit) = pan_tilt {
+        writeln!(
+            out,
+            "pan-tilt        on {}: turning {PAN_CHECK_DEG}° left for {PAN_CHECK_S} s, then ahead (a head that turns \
+             right first needs `invert_pan: true`)",
+            unit.connection
+        )?;
+    }
     let mut state = State::default();
     let started = Instant::now();
     let mut last_shown = Instant::now();
     while !stop.load(Ordering::SeqCst) && config.max_time_s.is_none_or(|t| started.elapsed().as_secs_f64() < t) {
         // Wake often enough to PULSE within the 500 ms; show once a second.
         std::thread::sleep(Duration::from_millis(250));
-        if let Err(e) = robot.inner_mut().inner_mut().keep_alive().and_then(|_| robot.sense(&mut state)) {
+        let pan = if started.elapsed().as_secs_f64() < PAN_CHECK_S { PAN_CHECK_DEG.to_radians() } else { 0.0 };
+        let aimed = if pan_tilt.is_some() { robot.aim_camera(pan) } else { Ok(()) };
+        if let Err(e) =
+            aimed.and_then(|()| robot.inner_mut().inner_mut().keep_alive()).and_then(|_| robot.sense(&mut state))
+        {
             return Ok(Err(e));
         }
         if last_shown.elapsed() < Duration::from_secs(1) {
@@ -835,6 +867,15 @@ fn show_robot(
             state.pose.theta.to_degrees(),
             state.battery_volts.unwrap_or(f64::NAN)
         )?;
+        if let Some(aim) = state.camera_aim {
+            writeln!(
+                out,
+                "pan-tilt        commanded {:.1}°, measured {:.2}° (tilt {:.2}°)",
+                pan.to_degrees(),
+                aim.pan.to_degrees(),
+                aim.tilt.to_degrees()
+            )?;
+        }
         if config.camera.is_some() {
             writeln!(
                 out,

@@ -201,20 +201,25 @@ fn exits_when_the_robot_vanishes_if_so_configured() {
     assert!(std::fs::read_to_string(&log).unwrap().lines().count() > 5, "the log was flushed");
 }
 
+/// Records `count` rendered pairs of the rendered corridor into
+/// `dir/frames`, to stand in for the cameras.
+fn record_frames(dir: &std::path::Path, count: u32) {
+    let record = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["frames", "scenarios/rendered-corridor.ron", "--max-frames", &count.to_string(), "--out"])
+        .arg(dir.join("frames"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(record.status.success(), "{}", String::from_utf8_lossy(&record.stderr));
+}
+
 #[test]
 fn a_dry_run_with_a_camera_shows_live_landmark_counts() {
     // Recorded rendered pairs stand in for the cameras: replayed at their
     // own pace (2 Hz) through the pipeline and egomotion while the robot
     // stays still with its motors off.
     let dir = tempfile::tempdir().unwrap();
-    let frames = dir.path().join("frames");
-    let record = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["frames", "scenarios/rendered-corridor.ron", "--max-frames", "8", "--out"])
-        .arg(&frames)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    assert!(record.status.success(), "{}", String::from_utf8_lossy(&record.stderr));
+    record_frames(dir.path(), 8);
     let (mut emulator, address, _) = emulator();
     let file = dir.path().join("robot.ron");
     let extra = r#"max_time_s: 3.5,
@@ -253,6 +258,55 @@ fn a_dry_run_with_a_camera_shows_live_landmark_counts() {
         Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("egomotion needs a camera"));
+}
+
+#[test]
+fn a_dry_run_turns_a_pan_tilt_head_left_and_back_and_shows_its_angles() {
+    // The head is `ubf emulate-ptu` on a pseudo-terminal, as its serial
+    // port would be; the robot `ubf emulate-powerbot` over TCP.
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 2);
+    let (mut emulator, address, _) = emulator();
+    let mut head =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["emulate-ptu", "--pty"]).stdout(Stdio::piped()).spawn().unwrap();
+    let mut head_out = BufReader::new(head.stdout.take().unwrap());
+    let mut head = Killed(head);
+    let mut line = String::new();
+    head_out.read_line(&mut line).unwrap();
+    let device = line.trim().strip_prefix("emulating a pan-tilt unit on ").expect("the device is named").to_owned();
+    let file = dir.path().join("robot.ron");
+    let extra = format!(
+        r#"max_time_s: 5.5,
+            camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{device}")),"#
+    );
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), &extra)).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    // (commanded, measured) once a second: 20° left for 3 s, then ahead.
+    let angles: Vec<(f64, f64)> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("pan-tilt        commanded "))
+        .map(|l| {
+            let (commanded, rest) = l.split_once("°, measured ").unwrap();
+            (commanded.parse().unwrap(), rest.split('°').next().unwrap().parse().unwrap())
+        })
+        .collect();
+    assert!(angles.len() >= 4, "{text}");
+    assert!(angles.iter().any(|&(c, m)| c == 20.0 && (m - 20.0).abs() < 0.06), "reached 20° left: {text}");
+    let &(commanded, measured) = angles.last().unwrap();
+    assert!(commanded == 0.0 && measured.abs() < 0.06, "back ahead: {text}");
+    head.kill().unwrap();
+    emulator.kill().unwrap();
+    // A head that does not answer stops the dry run before it starts.
+    let extra = r#"camera: (source: Directory("frames"), pan_tilt: (connection: "/dev/no-such-head")),"#;
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), extra)).unwrap();
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", "--dry-run", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("pan-tilt unit on /dev/no-such-head"), "{stderr}");
 }
 
 /// A robot file with `root` as its tree and `extra` fields.

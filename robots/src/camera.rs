@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::{Command, LandmarkObservation, Limits, Robot, RobotError, State, StereoImages};
+use ubf_core::{Aim, Command, LandmarkObservation, Limits, PanTilt, Robot, RobotError, State, StereoImages};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::source::CameraSource;
 use ubf_perception::StereoCamera;
@@ -24,18 +24,20 @@ struct CameraThread {
     thread: Option<JoinHandle<()>>,
 }
 
-/// Wraps a robot with a stereo camera. Without one it passes everything
-/// straight through.
+/// Wraps a robot with a stereo camera, on a pan-tilt unit or not. Without
+/// a camera it passes everything straight through.
 pub struct CameraRobot<R> {
     inner: R,
     camera: Option<(StereoCamera, CameraThread)>,
     frames: u64,
+    /// The unit the camera rides on, and the tilt it holds, rad.
+    pan_tilt: Option<(Box<dyn PanTilt>, f64)>,
 }
 
 impl<R: Robot> CameraRobot<R> {
     /// `inner` without a camera.
     pub fn without_camera(inner: R) -> Self {
-        CameraRobot { inner, camera: None, frames: 0 }
+        CameraRobot { inner, camera: None, frames: 0, pan_tilt: None }
     }
 
     /// `inner` with pairs from `source`, calibrated as `camera`. With
@@ -93,7 +95,18 @@ impl<R: Robot> CameraRobot<R> {
             inner,
             camera: Some((camera, CameraThread { frames, stop, thread: Some(thread) })),
             frames: 0,
+            pan_tilt: None,
         })
+    }
+
+    /// The camera rides on `unit`, holding its mount's tilt: the unit is
+    /// aimed by [`Robot::aim_camera`], its encoders are read every tick
+    /// into [`State::camera_aim`], and each new frame's calibration carries
+    /// the mount at the angles read as it arrived.
+    pub fn with_pan_tilt(mut self, unit: Box<dyn PanTilt>) -> Self {
+        let tilt = self.camera.as_ref().map_or(0.0, |(camera, _)| camera.mount.tilt_deg.to_radians());
+        self.pan_tilt = Some((unit, tilt));
+        self
     }
 
     /// The wrapped robot.
@@ -115,6 +128,9 @@ impl<R: Robot> CameraRobot<R> {
 impl<R: Robot> Robot for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
+        if let Some((unit, _)) = &mut self.pan_tilt {
+            state.camera_aim = Some(unit.measured()?);
+        }
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
@@ -123,7 +139,8 @@ impl<R: Robot> Robot for CameraRobot<R> {
                     state.stereo.number = self.frames;
                     state.stereo.time = time;
                     state.stereo.landmarks = landmarks;
-                    state.stereo.calibration = Some(*camera);
+                    let mount = state.camera_aim.map_or(camera.mount, |aim| camera.mount.aimed(aim.pan, aim.tilt));
+                    state.stereo.calibration = Some(StereoCamera { mount, ..*camera });
                     state.stereo.images = Some(images);
                 }
                 Ok(Err(e)) => return Err(RobotError::Protocol(format!("camera: {e}"))),
@@ -138,6 +155,8 @@ impl<R: Robot> Robot for CameraRobot<R> {
     }
 
     fn shutdown(&mut self) -> Result<(), RobotError> {
+        // A unit's driver halts the head as it goes.
+        self.pan_tilt = None;
         if let Some((_, thread)) = &mut self.camera {
             thread.stop.store(true, Ordering::Relaxed);
             if let Some(handle) = thread.thread.take() {
@@ -154,7 +173,10 @@ impl<R: Robot> Robot for CameraRobot<R> {
         self.inner.ground_truth()
     }
     fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
-        self.inner.aim_camera(pan)
+        match &mut self.pan_tilt {
+            Some((unit, tilt)) => unit.command(Aim { pan, tilt: *tilt }),
+            None => self.inner.aim_camera(pan),
+        }
     }
 
     fn hold(&self) -> Option<ubf_core::Hold> {

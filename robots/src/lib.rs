@@ -6,6 +6,8 @@
 //! - [`camera`]: a wrapper giving any robot a stereo camera: pairs from a
 //!   source through the feature pipeline on a thread of their own.
 //! - [`arcos`]: the Pioneer/Powerbot controller protocol.
+//! - [`ptu`]: a real pan-tilt head for the cameras (a FLIR PTU's serial
+//!   protocol), and an emulator of it.
 
 #![warn(missing_docs)]
 
@@ -13,4 +15,5 @@ pub mod arcos;
 pub mod camera;
 pub mod egomotion;
 pub mod model;
+pub mod ptu;
 pub mod sim;

@@ -326,6 +326,21 @@ enum Command {
         #[arg(long)]
         until_goal: bool,
     },
+    /// Emulate a FLIR PTU pan-tilt head on a TCP port or a pseudo-terminal,
+    /// for trying a robot file's `pan_tilt` without the head.
+    EmulatePtu {
+        /// Address to listen on.
+        #[arg(long, default_value = "127.0.0.1:4000", conflicts_with = "pty")]
+        listen: String,
+        /// Serve on a new pseudo-terminal instead, as the head's serial port
+        /// would be; prints its device path for `connection`.
+        #[arg(long)]
+        pty: bool,
+        /// The head counts its pan clockwise (a robot file then needs
+        /// `invert_pan: true`).
+        #[arg(long)]
+        clockwise: bool,
+    },
     /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
     /// for trying things out without a robot.
     EmulatePowerbot {
@@ -530,7 +545,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
     // Not for the commands that drive a robot: they notice a closed output
     // as a write error and stop the robot before they exit.
     #[cfg(unix)]
-    if !matches!(cli.command, Command::Drive { .. } | Command::EmulatePowerbot { .. }) {
+    if !matches!(cli.command, Command::Drive { .. } | Command::EmulatePowerbot { .. } | Command::EmulatePtu { .. }) {
         // SAFETY: restoring the default action of a signal, before any
         // thread has started.
         unsafe {
@@ -570,6 +585,13 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 (std::time::Duration::from_secs_f64(after), std::time::Duration::from_secs_f64(span))
             });
             robot::emulate(&listen, pty, &config)
+        }
+        Command::EmulatePtu { listen, pty, clockwise } => {
+            let config = ubf_robots::ptu::PtuEmulatorConfig {
+                clockwise_positive: clockwise,
+                ..ubf_robots::ptu::PtuEmulatorConfig::default()
+            };
+            robot::emulate_ptu(&listen, pty, &config)
         }
         Command::Frames { file, out, seed, max_frames, huge } => {
             images::frames(&registry, &file, &out, seed, max_frames, huge)

@@ -1,10 +1,15 @@
-//! `ubf drive` and `ubf emulate-powerbot`: the real robot, and a stand-in
-//! for it.
+//! `ubf drive`, `ubf emulate-powerbot` and `ubf emulate-ptu`: the real
+//! robot, and stand-ins for it and its pan-tilt head.
 
 use super::{CliError, Exit, Outcome};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
 use ubf_core::Registry;
 use ubf_robots::arcos::emulator::{EmulatorConfig, EmulatorReport};
+use ubf_robots::arcos::link::Link;
+use ubf_robots::ptu::PtuEmulatorConfig;
 
 /// Drives the robot (or only looks at it, `dry_run`) until stopped.
 pub(super) fn drive(registry: &Registry, file: &Path, dry_run: bool, status: bool, until_goal: bool) -> Outcome {
@@ -46,58 +51,77 @@ pub(super) fn drive(registry: &Registry, file: &Path, dry_run: bool, status: boo
 
 /// Emulates a Powerbot on a TCP address, or on a new pseudo-terminal.
 pub(super) fn emulate(listen: &str, pty: bool, config: &EmulatorConfig) -> Outcome {
-    if pty {
-        emulate_on_pty(config)
-    } else {
-        emulate_on_tcp(listen, config)
-    }
+    use ubf_robots::arcos::emulator::serve;
+    let client = |link: Box<dyn Link>, stop: &Arc<AtomicBool>| {
+        serve(link, config, stop).map(|report| (report.commands, emulator_report(&report)))
+    };
+    serve_clients("a Powerbot", listen, pty, client)
 }
 
-/// Serves clients one after another on a new pseudo-terminal until Ctrl-C
-/// or SIGTERM.
-#[cfg(unix)]
-fn emulate_on_pty(config: &EmulatorConfig) -> Outcome {
-    use ubf_robots::arcos::emulator::serve;
-    let (master, path) = ubf_robots::arcos::link::pseudo_terminal()
-        .map_err(|e| CliError::failed(format!("opening a pseudo-terminal: {e}")))?;
-    println!("emulating a Powerbot on {path}");
+/// Emulates a FLIR PTU pan-tilt head on a TCP address, or on a new
+/// pseudo-terminal.
+pub(super) fn emulate_ptu(listen: &str, pty: bool, config: &PtuEmulatorConfig) -> Outcome {
+    use ubf_robots::ptu::serve_ptu;
+    let client = |link: Box<dyn Link>, stop: &Arc<AtomicBool>| {
+        serve_ptu(link, config, stop).map(|r| {
+            let line = format!(
+                "client gone: {} commands, pan {:.2}°, tilt {:.2}°",
+                r.commands,
+                r.pan.to_degrees(),
+                r.tilt.to_degrees()
+            );
+            (r.commands, line)
+        })
+    };
+    serve_clients("a pan-tilt unit", listen, pty, client)
+}
+
+/// Serves clients one after another with `client` (which answers how many
+/// commands it took and a line to print) until Ctrl-C or SIGTERM: on a
+/// TCP address, or on a new pseudo-terminal whose path is printed.
+fn serve_clients(
+    what: &str,
+    listen: &str,
+    pty: bool,
+    client: impl Fn(Box<dyn Link>, &Arc<AtomicBool>) -> std::io::Result<(u64, String)>,
+) -> Outcome {
     let stop = crate::drive::install_stop_flag();
-    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
-        let link = master.try_clone_native().map_err(CliError::failed)?;
-        match serve(Box::new(link), config, &stop) {
-            // Nobody on the other end yet.
-            Ok(report) if report.commands == 0 => std::thread::sleep(std::time::Duration::from_millis(100)),
-            Ok(report) => print_emulator_report(&report),
-            Err(e) => {
-                eprintln!("client error: {e}");
-                std::thread::sleep(std::time::Duration::from_millis(100));
+    // Nobody reading the output is no reason to stop emulating: a closed
+    // pipe is ignored.
+    let say = |line: &str| {
+        use std::io::Write;
+        let _ = writeln!(std::io::stdout(), "{line}");
+    };
+    if pty {
+        let (master, path) = open_pty()?;
+        say(&format!("emulating {what} on {path}"));
+        while !stop.load(Ordering::SeqCst) {
+            let link = master.try_clone_link().map_err(CliError::failed)?;
+            match client(link, &stop) {
+                // Nobody on the other end yet.
+                Ok((0, _)) => std::thread::sleep(Duration::from_millis(100)),
+                Ok((_, line)) => say(&line),
+                Err(e) => {
+                    eprintln!("client error: {e}");
+                    std::thread::sleep(Duration::from_millis(100));
+                }
             }
         }
+        return Ok(Exit::Success);
     }
-    Ok(Exit::Success)
-}
-
-#[cfg(not(unix))]
-fn emulate_on_pty(_config: &EmulatorConfig) -> Outcome {
-    Err(CliError::failed("pseudo-terminals are supported on Unix only"))
-}
-
-fn emulate_on_tcp(listen: &str, config: &EmulatorConfig) -> Outcome {
-    use ubf_robots::arcos::emulator::serve;
     let listener =
         std::net::TcpListener::bind(listen).map_err(|e| CliError::bad_input(format!("listening on {listen}: {e}")))?;
     match listener.local_addr() {
-        Ok(address) => println!("emulating a Powerbot on tcp://{address}"),
+        Ok(address) => say(&format!("emulating {what} on tcp://{address}")),
         Err(e) => eprintln!("warning: {e}"),
     }
-    let stop = crate::drive::install_stop_flag();
     // Poll for clients so that Ctrl-C or SIGTERM ends a waiting emulator.
     listener.set_nonblocking(true).map_err(CliError::failed)?;
-    while !stop.load(std::sync::atomic::Ordering::SeqCst) {
+    while !stop.load(Ordering::SeqCst) {
         let stream = match listener.accept() {
             Ok((stream, _)) => stream,
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
-                std::thread::sleep(std::time::Duration::from_millis(50));
+                std::thread::sleep(Duration::from_millis(50));
                 continue;
             }
             Err(e) => {
@@ -107,23 +131,33 @@ fn emulate_on_tcp(listen: &str, config: &EmulatorConfig) -> Outcome {
         };
         let _ = stream.set_nonblocking(false);
         let _ = stream.set_read_timeout(Some(ubf_robots::arcos::link::READ_TIMEOUT));
-        match serve(Box::new(stream), config, &stop) {
-            Ok(report) => print_emulator_report(&report),
+        match client(Box::new(stream), &stop) {
+            Ok((_, line)) => say(&line),
             Err(e) => eprintln!("client error: {e}"),
         }
     }
     Ok(Exit::Success)
 }
 
-/// Prints what the emulator saw of a client, one line, the timings as
-/// `name=value` (`-` when it did not happen). Nobody reading the output is
-/// no reason to stop emulating: a closed pipe is ignored.
-fn print_emulator_report(report: &EmulatorReport) {
-    use std::io::Write;
+/// A new pseudo-terminal's master end, and the path a client opens.
+#[cfg(unix)]
+fn open_pty() -> Result<(Box<dyn Link>, String), CliError> {
+    let (master, path) = ubf_robots::arcos::link::pseudo_terminal()
+        .map_err(|e| CliError::failed(format!("opening a pseudo-terminal: {e}")))?;
+    Ok((Box::new(master), path))
+}
+
+#[cfg(not(unix))]
+fn open_pty() -> Result<(Box<dyn Link>, String), CliError> {
+    Err(CliError::failed("pseudo-terminals are supported on Unix only"))
+}
+
+/// What the emulator saw of a client, one line, the timings as
+/// `name=value` (`-` when it did not happen).
+fn emulator_report(report: &EmulatorReport) -> String {
     let show = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.3}"));
     let limits = report.speed_limits.map_or("-".to_owned(), |(v, w)| format!("{v},{w}"));
-    let _ = writeln!(
-        std::io::stdout(),
+    format!(
         "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m; sips={} motion_before_first_sip={} \
          last_motion_after_silence_s={} stop_after_silence_s={} stop_to_disable_s={} speed_at_disable_mm_s={} \
          speed_limits={limits} stalled_cycles={} host_baud={}",
@@ -139,7 +173,7 @@ fn print_emulator_report(report: &EmulatorReport) {
         show(report.speed_at_disable),
         report.stalled_cycles,
         report.host_baud.map_or("-".to_owned(), |b| b.to_string()),
-    );
+    )
 }
 
 /// `LENGTHxWIDTH` in metres, both positive.

@@ -134,7 +134,7 @@ pub struct EmulatorReport {
 
 /// A pseudo-terminal's master hangs up (a broken pipe, or EIO on a plain
 /// read) while no client holds the slave end: the client has gone.
-fn client_left_terminal(e: &io::Error) -> bool {
+pub(crate) fn client_left_terminal(e: &io::Error) -> bool {
     #[cfg(unix)]
     let eio = e.raw_os_error() == Some(libc::EIO);
     #[cfg(not(unix))]

@@ -1,0 +1,576 @@
+//! A real pan-tilt head: a FLIR (formerly Directed Perception) PTU on a
+//! serial line or a TCP bridge, driven by its ASCII protocol, behind
+//! [`ubf_core::PanTilt`]; and an emulator of that protocol to try it and
+//! test it without the head.
+//!
+//! The protocol (PTU-D46 user's manual, §4): a command or query is a few
+//! letters, an optional number and a delimiter (space or carriage return).
+//! A command is answered `*`, a query `* RESULT`, a failure `! MESSAGE`;
+//! `!P` and `!T` arrive unasked when an axis hits its limit. Positions are
+//! whole encoder steps of a resolution the unit reports (`PR`, `TR`, in
+//! arc-seconds per step), within limits it reports (`PN`, `PX`, `TN`,
+//! `TX`). The driver turns echo off (`ED`) and asks for terse answers
+//! (`FT`), then sends `PP<steps>` to aim and `PP`/`TP` to read the encoders.
+//!
+//! The serial line runs at 9 600 baud, a few milliseconds a character, so
+//! the head is driven from a thread of its own: [`Ptu::command`] hands the
+//! newest target over and returns at once, and [`Ptu::measured`] returns the
+//! newest reading, refusing one older than `stale_after_s` (a head that
+//! stopped answering must not pass for one that holds still).
+
+use crate::arcos::emulator::client_left_terminal;
+use crate::arcos::link::{self, Link};
+use serde::Deserialize;
+use std::io::{self, Read, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use ubf_core::config::positive;
+use ubf_core::{Aim, PanTilt, RobotError};
+
+/// A PTU as written under the camera in a robot file:
+/// `pan_tilt: (connection: "/dev/ttyUSB1")`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PtuConfig {
+    /// A serial device (`/dev/ttyUSB1`) or `tcp://host:port`.
+    pub connection: String,
+    /// Serial baud rate (the PTU's default: 9 600).
+    #[serde(default = "PtuConfig::default_baud")]
+    pub baud: u32,
+    /// The tilt the head holds, ° above the horizontal.
+    #[serde(default)]
+    pub tilt_deg: f64,
+    /// Whether the unit's positive pan turns the head clockwise seen from
+    /// above (to the right). Ours turns it counter-clockwise (to the left);
+    /// `ubf drive --dry-run` turns the head left first, to check.
+    #[serde(default)]
+    pub invert_pan: bool,
+    /// Fastest pan, °/s (sent as the unit's pan speed on connecting).
+    #[serde(default = "PtuConfig::default_rate", deserialize_with = "positive")]
+    pub max_rate_deg_s: f64,
+    /// A reading older than this is refused as stale, s.
+    #[serde(default = "PtuConfig::default_stale", deserialize_with = "positive")]
+    pub stale_after_s: f64,
+}
+
+impl PtuConfig {
+    fn default_baud() -> u32 {
+        9600
+    }
+    fn default_rate() -> f64 {
+        60.0
+    }
+    fn default_stale() -> f64 {
+        0.5
+    }
+
+    /// A head on `connection` with the defaults.
+    pub fn new(connection: impl Into<String>) -> Self {
+        PtuConfig {
+            connection: connection.into(),
+            baud: Self::default_baud(),
+            tilt_deg: 0.0,
+            invert_pan: false,
+            max_rate_deg_s: Self::default_rate(),
+            stale_after_s: Self::default_stale(),
+        }
+    }
+}
+
+/// Longest wait for the answer to one command or query.
+const ANSWER_WAIT: Duration = Duration::from_millis(1000);
+/// Pause between two rounds of reading the encoders.
+const POLL_PERIOD: Duration = Duration::from_millis(20);
+
+/// One answer of the unit.
+#[derive(Clone, Debug, PartialEq)]
+enum Answer {
+    /// `*` and what follows it (empty for a command).
+    Done(String),
+    /// `!` and the unit's message.
+    Refused(String),
+}
+
+/// What a line from the unit says: an answer, or nothing to wait on (an
+/// empty line, a banner, an unasked limit notice `!P` or `!T`).
+fn parse_line(line: &str) -> Option<Answer> {
+    let line = line.trim();
+    if line == "!P" || line == "!T" {
+        return None;
+    }
+    // An echoed command comes before the marker: `PP-500 *`.
+    let at = line.find(['*', '!'])?;
+    let rest = line[at + 1..].trim().to_owned();
+    Some(if line.as_bytes()[at] == b'*' { Answer::Done(rest) } else { Answer::Refused(rest) })
+}
+
+/// The first number in `text`: `-500` in `Current Pan position is -500`,
+/// `185.1428` in `185.1428 seconds arc per Pan position`.
+fn first_number(text: &str) -> Option<f64> {
+    let bytes = text.as_bytes();
+    let start = (0..bytes.len()).find(|&i| {
+        bytes[i].is_ascii_digit() || (bytes[i] == b'-' && bytes.get(i + 1).is_some_and(u8::is_ascii_digit))
+    })?;
+    let end =
+        (start + 1..bytes.len()).find(|&i| !(bytes[i].is_ascii_digit() || bytes[i] == b'.')).unwrap_or(bytes.len());
+    text[start..end].parse().ok()
+}
+
+/// The unit's side of the conversation: one command at a time, each
+/// waited on.
+struct Conversation {
+    link: Box<dyn Link>,
+    /// Bytes read and not yet a whole line.
+    pending: Vec<u8>,
+}
+
+impl Conversation {
+    /// Sends `text` and a delimiter, and waits for the answer.
+    fn ask(&mut self, text: &str) -> Result<Answer, String> {
+        self.link.write_all(format!("{text} ").as_bytes()).map_err(|e| format!("writing `{text}`: {e}"))?;
+        self.link.flush().map_err(|e| format!("writing `{text}`: {e}"))?;
+        let deadline = Instant::now() + ANSWER_WAIT;
+        loop {
+            while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
+                let line: Vec<u8> = self.pending.drain(..=end).collect();
+                if let Some(answer) = parse_line(&String::from_utf8_lossy(&line)) {
+                    return Ok(answer);
+                }
+            }
+            if self.pending.len() > 4096 {
+                return Err(format!("no line end in {} bytes after `{text}`: is this a PTU?", self.pending.len()));
+            }
+            if Instant::now() > deadline {
+                return Err(format!("no answer to `{text}` within {} ms", ANSWER_WAIT.as_millis()));
+            }
+            let mut buffer = [0u8; 256];
+            match self.link.read(&mut buffer) {
+                Ok(0) => return Err("the link closed".into()),
+                Ok(n) => self.pending.extend_from_slice(&buffer[..n]),
+                Err(e) if link::is_timeout(&e) => {}
+                Err(e) => return Err(format!("reading: {e}")),
+            }
+        }
+    }
+
+    /// A command that must be done.
+    fn command(&mut self, text: &str) -> Result<(), String> {
+        match self.ask(text)? {
+            Answer::Done(_) => Ok(()),
+            Answer::Refused(message) => Err(format!("`{text}` refused: {message}")),
+        }
+    }
+
+    /// A query whose answer is a number.
+    fn number(&mut self, text: &str) -> Result<f64, String> {
+        match self.ask(text)? {
+            Answer::Done(result) => {
+                first_number(&result).ok_or_else(|| format!("`{text}` answered `{result}`, not a number"))
+            }
+            Answer::Refused(message) => Err(format!("`{text}` refused: {message}")),
+        }
+    }
+}
+
+/// What the unit reported of itself on connecting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PtuAxes {
+    /// Pan per encoder step, rad.
+    pub pan_step: f64,
+    /// Tilt per encoder step, rad.
+    pub tilt_step: f64,
+    /// Pan limits, encoder steps.
+    pub pan_limits: [i64; 2],
+    /// Tilt limits, encoder steps.
+    pub tilt_limits: [i64; 2],
+}
+
+/// Readings and targets shared with the unit's thread.
+#[derive(Debug, Default)]
+struct Shared {
+    /// The newest target not yet sent.
+    target: Option<Aim>,
+    /// The newest reading and when it was taken.
+    reading: Option<(Instant, Aim)>,
+    /// Why the thread stopped, if it did.
+    failure: Option<String>,
+}
+
+/// A PTU head, driven from a thread of its own.
+pub struct Ptu {
+    config: PtuConfig,
+    axes: PtuAxes,
+    shared: Arc<Mutex<Shared>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Ptu {
+    /// Opens the head's link, sets it up (echo off, terse answers, pan
+    /// speed, the held tilt) and reads its resolution, limits and angles;
+    /// then keeps reading its encoders until dropped.
+    pub fn connect(config: PtuConfig) -> Result<Ptu, RobotError> {
+        let link = link::open(&config.connection, config.baud)
+            .map_err(|e| RobotError::Disconnected(format!("pan-tilt unit on {}: {e}", config.connection)))?;
+        let mut talk = Conversation { link, pending: Vec::new() };
+        let failed = |e: String| RobotError::Protocol(format!("pan-tilt unit on {}: {e}", config.connection));
+        let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
+        let first = Self::read(&mut talk, &axes, &config).map_err(failed)?;
+        let shared = Arc::new(Mutex::new(Shared { reading: Some((Instant::now(), first)), ..Shared::default() }));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (for_thread, flag, settings) = (Arc::clone(&shared), Arc::clone(&stop), config.clone());
+        let thread = std::thread::Builder::new()
+            .name("pan-tilt".into())
+            .spawn(move || Self::run(talk, axes, settings, &for_thread, &flag))
+            .map_err(RobotError::Io)?;
+        Ok(Ptu { config, axes, shared, stop, thread: Some(thread) })
+    }
+
+    /// What the unit reported of itself.
+    pub fn axes(&self) -> PtuAxes {
+        self.axes
+    }
+
+    fn handshake(talk: &mut Conversation, config: &PtuConfig) -> Result<PtuAxes, String> {
+        // Whatever the unit said before (a power-up banner) is not ours.
+        let mut scratch = [0u8; 256];
+        let quiet_until = Instant::now() + Duration::from_millis(100);
+        while Instant::now() < quiet_until {
+            match talk.link.read(&mut scratch) {
+                Ok(0) => return Err("the link closed".into()),
+                Ok(_) => {}
+                Err(e) if link::is_timeout(&e) => {}
+                Err(e) => return Err(format!("reading: {e}")),
+            }
+        }
+        talk.command("ED")?;
+        talk.command("FT")?;
+        let arc_seconds = |s: f64| (s / 3600.0).to_radians();
+        let whole = |v: f64| v.round() as i64;
+        let axes = PtuAxes {
+            pan_step: arc_seconds(talk.number("PR")?),
+            tilt_step: arc_seconds(talk.number("TR")?),
+            pan_limits: [whole(talk.number("PN")?), whole(talk.number("PX")?)],
+            tilt_limits: [whole(talk.number("TN")?), whole(talk.number("TX")?)],
+        };
+        if !(axes.pan_step > 0.0 && axes.tilt_step > 0.0 && axes.pan_step.is_finite() && axes.tilt_step.is_finite()) {
+            return Err(format!("unusable resolution: {axes:?}"));
+        }
+        let speed = (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0);
+        talk.command(&format!("PS{speed}"))?;
+        let tilt = Self::steps(config.tilt_deg.to_radians(), axes.tilt_step, axes.tilt_limits);
+        talk.command(&format!("TP{tilt}"))?;
+        Ok(axes)
+    }
+
+    /// `angle` in whole steps, within `limits`.
+    fn steps(angle: f64, step: f64, limits: [i64; 2]) -> i64 {
+        ((angle / step).round() as i64).clamp(limits[0], limits[1])
+    }
+
+    /// The sign that turns our pan (counter-clockwise) into the unit's.
+    fn pan_sign(config: &PtuConfig) -> f64 {
+        if config.invert_pan {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+
+    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<Aim, String> {
+        let pan = talk.number("PP")? * axes.pan_step * Self::pan_sign(config);
+        let tilt = talk.number("TP")? * axes.tilt_step;
+        Ok(Aim { pan, tilt })
+    }
+
+    /// The unit's thread: sends the newest target, reads the encoders,
+    /// again, until stopped or the unit fails; then halts the head.
+    fn run(mut talk: Conversation, axes: PtuAxes, config: PtuConfig, shared: &Mutex<Shared>, stop: &AtomicBool) {
+        let lock = || shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        while !stop.load(Ordering::Relaxed) {
+            let target = lock().target.take();
+            let sent = target.map_or(Ok(()), |aim| {
+                let pan = Self::steps(aim.pan * Self::pan_sign(&config), axes.pan_step, axes.pan_limits);
+                talk.command(&format!("PP{pan}"))
+            });
+            match sent.and_then(|()| Self::read(&mut talk, &axes, &config)) {
+                Ok(aim) => lock().reading = Some((Instant::now(), aim)),
+                Err(e) => {
+                    lock().failure = Some(e);
+                    return;
+                }
+            }
+            std::thread::sleep(POLL_PERIOD);
+        }
+        // On the way out the head stops where it is.
+        let _ = talk.command("H");
+    }
+
+    fn failure(&self) -> Option<RobotError> {
+        let shared = self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        shared
+            .failure
+            .as_ref()
+            .map(|e| RobotError::Disconnected(format!("pan-tilt unit on {}: {e}", self.config.connection)))
+    }
+}
+
+impl PanTilt for Ptu {
+    fn command(&mut self, aim: Aim) -> Result<(), RobotError> {
+        if let Some(failure) = self.failure() {
+            return Err(failure);
+        }
+        self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner).target = Some(aim);
+        Ok(())
+    }
+
+    fn measured(&mut self) -> Result<Aim, RobotError> {
+        if let Some(failure) = self.failure() {
+            return Err(failure);
+        }
+        let reading = self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner).reading;
+        match reading {
+            Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok(aim),
+            Some((at, _)) => Err(RobotError::Other(format!(
+                "pan-tilt unit on {}: no reading for {:.2} s (stale after {} s)",
+                self.config.connection,
+                at.elapsed().as_secs_f64(),
+                self.config.stale_after_s
+            ))),
+            None => Err(RobotError::Other(format!("pan-tilt unit on {}: no reading yet", self.config.connection))),
+        }
+    }
+}
+
+impl Drop for Ptu {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(handle) = self.thread.take() {
+            let _ = handle.join();
+        }
+    }
+}
+
+/// The emulated head's make-up: a PTU-D46's resolution and limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PtuEmulatorConfig {
+    /// Arc-seconds per step, both axes.
+    pub arc_seconds_per_step: f64,
+    /// Pan limits, steps.
+    pub pan_limits: [i64; 2],
+    /// Tilt limits, steps.
+    pub tilt_limits: [i64; 2],
+    /// Whether positive pan steps turn the head clockwise (its truth, which
+    /// a client's `invert_pan` must match).
+    pub clockwise_positive: bool,
+}
+
+impl Default for PtuEmulatorConfig {
+    fn default() -> Self {
+        PtuEmulatorConfig {
+            arc_seconds_per_step: 185.1428,
+            pan_limits: [-3090, 3090],
+            tilt_limits: [-907, 604],
+            clockwise_positive: false,
+        }
+    }
+}
+
+/// The emulated head's state as its last client left it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PtuEmulatorReport {
+    /// Commands and queries answered.
+    pub commands: u64,
+    /// The true pan at the end, counter-clockwise from ahead, rad.
+    pub pan: f64,
+    /// The true tilt, rad.
+    pub tilt: f64,
+}
+
+/// One axis of the emulated head: where it is, where it goes, how fast.
+#[derive(Clone, Copy, Debug)]
+struct Axis {
+    position: f64,
+    target: f64,
+    /// Steps per second.
+    speed: f64,
+    limits: [i64; 2],
+}
+
+impl Axis {
+    fn advance(&mut self, seconds: f64) {
+        let gap = self.target - self.position;
+        self.position += gap.clamp(-self.speed * seconds, self.speed * seconds);
+    }
+}
+
+/// Serves one client on `link` as a PTU would, in real time, until the
+/// client goes or `stop` is set. The head starts as a PTU powers up: echo
+/// on, verbose answers, both axes at 0.
+pub fn serve_ptu(
+    mut link: Box<dyn Link>,
+    config: &PtuEmulatorConfig,
+    stop: &AtomicBool,
+) -> io::Result<PtuEmulatorReport> {
+    let mut pan = Axis { position: 0.0, target: 0.0, speed: 1000.0, limits: config.pan_limits };
+    let mut tilt = Axis { position: 0.0, target: 0.0, speed: 1000.0, limits: config.tilt_limits };
+    let (mut echo, mut verbose) = (true, true);
+    let mut report = PtuEmulatorReport::default();
+    let mut word = Vec::new();
+    let mut last = Instant::now();
+    let step = (config.arc_seconds_per_step / 3600.0).to_radians();
+    let ccw = if config.clockwise_positive { -1.0 } else { 1.0 };
+    let finish = |report: &mut PtuEmulatorReport, pan: &Axis, tilt: &Axis| {
+        report.pan = pan.position * step * ccw;
+        report.tilt = tilt.position * step;
+    };
+    while !stop.load(Ordering::Relaxed) {
+        let mut buffer = [0u8; 256];
+        let n = match link.read(&mut buffer) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if link::is_timeout(&e) => 0,
+            Err(e) if e.kind() == io::ErrorKind::ConnectionReset || client_left_terminal(&e) => break,
+            Err(e) => return Err(e),
+        };
+        let now = Instant::now();
+        let seconds = now.duration_since(last).as_secs_f64();
+        last = now;
+        pan.advance(seconds);
+        tilt.advance(seconds);
+        let mut out = String::new();
+        for &byte in &buffer[..n] {
+            if byte != b' ' && byte != b'\r' && byte != b'\n' {
+                word.push(byte);
+                continue;
+            }
+            if word.is_empty() {
+                continue;
+            }
+            let text = String::from_utf8_lossy(&word).to_ascii_uppercase();
+            word.clear();
+            report.commands += 1;
+            let answer = answer(&text, &mut pan, &mut tilt, &mut echo, &mut verbose, config);
+            let echoed = if echo { format!("{text} ") } else { String::new() };
+            out.push_str(&format!("{echoed}{answer}\r\n"));
+        }
+        if out.is_empty() {
+            continue;
+        }
+        match link.write_all(out.as_bytes()).and_then(|()| link.flush()) {
+            Ok(()) => {}
+            // The client went between its command and our answer.
+            Err(e) if e.kind() == io::ErrorKind::ConnectionReset || client_left_terminal(&e) => break,
+            Err(e) => return Err(e),
+        }
+    }
+    finish(&mut report, &pan, &tilt);
+    Ok(report)
+}
+
+/// The answer to one command or query.
+fn answer(
+    text: &str,
+    pan: &mut Axis,
+    tilt: &mut Axis,
+    echo: &mut bool,
+    verbose: &mut bool,
+    config: &PtuEmulatorConfig,
+) -> String {
+    let say =
+        |verbose: bool, long: String, short: String| if verbose { format!("* {long}") } else { format!("* {short}") };
+    let (name, argument) = text.split_at(text.len().min(2));
+    let value: Option<i64> = (!argument.is_empty()).then(|| argument.parse().ok()).flatten();
+    if !argument.is_empty() && value.is_none() {
+        return "! Illegal Command argument".into();
+    }
+    let axis_name = |c: &str| if c.starts_with('P') { "Pan" } else { "Tilt" };
+    match (name, value) {
+        ("ED", None) => {
+            *echo = false;
+            "*".into()
+        }
+        ("EE", None) => {
+            *echo = true;
+            "*".into()
+        }
+        ("FT", None) => {
+            *verbose = false;
+            "*".into()
+        }
+        ("FV", None) => {
+            *verbose = true;
+            "*".into()
+        }
+        ("H", None) | ("HP", None) | ("HT", None) => {
+            pan.target = pan.position;
+            tilt.target = tilt.position;
+            "*".into()
+        }
+        ("PR" | "TR", None) => say(
+            *verbose,
+            format!("{} seconds arc per {} position", config.arc_seconds_per_step, axis_name(name)),
+            config.arc_seconds_per_step.to_string(),
+        ),
+        ("PN" | "TN" | "PX" | "TX", None) => {
+            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
+            let (word, limit) =
+                if name.ends_with('N') { ("Minimum", axis.limits[0]) } else { ("Maximum", axis.limits[1]) };
+            say(*verbose, format!("{word} {} position is {limit}", axis_name(name)), limit.to_string())
+        }
+        ("PP" | "TP", None) => {
+            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
+            let at = axis.position.round() as i64;
+            say(*verbose, format!("Current {} position is {at}", axis_name(name)), at.to_string())
+        }
+        ("PP" | "TP", Some(target)) => {
+            let axis = if name.starts_with('P') { pan } else { tilt };
+            if target > axis.limits[1] {
+                format!("! Maximum allowable {} position is {}", axis_name(name), axis.limits[1])
+            } else if target < axis.limits[0] {
+                format!("! Minimum allowable {} position is {}", axis_name(name), axis.limits[0])
+            } else {
+                axis.target = target as f64;
+                "*".into()
+            }
+        }
+        ("PS" | "TS", Some(speed)) if speed > 0 => {
+            let axis = if name.starts_with('P') { pan } else { tilt };
+            axis.speed = speed as f64;
+            "*".into()
+        }
+        ("PS" | "TS", None) => {
+            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
+            say(*verbose, format!("Target speed is {} positions/sec", axis.speed), axis.speed.to_string())
+        }
+        _ => "! Illegal Command argument".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn answers_are_read_with_or_without_echo_and_verbosity() {
+        assert_eq!(
+            parse_line("PP * Current Pan position is -500\r"),
+            Some(Answer::Done("Current Pan position is -500".into()))
+        );
+        assert_eq!(parse_line("* 22"), Some(Answer::Done("22".into())));
+        assert_eq!(parse_line("ED *"), Some(Answer::Done(String::new())));
+        assert_eq!(
+            parse_line("PP9999 ! Maximum allowable Pan position is 3090"),
+            Some(Answer::Refused("Maximum allowable Pan position is 3090".into()))
+        );
+        // Unasked limit notices and banners are not answers.
+        assert_eq!(parse_line("!P"), None);
+        assert_eq!(parse_line("Pan-Tilt Controller v2.14.0"), None);
+        assert_eq!(first_number("Current Pan position is -500"), Some(-500.0));
+        assert_eq!(first_number("185.1428 seconds arc per Pan position"), Some(185.1428));
+        assert_eq!(first_number("no number"), None);
+        assert_eq!(first_number("-"), None);
+    }
+}

@@ -1,0 +1,187 @@
+//! The pan-tilt head's driver against the emulated PTU, over a real
+//! pseudo-terminal pair and over TCP loopback.
+
+use std::net::TcpListener;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use ubf_core::{Aim, NullRobot, PanTilt, Robot, State, StereoCamera};
+use ubf_perception::features::FeatureConfig;
+use ubf_perception::source::ImageDirectory;
+use ubf_robots::arcos::link::{self, Link};
+use ubf_robots::camera::CameraRobot;
+use ubf_robots::ptu::{serve_ptu, Ptu, PtuConfig, PtuEmulatorConfig, PtuEmulatorReport};
+
+/// An emulated head serving clients one after another until stopped; the
+/// report of the first client it served.
+struct Emulator {
+    connection: String,
+    stop: Arc<AtomicBool>,
+    thread: JoinHandle<PtuEmulatorReport>,
+}
+
+impl Emulator {
+    fn finish(self) -> PtuEmulatorReport {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.join().unwrap()
+    }
+}
+
+#[cfg(unix)]
+fn on_pty(config: PtuEmulatorConfig) -> Emulator {
+    let (master, path) = link::pseudo_terminal().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let thread = std::thread::spawn(move || loop {
+        // Until a client opens the other end, the master reads EIO.
+        let link: Box<dyn Link> = Box::new(master.try_clone_native().unwrap());
+        let report = serve_ptu(link, &config, &flag).unwrap();
+        if report.commands > 0 || flag.load(Ordering::Relaxed) {
+            return report;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    });
+    Emulator { connection: path, stop, thread }
+}
+
+fn on_tcp(config: PtuEmulatorConfig) -> Emulator {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let connection = format!("tcp://{}", listener.local_addr().unwrap());
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let thread = std::thread::spawn(move || {
+        let (stream, _) = listener.accept().unwrap();
+        stream.set_read_timeout(Some(link::READ_TIMEOUT)).unwrap();
+        serve_ptu(Box::new(stream), &config, &flag).unwrap()
+    });
+    Emulator { connection, stop, thread }
+}
+
+/// Waits up to 3 s for the head to read within `tolerance` of `pan`.
+fn settle(ptu: &mut Ptu, pan: f64, tolerance: f64) -> Aim {
+    let deadline = Instant::now() + Duration::from_secs(3);
+    loop {
+        let aim = ptu.measured().unwrap();
+        if (aim.pan - pan).abs() <= tolerance || Instant::now() > deadline {
+            return aim;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn the_head_turns_where_it_is_sent_over_a_pseudo_terminal() {
+    let emulator = on_pty(PtuEmulatorConfig::default());
+    let mut ptu = Ptu::connect(PtuConfig::new(&emulator.connection)).unwrap();
+    // The unit's own resolution (185.1428″ a step) and limits (±3090).
+    let axes = ptu.axes();
+    assert!((axes.pan_step.to_degrees() - 0.051_428).abs() < 1e-5, "{axes:?}");
+    assert_eq!(axes.pan_limits, [-3090, 3090]);
+    assert!(ptu.measured().unwrap().pan.abs() < 1e-9);
+    // 30° to the left, read back to the encoders' step.
+    ptu.command(Aim { pan: 30f64.to_radians(), tilt: 0.0 }).unwrap();
+    let aim = settle(&mut ptu, 30f64.to_radians(), axes.pan_step);
+    assert!((aim.pan.to_degrees() - 30.0).abs() <= axes.pan_step.to_degrees(), "{aim:?}");
+    // Beyond the limit: held at it, not refused.
+    ptu.command(Aim { pan: 170f64.to_radians(), tilt: 0.0 }).unwrap();
+    let limit = 3090.0 * axes.pan_step;
+    let aim = settle(&mut ptu, limit, 1e-9);
+    assert!((aim.pan - limit).abs() < 1e-9, "{aim:?}");
+    drop(ptu);
+    let report = emulator.finish();
+    assert!((report.pan - limit).abs() < 1e-9, "{report:?}");
+}
+
+#[test]
+fn an_inverted_unit_still_turns_left_for_a_positive_pan() {
+    // This head counts clockwise; told so, the driver sends it the other
+    // way, and reads it back the other way.
+    let emulator = on_tcp(PtuEmulatorConfig { clockwise_positive: true, ..PtuEmulatorConfig::default() });
+    let mut ptu = Ptu::connect(PtuConfig { invert_pan: true, ..PtuConfig::new(&emulator.connection) }).unwrap();
+    ptu.command(Aim { pan: 20f64.to_radians(), tilt: 0.0 }).unwrap();
+    let step = ptu.axes().pan_step;
+    let aim = settle(&mut ptu, 20f64.to_radians(), step);
+    assert!((aim.pan.to_degrees() - 20.0).abs() < 0.06, "{aim:?}");
+    drop(ptu);
+    let report = emulator.finish();
+    assert!((report.pan.to_degrees() - 20.0).abs() < 0.06, "truly turned left: {report:?}");
+}
+
+#[test]
+fn a_silent_head_is_reported_not_read_as_holding_still() {
+    let emulator = on_tcp(PtuEmulatorConfig::default());
+    let mut ptu = Ptu::connect(PtuConfig::new(&emulator.connection)).unwrap();
+    assert!(ptu.measured().is_ok());
+    emulator.finish();
+    // Within the answer wait (1 s) plus the staleness limit (0.5 s).
+    std::thread::sleep(Duration::from_millis(1600));
+    let error = ptu.measured().unwrap_err().to_string();
+    assert!(error.contains("pan-tilt unit on tcp://"), "{error}");
+    assert!(ptu.command(Aim::default()).is_err());
+}
+
+#[test]
+fn a_dropped_driver_halts_the_head_where_it_is() {
+    let emulator = on_tcp(PtuEmulatorConfig::default());
+    // 10°/s: a 90° turn takes 9 s.
+    let mut ptu = Ptu::connect(PtuConfig { max_rate_deg_s: 10.0, ..PtuConfig::new(&emulator.connection) }).unwrap();
+    ptu.command(Aim { pan: 90f64.to_radians(), tilt: 0.0 }).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    drop(ptu);
+    std::thread::sleep(Duration::from_millis(300));
+    let report = emulator.finish();
+    assert!(report.pan > 0.0 && report.pan.to_degrees() < 20.0, "stopped on the way: {report:?}");
+}
+
+#[test]
+fn nothing_answering_is_a_clear_error() {
+    // A listener that accepts and never answers.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let connection = format!("tcp://{}", listener.local_addr().unwrap());
+    let error = Ptu::connect(PtuConfig::new(&connection)).err().unwrap().to_string();
+    assert!(error.contains("no answer to `ED`"), "{error}");
+    let error = Ptu::connect(PtuConfig::new("/dev/no-such-ptu")).err().unwrap().to_string();
+    assert!(error.contains("/dev/no-such-ptu"), "{error}");
+}
+
+#[test]
+fn a_camera_on_the_head_is_aimed_by_the_tree_and_its_frames_carry_the_angles_read() {
+    // Two blank pairs stand in for the cameras; the head is the emulated PTU.
+    let dir = tempfile::tempdir().unwrap();
+    let camera = StereoCamera { width_px: 64, height_px: 48, focal_px: 50.0, ..StereoCamera::default() };
+    for side in ["left", "right"] {
+        std::fs::create_dir(dir.path().join(side)).unwrap();
+        for k in 0..2 {
+            image::GrayImage::new(64, 48).save(dir.path().join(format!("{side}/{k}.png"))).unwrap();
+        }
+    }
+    std::fs::write(
+        dir.path().join("frames.csv"),
+        "time_s,left,right\n0.0,left/0.png,right/0.png\n0.5,left/1.png,right/1.png\n",
+    )
+    .unwrap();
+    let source = Box::new(ImageDirectory::open(dir.path()).unwrap());
+    let emulator = on_tcp(PtuEmulatorConfig::default());
+    let head = Ptu::connect(PtuConfig::new(&emulator.connection)).unwrap();
+    let step = head.axes().pan_step;
+    let robot = CameraRobot::new(NullRobot::default(), source, camera, FeatureConfig::default(), true).unwrap();
+    let mut robot = robot.with_pan_tilt(Box::new(head));
+    robot.aim_camera(25f64.to_radians()).unwrap();
+    // The second pair comes 0.5 s after the first, by when the head is there.
+    let mut state = State::default();
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while state.stereo.number < 2 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        robot.sense(&mut state).unwrap();
+    }
+    assert_eq!(state.stereo.number, 2);
+    let aim = state.camera_aim.expect("the head's angles are in the state");
+    assert!((aim.pan.to_degrees() - 25.0).abs() <= step.to_degrees(), "{aim:?}");
+    let mount = state.stereo.calibration.unwrap().mount;
+    assert!((mount.pan_deg - aim.pan.to_degrees()).abs() < 1e-9, "{mount:?} {aim:?}");
+    robot.shutdown().unwrap();
+    let report = emulator.finish();
+    assert!((report.pan.to_degrees() - 25.0).abs() <= step.to_degrees(), "{report:?}");
+}
