@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs every command docs/results.md reports, leaving their output in out/
-# for scripts/results-page.py. About 14 minutes on two cores.
+# for scripts/results-page.py. About 30 minutes on two cores.
 #
 #   scripts/results-data.sh && python3 scripts/results-page.py
 #
@@ -20,12 +20,15 @@ SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs
 "$ubf" experiment thesis-endpoint --json > out/endpoint.json
 "$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
 "$ubf" experiment thesis-endpoint --rotate-then-translate --json > out/endpoint-rtt.json
-# The end-point experiment on held-out layouts: held_out SEEDS LAYOUT...
+# The end-point experiment on held-out layouts, with the planar error model
+# and with the 3D one: held_out SEEDS LAYOUT...
 held_out() {
     local seeds=$1 layout
     shift
     for layout in "$@"; do
         "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
+        "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --model geometric-3d --json \
+            > "out/endpoint-held-$layout-3d.json"
     done
 }
 held_out 1000..1030 101 202 303
@@ -43,6 +46,22 @@ held_out 6000..6030 1111 1212 1313
 # seed 3025).
 held_out 7000..7030 1414 1515 1616
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
+# Whether the 3D error model predicts egomotion's step errors better: the
+# routes driven straight and with tracking, the step CVs from each model,
+# ranked against the steps' actual errors by `ubf model fit-costs`.
+for model in Geometric Geometric3d; do
+    variants=$(mktemp -d)
+    for route in route-1-2 route-2-1 feature-poor; do
+        for technique in None Tracking; do
+            sed -e "s/technique: None/technique: $technique/" \
+                -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), model: $model)/" \
+                "scenarios/thesis/$route.ron" > "$variants/$route-$technique.ron"
+        done
+    done
+    "$ubf" sweep "$variants"/*.ron --seeds 100..120 --out "out/steps-$model" --trajectories --overwrite >&2
+    "$ubf" model fit-costs "out/steps-$model" --json > "out/steps-$model.json"
+    rm -rf "$variants"
+done
 "$ubf" experiment where-aiding-pays --plot docs/where-aiding-pays.png --json > out/where-aiding-pays.json
 # Route 1->2 with a one-frame keyframe bank (frame-to-frame matching)
 # beside the default bank, every technique, the thesis's CV objective.
@@ -60,6 +79,7 @@ done
 "$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes --overwrite >&2
 cp out/keyframes/summary.json out/keyframes.json
 rm -rf "$variants"
+scripts/camera-sources.sh > out/camera-sources.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
     commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484)

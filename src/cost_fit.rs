@@ -86,6 +86,10 @@ pub struct CostFit {
     /// RMS translation error of single frame-to-frame straight steps, m
     /// (for reference: most of it does not stay).
     pub step_rms_error_m: f64,
+    /// Spearman's rank correlation of those steps' errors with their
+    /// predicted `CV · d`: how well the error model the logs' egomotion
+    /// used orders its steps' actual errors.
+    pub step_error_rank_correlation: f64,
     /// Steps driven on the odometry bridge.
     pub bridged_steps: usize,
     /// Heading variance a metre on the odometry bridge adds, rad²/m; `None`
@@ -319,12 +323,49 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
         turn_rms_error_deg: mean(&turns, &|t| t.1).sqrt().to_degrees(),
         turn_mean_deg: mean(&turns, &|t| t.0).to_degrees(),
         step_rms_error_m: mean(&steps, &|s| s.1).sqrt(),
+        step_error_rank_correlation: rank_correlation(&steps),
         bridged_steps: bridged.len(),
         bridge_heading_var_per_m: (bridged.len() >= 3).then(|| {
             let (metres, variance) = bridged.iter().fold((0.0, 0.0), |(m, v), b| (m + b.0, v + b.1));
             variance / metres
         }),
     })
+}
+
+/// Spearman's rank correlation of the pairs' two values (ties take their
+/// mean rank).
+fn rank_correlation(pairs: &[(f64, f64)]) -> f64 {
+    fn ranks(values: Vec<f64>) -> Vec<f64> {
+        let mut order: Vec<usize> = (0..values.len()).collect();
+        order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+        let mut ranks = vec![0.0; values.len()];
+        let mut start = 0;
+        while start < order.len() {
+            let mut end = start + 1;
+            while end < order.len() && values[order[end]] == values[order[start]] {
+                end += 1;
+            }
+            for &i in &order[start..end] {
+                ranks[i] = (start + end - 1) as f64 / 2.0;
+            }
+            start = end;
+        }
+        ranks
+    }
+    let (a, b) = (ranks(pairs.iter().map(|p| p.0).collect()), ranks(pairs.iter().map(|p| p.1).collect()));
+    let n = a.len() as f64;
+    let mean = (n - 1.0) / 2.0;
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(&b) {
+        ab += (x - mean) * (y - mean);
+        aa += (x - mean).powi(2);
+        bb += (y - mean).powi(2);
+    }
+    if aa > 0.0 && bb > 0.0 {
+        ab / (aa * bb).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// What `ubf model fit-costs` prints.
@@ -336,7 +377,11 @@ impl std::fmt::Display for CostFit {
             "turns           mean {:.1}°, RMS heading error {:.3}°",
             self.turn_mean_deg, self.turn_rms_error_deg
         )?;
-        writeln!(f, "steps           RMS translation error {:.4} m", self.step_rms_error_m)?;
+        writeln!(
+            f,
+            "steps           RMS translation error {:.4} m; rank correlation with CV·d {:.3}",
+            self.step_rms_error_m, self.step_error_rank_correlation
+        )?;
         match self.bridge_heading_var_per_m {
             Some(v) => writeln!(
                 f,
@@ -369,6 +414,17 @@ mod tests {
 
     /// The columns the fit reads, as `ubf run` writes them.
     const HEADER: &str = "time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n";
+
+    #[test]
+    fn rank_correlation_is_spearmans() {
+        let rising: Vec<(f64, f64)> = (0..10).map(|i| (f64::from(i), f64::from(i).powi(3))).collect();
+        assert!((rank_correlation(&rising) - 1.0).abs() < 1e-12);
+        let falling: Vec<(f64, f64)> = rising.iter().map(|&(a, b)| (a, -b)).collect();
+        assert!((rank_correlation(&falling) + 1.0).abs() < 1e-12);
+        // Ranks 1 2 3 4 5 against 2 1 4 3 5: 1 − 6·4/(5·24) = 0.8.
+        let swapped = [(1.0, 2.0), (2.0, 1.0), (3.0, 4.0), (4.0, 3.0), (5.0, 5.0)];
+        assert!((rank_correlation(&swapped) - 0.8).abs() < 1e-12);
+    }
 
     #[test]
     fn least_squares_recover_coefficients_and_keep_them_non_negative() {

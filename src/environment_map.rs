@@ -22,6 +22,7 @@ use std::ops::Range;
 use ubf_behaviors::{DecisionObjective, Technique};
 use ubf_core::Registry;
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig};
+use ubf_perception::error_model::ErrorModelKind;
 use ubf_robots::sim::{FeaturelessConfig, Side};
 
 /// One environment: the factor varied and its level.
@@ -217,7 +218,9 @@ pub fn where_aiding_pays(
             change(&mut environment);
             let width = environment.world.corridor.map_or(4.0, |c| c.width);
             let offset = zigzag * width / 4.0;
-            let scenario = |technique| variant(registry, &environment, technique, offset, objective, rigid);
+            let scenario = |technique| {
+                variant(registry, &environment, technique, offset, objective, ErrorModelKind::default(), rigid)
+            };
             // Development: every aided technique.
             let aided: Vec<Scenario> = AIDED.iter().map(|&t| scenario(t)).collect::<Result<_, _>>()?;
             let tasks: Vec<(usize, u64)> =
@@ -239,8 +242,16 @@ pub fn where_aiding_pays(
                 r.seed = Some(layout_seed);
             }
             let pair = [
-                variant(registry, &held, Aid::robot(Technique::None), offset, objective, rigid)?,
-                variant(registry, &held, AIDED[best], offset, objective, rigid)?,
+                variant(
+                    registry,
+                    &held,
+                    Aid::robot(Technique::None),
+                    offset,
+                    objective,
+                    ErrorModelKind::default(),
+                    rigid,
+                )?,
+                variant(registry, &held, AIDED[best], offset, objective, ErrorModelKind::default(), rigid)?,
             ];
             let tasks: Vec<(usize, u64)> = (0..2).flat_map(|i| held_out.clone().map(move |s| (i, s))).collect();
             let reports = run_parallel(&tasks, jobs, |&(i, seed)| run(&pair[i], seed, None).map_err(|e| e.to_string()));

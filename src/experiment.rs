@@ -15,6 +15,7 @@ use std::ops::Range;
 use ubf_behaviors::{DecisionObjective, Steer, Technique};
 use ubf_core::{BehaviorSpec, Registry};
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
+use ubf_perception::error_model::ErrorModelKind;
 use ubf_robots::sim::{MotionProfile, PanTiltConfig};
 
 /// The techniques, in the thesis's order.
@@ -86,14 +87,15 @@ pub fn load_route(registry: &Registry, index: usize) -> Result<(Scenario, f64), 
 
 /// `base` with its tree driven by `technique` (with the zig-zag's largest
 /// offset `zigzag_offset`, which depends on the corridor's width, and the
-/// evaluative techniques' `objective`) and egomotion by `estimator`: the
-/// tree every experiment runs.
+/// evaluative techniques' `objective` and error `model`) and egomotion by
+/// `estimator`: the tree every experiment runs.
 pub fn variant(
     registry: &Registry,
     base: &Scenario,
     aid: Aid,
     zigzag_offset: f64,
     objective: DecisionObjective,
+    model: ErrorModelKind,
     estimator: EstimatorKind,
 ) -> Result<Scenario, ExperimentError> {
     let technique_name = format!("{:?}", aid.technique);
@@ -101,7 +103,11 @@ pub fn variant(
         Steer::Robot => String::new(),
         other => format!(", steer: {other:?}"),
     };
-    let settings = format!(", zigzag_max_offset_m: {zigzag_offset:.1}, objective: {objective:?}{steer}");
+    let model = match model {
+        ErrorModelKind::Geometric => String::new(),
+        other => format!(", model: {}", ron::to_string(&other).expect("an error model always serialises")),
+    };
+    let settings = format!(", zigzag_max_offset_m: {zigzag_offset:.1}, objective: {objective:?}{steer}{model}");
     let tree = format!(
         "Composite(arbiter: CommandFusion, children: [(behavior: Stop(), weight: 1.0), \
          (behavior: AvoidCollision(), weight: 2.0), (behavior: ActionAiding(technique: {technique_name}{settings}))])"
@@ -176,7 +182,7 @@ pub fn thesis_table4(
     let rigid = EstimatorKind::Rigid(RigidConfig::default());
     let scenarios: Vec<Scenario> = TECHNIQUES
         .iter()
-        .map(|&t| variant(registry, &base, Aid::robot(t), TABLE4_ZIGZAG_M, objective, rigid))
+        .map(|&t| variant(registry, &base, Aid::robot(t), TABLE4_ZIGZAG_M, objective, ErrorModelKind::default(), rigid))
         .collect::<Result<_, _>>()?;
     let tasks: Vec<(u64, usize)> = seeds.flat_map(|c| (0..TECHNIQUES.len()).map(move |t| (c, t))).collect();
     let reports = run_parallel(&tasks, jobs, |&(corridor, t)| run(&scenarios[t], corridor, None));
@@ -249,6 +255,10 @@ pub struct Endpoint {
     pub layout_seed: Option<u64>,
     /// What the evaluative techniques minimised.
     pub objective: DecisionObjective,
+    /// The error model the evaluative techniques weighed landmarks by,
+    /// when not the geometric one.
+    #[serde(skip_serializing_if = "is_geometric")]
+    pub model: ErrorModelKind,
     /// The motion profile, when it replaced the routes' own.
     pub profile: Option<MotionProfile>,
     /// Where the landmarks came from: `geometric` (the camera model
@@ -284,6 +294,10 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
     }
 }
 
+fn is_geometric(model: &ErrorModelKind) -> bool {
+    *model == ErrorModelKind::Geometric
+}
+
 /// How the end-point experiment is run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EndpointOptions {
@@ -299,6 +313,8 @@ pub struct EndpointOptions {
     pub layout_seed: Option<u64>,
     /// What the evaluative techniques minimise.
     pub objective: DecisionObjective,
+    /// The error model they weigh landmarks by.
+    pub model: ErrorModelKind,
     /// The robot's motion profile, when it replaces the routes' own
     /// (continuous): the thesis's rotate-then-translate suits the
     /// simplified estimator.
@@ -308,7 +324,7 @@ pub struct EndpointOptions {
 /// End-point egomotion error of every technique on every route with both
 /// estimators.
 pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result<Endpoint, ExperimentError> {
-    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective, profile } = options.clone();
+    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile } = options.clone();
     let estimators = [
         ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
@@ -327,7 +343,12 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         }
         for (estimator, kind) in estimators {
             for aid in ENDPOINT_AIDS {
-                scenarios.push((label, estimator, aid.name(), variant(registry, &base, aid, zigzag, objective, kind)?));
+                scenarios.push((
+                    label,
+                    estimator,
+                    aid.name(),
+                    variant(registry, &base, aid, zigzag, objective, model, kind)?,
+                ));
             }
         }
     }
@@ -339,8 +360,15 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         by_case.entry(i).or_default().push(report);
     }
     let camera = if rendered { "rendered" } else { "geometric" };
-    let mut routes =
-        Endpoint { seeds: [seeds.start, seeds.end], layout_seed, objective, profile, camera, routes: BTreeMap::new() };
+    let mut routes = Endpoint {
+        seeds: [seeds.start, seeds.end],
+        layout_seed,
+        objective,
+        model,
+        profile,
+        camera,
+        routes: BTreeMap::new(),
+    };
     for (i, reports) in by_case {
         let (route, estimator, technique, _) = &scenarios[i];
         routes.routes.entry(route).or_default().entry(estimator).or_default().insert(technique, cell(&reports));
@@ -560,9 +588,10 @@ impl std::fmt::Display for Table2 {
 impl std::fmt::Display for Endpoint {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let layout = self.layout_seed.map_or("each route's own layout".into(), |s| format!("layout seed {s}"));
+        let model = if is_geometric(&self.model) { String::new() } else { format!(", {:?} model", self.model) };
         writeln!(
             f,
-            "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective",
+            "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective{model}",
             self.seeds[0], self.seeds[1], self.camera, self.objective
         )?;
         for (route, estimators) in &self.routes {

@@ -355,7 +355,7 @@ pub struct ActionAiding {
     path: Option<((f64, f64), f64)>,
     zig_side: f64,
     zig_limit: f64,
-    positions: Vec<(f64, f64)>,
+    positions: Vec<[f64; 3]>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
     watch: TurnWatch,
@@ -437,6 +437,9 @@ impl ActionAiding {
             baseline_m: camera.baseline_m,
             min_stereo_range_m: camera.baseline_m / 2.0 / (c.max_stereo_viewpoint_deg.to_radians() / 2.0).tan(),
             min_landmarks: c.min_landmarks,
+            camera_height_m: camera.mount.height,
+            up_fov: camera.vertical_reach()[0],
+            down_fov: camera.vertical_reach()[1],
         }
     }
 
@@ -498,7 +501,7 @@ impl ActionAiding {
     /// seen from too far round to be recognised from here.
     fn refresh_positions(&mut self) {
         self.positions.clear();
-        self.positions.extend(self.list.confirmed().map(|l| l.position));
+        self.positions.extend(self.list.confirmed().map(|l| [l.position.0, l.position.1, l.height]));
     }
 
     /// How the robot itself is steered: by the technique, except that with
@@ -864,7 +867,17 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "nearer than where the two cameras' lines of sight differ by this, a landmark is not counted \
                  (§4.4.10.3)",
             ),
-            Field::new("model", "error model", "", "Geometric", "", "error model for evaluating headings"),
+            Field::new(
+                "model",
+                "error model",
+                "",
+                "Geometric",
+                "",
+                "error model for evaluating headings: `Geometric` (eq. 16–23), `Geometric3d` (the same in both image \
+                 axes: landmarks above or below the cameras move in rows too, §5.3.1), `FittedExponential`, \
+                 `FittedExponential3d` (eq. 24 fitted to those two) or `Exponential((alpha: .., beta: .., gamma: .., \
+                 delta: ..))`",
+            ),
             Field::new(
                 "tracking",
                 "tracking list",

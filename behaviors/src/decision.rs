@@ -5,7 +5,7 @@
 use serde::Deserialize;
 use ubf_core::config::non_negative;
 use ubf_core::{angle_difference, Pose2};
-use ubf_perception::error_model::CvTable;
+use ubf_perception::error_model::{CvTable, HeightFactor};
 
 /// What the engine needs to know of the camera and the rules.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,6 +28,14 @@ pub struct DecisionRules {
     /// Fewer landmarks in view than this and egomotion would fail: the
     /// heading is infeasible.
     pub min_landmarks: usize,
+    /// The cameras' height above the floor, m: landmarks' heights are
+    /// measured from it.
+    pub camera_height_m: f64,
+    /// How far above and below the optical axis the images reach, rad: a
+    /// landmark must fall in the images' rows too.
+    pub up_fov: f64,
+    /// As above, below the axis, rad.
+    pub down_fov: f64,
 }
 
 /// The error coefficients of egomotion the end-point objective weighs, both
@@ -283,7 +291,8 @@ const NEAR_STEPS: f64 = 4.0;
 const BANDS: usize = 4;
 
 /// The best heading among `candidates` (world angles) for a robot at
-/// `position` among `landmarks` (world floor positions, each recognisable
+/// `position` among `landmarks` (world `[x, y, height above the floor]`,
+/// m, each recognisable
 /// from here: the tracking list drops those seen from too far round): the
 /// one of least `objective` over the landmarks predicted in view after one
 /// projected step. A heading with
@@ -300,7 +309,7 @@ const BANDS: usize = 4;
 pub fn best_heading(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[[f64; 3]],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
     objective: &Objective,
@@ -318,7 +327,7 @@ pub fn best_heading(
 pub fn best_look(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[[f64; 3]],
     position: (f64, f64),
     driving: f64,
     looks: impl IntoIterator<Item = f64>,
@@ -332,7 +341,7 @@ pub fn best_look(
 fn best_view(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[[f64; 3]],
     position: (f64, f64),
     driving: Option<f64>,
     candidates: impl IntoIterator<Item = f64>,
@@ -364,7 +373,7 @@ fn best_view(
     // A counting sort by key.
     let mut starts = vec![0usize; NEAR + 2];
     let mut keys = Vec::with_capacity(landmarks.len());
-    for &(lx, ly) in landmarks {
+    for &[lx, ly, _] in landmarks {
         let key = key_of(lx - position.0, ly - position.1);
         starts[key + 1] += 1;
         keys.push(key);
@@ -373,9 +382,9 @@ fn best_view(
         starts[k + 1] += starts[k];
     }
     let mut fill = starts.clone();
-    let mut sorted = vec![(0.0, 0.0); landmarks.len()];
-    for (&(lx, ly), &key) in landmarks.iter().zip(&keys) {
-        sorted[fill[key]] = (lx - position.0, ly - position.1);
+    let mut sorted = vec![Offset::default(); landmarks.len()];
+    for (offset, &key) in Offset::all(table, rules, position, landmarks).zip(&keys) {
+        sorted[fill[key]] = offset;
         fill[key] += 1;
     }
     let nearby = &sorted[starts[NEAR]..starts[NEAR + 1]];
@@ -404,7 +413,7 @@ fn best_view(
             let Some(sum) = seen else { break };
             let within = |from: usize, to: usize| &sorted[starts[band * BUCKETS + from]..starts[band * BUCKETS + to]];
             // The window is one run of the band, or two where it wraps.
-            let runs: [&[(f64, f64)]; 2] = if 2 * span + 1 >= BUCKETS {
+            let runs: [&[Offset]; 2] = if 2 * span + 1 >= BUCKETS {
                 [within(0, BUCKETS), &[]]
             } else {
                 let (lo, hi) = ((centre + BUCKETS - span) % BUCKETS, (centre + span) % BUCKETS);
@@ -484,6 +493,40 @@ impl Seen {
     }
 }
 
+/// A landmark as every candidate reads it: what depends on its height is
+/// worked out once, not once per heading.
+#[derive(Clone, Copy, Debug, Default)]
+struct Offset {
+    /// From the robot's position, m.
+    dx: f64,
+    dy: f64,
+    /// The least depth at which it falls in the images' rows, m.
+    row_depth: f64,
+    /// Its height's part in its information.
+    height: HeightFactor,
+}
+
+impl Offset {
+    /// Offsets of `landmarks` from `position` under `rules`.
+    fn all<'a>(
+        table: &'a CvTable,
+        rules: &DecisionRules,
+        position: (f64, f64),
+        landmarks: &'a [[f64; 3]],
+    ) -> impl Iterator<Item = Offset> + 'a {
+        let (up, down, level) = (rules.up_fov.tan(), rules.down_fov.tan(), rules.camera_height_m);
+        landmarks.iter().map(move |&[x, y, height]| {
+            let z = height - level;
+            Offset {
+                dx: x - position.0,
+                dy: y - position.1,
+                row_depth: (z / up).max(-z / down),
+                height: table.height_factor(z),
+            }
+        })
+    }
+}
+
 /// One candidate heading's view from the projected position.
 struct View {
     sin: f64,
@@ -517,13 +560,14 @@ impl View {
     }
 
     /// The information and count of the landmarks in view, given as offsets
-    /// from the robot's current position, or `None` if one is nearer than
-    /// the slant limit (an obstacle). A landmark counts if it is in both
-    /// images, within range, and far enough for stereo matching.
+    /// from the robot's current position and the cameras' height, or `None`
+    /// if one is nearer than the slant limit (an obstacle). A landmark
+    /// counts if it is in both images (columns and rows), within range, and
+    /// far enough for stereo matching.
     #[inline]
-    fn information(&self, table: &CvTable, offsets: &[(f64, f64)]) -> Option<Seen> {
+    fn information(&self, table: &CvTable, offsets: &[Offset]) -> Option<Seen> {
         let mut seen = Seen::default();
-        for &(dx, dy) in offsets {
+        for &Offset { dx, dy, height, row_depth } in offsets {
             // Eq. 44–48 without trigonometry: depth along the heading from
             // the projected position, lateral offset to the right.
             let depth = dx * self.cos + dy * self.sin - self.step;
@@ -538,10 +582,11 @@ impl View {
             if range2 > self.max_range2
                 || range2 < self.min_stereo2
                 || lateral.abs() + self.half_baseline > depth * self.tan_half
+                || depth < row_depth
             {
                 continue;
             }
-            seen.information += table.information(lateral, depth);
+            seen.information += table.information_at(lateral, depth, height);
             seen.count += 1;
         }
         Some(seen)
@@ -553,12 +598,12 @@ impl View {
 pub fn best_heading_exhaustive(
     table: &CvTable,
     rules: &DecisionRules,
-    landmarks: &[(f64, f64)],
+    landmarks: &[[f64; 3]],
     position: (f64, f64),
     candidates: impl IntoIterator<Item = f64>,
     objective: &Objective,
 ) -> Option<Decision> {
-    let offsets: Vec<(f64, f64)> = landmarks.iter().map(|&(x, y)| (x - position.0, y - position.1)).collect();
+    let offsets: Vec<Offset> = Offset::all(table, rules, position, landmarks).collect();
     let mut best = None;
     for heading in candidates {
         let seen = View::new(rules, heading, heading).information(table, &offsets);
@@ -582,7 +627,16 @@ mod tests {
             baseline_m: 0.6,
             min_stereo_range_m: 1.12,
             min_landmarks: 1,
+            camera_height_m: 1.0,
+            up_fov: 23.4f64.to_radians(),
+            down_fov: 23.4f64.to_radians(),
         }
+    }
+
+    /// Landmarks at the cameras' height, where the planar and 3D models
+    /// agree.
+    fn level(points: impl IntoIterator<Item = (f64, f64)>) -> Vec<[f64; 3]> {
+        points.into_iter().map(|(x, y)| [x, y, rules().camera_height_m]).collect()
     }
 
     fn table() -> CvTable {
@@ -598,11 +652,11 @@ mod tests {
         let t = table();
         // One landmark 10 m ahead, 2 m left: looking straight at it is the
         // worst choice; turning so it sits near the edge of the view is best.
-        let landmarks = vec![(10.0, 2.0)];
+        let landmarks = level([(10.0, 2.0)]);
         let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
         let straight_at = 2f64.atan2(10.0);
         assert!((d.heading - straight_at).abs() > 15f64.to_radians(), "{}", d.heading.to_degrees());
-        assert!(d.cv < 1.0 / t.information(0.0, 10.0));
+        assert!(d.cv < 1.0 / t.information(0.0, 10.0, 0.0));
         assert_eq!(d.landmarks, 1);
     }
 
@@ -612,7 +666,7 @@ mod tests {
         // Landmarks only on a wall 3 m to the left, from 1 to 4 m ahead:
         // out of the view along the course (more than 30° off it); the
         // robot keeps driving along x.
-        let landmarks: Vec<(f64, f64)> = (2..=8).map(|x| (f64::from(x) / 2.0, 3.0)).collect();
+        let landmarks = level((2..=8).map(|x| (f64::from(x) / 2.0, 3.0)));
         let ahead = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0], &Objective::Cv);
         let looks = (-18..=18).map(|i| f64::from(i) * 5f64.to_radians());
         let look = best_look(&t, &rules(), &landmarks, (0.0, 0.0), 0.0, looks, &Objective::Cv).unwrap();
@@ -657,16 +711,22 @@ mod tests {
         // at every distance band with headings all round the circle; random
         // both objectives, and one or four landmarks needed.
         use rand::{Rng, SeedableRng};
-        let t = table();
+        // Heights from the floor to 3 m, so that some landmarks fall outside
+        // the images' rows; half the rounds with the 3D model.
+        let tables = [table(), CvTable::for_camera(ErrorModelKind::Geometric3d, &StereoCamera::default(), 1.0, 80.0)];
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         for round in 0..100 {
+            let t = &tables[round % 2];
             let (count, radius) = if round % 2 == 0 { (300, 0.0) } else { (rng.random_range(1..12), 30.0) };
-            let landmarks: Vec<(f64, f64)> = (0..count)
-                .map(|_| match radius {
-                    0.0 => (rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0)),
-                    r => {
-                        let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
-                        (d * a.cos(), d * a.sin())
+            let landmarks: Vec<[f64; 3]> = (0..count)
+                .map(|_| {
+                    let height = rng.random_range(0.0..3.0);
+                    match radius {
+                        0.0 => [rng.random_range(-20.0..60.0), rng.random_range(-8.0..8.0), height],
+                        r => {
+                            let (d, a) = (rng.random_range(0.3f64..r), rng.random_range(-4.0f64..4.0));
+                            [d * a.cos(), d * a.sin(), height]
+                        }
                     }
                 })
                 .collect();
@@ -685,8 +745,8 @@ mod tests {
             };
             for k in -80..=80 {
                 let heading = [f64::from(k) * 2.5f64.to_radians() + rng.random_range(-0.02..0.02)];
-                let fast = best_heading(&t, &rules, &landmarks, at, heading, &objective);
-                let slow = best_heading_exhaustive(&t, &rules, &landmarks, at, heading, &objective);
+                let fast = best_heading(t, &rules, &landmarks, at, heading, &objective);
+                let slow = best_heading_exhaustive(t, &rules, &landmarks, at, heading, &objective);
                 match (fast, slow) {
                     (Some(a), Some(b)) => {
                         assert!((a.cv / b.cv - 1.0).abs() < 1e-9, "{round} {k}");
@@ -702,12 +762,12 @@ mod tests {
     fn rejects_headings_without_landmarks_or_with_one_too_near() {
         let t = table();
         // Only landmark far to the left, out of view for right headings.
-        let left = vec![(5.0, 4.0)];
+        let left = level([(5.0, 4.0)]);
         let d = best_heading(&t, &rules(), &left, (0.0, 0.0), headings(), &Objective::Cv).unwrap();
         assert!(d.heading > 0.0);
         // A landmark right in front is an obstacle: straight ahead is out;
         // 34° left puts it out of view and a far landmark in.
-        let landmarks = vec![(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)];
+        let landmarks = level([(0.6, 0.0), (20.0, -5.0), (20.0, 5.0)]);
         let d = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), [0.0, 0.6], &Objective::Cv).unwrap();
         assert_eq!(d.heading, 0.6);
         assert!(best_heading(&t, &rules(), &[], (0.0, 0.0), headings(), &Objective::Cv).is_none());
@@ -721,14 +781,40 @@ mod tests {
         // feasible.
         let three = [(10.0, 0.0), (12.0, 1.0), (14.0, -1.0)];
         let edge = (10.0, -(10.0 - 0.25) * 30f64.to_radians().tan() + 0.1);
-        let mut points = three.to_vec();
-        points.push(edge);
-        let landmarks = points;
+        let landmarks = level(three.into_iter().chain([edge]));
         let four = DecisionRules { min_landmarks: 4, ..rules() };
         assert!(best_heading(&t, &four, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
         let three_needed = DecisionRules { min_landmarks: 3, ..rules() };
         let d = best_heading(&t, &three_needed, &landmarks, (0.0, 0.0), [0.0], &Objective::Cv).unwrap();
         assert_eq!(d.landmarks, 3);
+    }
+
+    #[test]
+    fn the_3d_model_prefers_landmarks_off_the_cameras_level_the_planar_one_cannot_tell() {
+        // Two mirror-image clusters 30° either side: one at the cameras'
+        // height, one 0.8 m below it. The planar model scores both alike
+        // (the tie goes to the first candidate); the 3D one turns to the
+        // landmarks whose rows move too.
+        let mut landmarks = level((0..4).map(|i| (8.0 + f64::from(i), 5.0)));
+        landmarks.extend((0..4).map(|i| [8.0 + f64::from(i), -5.0, rules().camera_height_m - 0.8]));
+        let turns = [30f64.to_radians(), -30f64.to_radians()];
+        let planar = best_heading(&table(), &rules(), &landmarks, (0.0, 0.0), turns, &Objective::Cv).unwrap();
+        let t3 = CvTable::for_camera(ErrorModelKind::Geometric3d, &StereoCamera::default(), 1.0, 80.0);
+        let with_height = best_heading(&t3, &rules(), &landmarks, (0.0, 0.0), turns, &Objective::Cv).unwrap();
+        assert_eq!(planar.heading, turns[0]);
+        assert_eq!(with_height.heading, turns[1]);
+        assert!(with_height.cv < planar.cv);
+    }
+
+    #[test]
+    fn a_landmark_above_the_images_rows_is_not_in_view() {
+        // 3 m ahead and 1.5 m above the cameras: 27° up, beyond the 23.4°
+        // the rows reach; farther on, the same height is in view.
+        let t = table();
+        let near = [[3.0 + rules().step_m, 0.0, rules().camera_height_m + 1.5]];
+        assert!(best_heading(&t, &rules(), &near, (0.0, 0.0), [0.0], &Objective::Cv).is_none());
+        let far = [[8.0, 0.0, rules().camera_height_m + 1.5]];
+        assert_eq!(best_heading(&t, &rules(), &far, (0.0, 0.0), [0.0], &Objective::Cv).unwrap().landmarks, 1);
     }
 
     #[test]
@@ -776,9 +862,8 @@ mod tests {
         // CV objective turns to the cluster; with 40 m still to go, the
         // end-point objective stays on the goal bearing, and with half a
         // metre to go it turns.
-        let mut points: Vec<(f64, f64)> = (0..11).map(|i| (50.0, -25.0 + 5.0 * f64::from(i))).collect();
-        points.extend((0..6).map(|i| (3.0 + 0.3 * f64::from(i), 3.5 + 0.2 * f64::from(i))));
-        let landmarks = points;
+        let wall = (0..11).map(|i| (50.0, -25.0 + 5.0 * f64::from(i)));
+        let landmarks = level(wall.chain((0..6).map(|i| (3.0 + 0.3 * f64::from(i), 3.5 + 0.2 * f64::from(i)))));
         let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
         let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
         assert!(cv.heading > 20f64.to_radians(), "{}", cv.heading.to_degrees());
@@ -807,7 +892,7 @@ mod tests {
         // Nothing ahead; a cluster 40° left. The CV objective must turn: no
         // landmark, no egomotion. The end-point objective weighs the turn
         // there and back against driving the step on the odometry bridge.
-        let landmarks: Vec<(f64, f64)> = (0..6).map(|i| (6.0 + 0.5 * f64::from(i), 5.0 + 0.3 * f64::from(i))).collect();
+        let landmarks = level((0..6).map(|i| (6.0 + 0.5 * f64::from(i), 5.0 + 0.3 * f64::from(i))));
         let candidates = || (-18..=18).map(|k| f64::from(k) * 2.5f64.to_radians());
         let cv = best_heading(&t, &rules(), &landmarks, (0.0, 0.0), candidates(), &Objective::Cv).unwrap();
         assert!(cv.heading > 10f64.to_radians(), "{}", cv.heading.to_degrees());
@@ -832,7 +917,7 @@ mod tests {
         // A landmark too near ahead is an obstacle, not a view: the bridge
         // does not drive into it.
         let mut blocked = landmarks.clone();
-        blocked.push((rules().step_m + 0.3, 0.0));
+        blocked.extend(level([(rules().step_m + 0.3, 0.0)]));
         let d = best_heading(&t, &rules(), &blocked, (0.0, 0.0), candidates(), &end_point(1e-5)).unwrap();
         assert_ne!(d.heading, 0.0);
     }

@@ -38,6 +38,8 @@ impl Default for TrackingConfig {
 pub struct TrackedLandmark {
     /// World position on the floor plane, m (eq. 28–29).
     pub position: (f64, f64),
+    /// Height above the floor, m.
+    pub height: f64,
     /// Its descriptor when last seen.
     pub descriptor: Descriptor,
     /// The world direction from the robot to it when last seen, as a unit
@@ -85,10 +87,12 @@ fn unit(x: f64, y: f64) -> (f64, f64) {
     }
 }
 
-/// Where an observation is in the world, from the robot's pose (eq. 25–29).
-pub fn world_position(observation: &LandmarkObservation, camera: &StereoCamera, pose: &Pose2) -> (f64, f64) {
-    let [forward, left, _] = camera.mount.cam_to_robot(observation.point_cam);
-    pose.transform_point(forward, left)
+/// Where an observation is in the world, from the robot's pose (eq. 25–29):
+/// on the floor plane, and its height above the floor, m.
+pub fn world_position(observation: &LandmarkObservation, camera: &StereoCamera, pose: &Pose2) -> [f64; 3] {
+    let [forward, left, height] = camera.mount.cam_to_robot(observation.point_cam);
+    let (x, y) = pose.transform_point(forward, left);
+    [x, y, height]
 }
 
 impl TrackingList {
@@ -128,10 +132,11 @@ impl TrackingList {
     ) -> TrackingUpdate {
         let mut update = TrackingUpdate::default();
         for obs in observations {
-            let position = world_position(obs, camera, pose);
+            let [x, y, height] = world_position(obs, camera, pose);
+            let position = (x, y);
             let range = pose.distance_to(position.0, position.1);
             let seen_along = unit(position.0 - pose.x, position.1 - pose.y);
-            let fresh = TrackedLandmark { position, descriptor: obs.descriptor, seen_along, sightings: 1 };
+            let fresh = TrackedLandmark { position, height, descriptor: obs.descriptor, seen_along, sightings: 1 };
             let gate = self.config.gate_m + self.config.gate_per_m * range;
             self.in_gate.clear();
             self.in_gate.extend((0..self.entries.len()).filter(|&i| {
@@ -189,13 +194,15 @@ mod tests {
 
     #[test]
     fn converts_camera_to_world() {
-        // 10 m ahead and 2 m right of a robot at (1, 1) facing +y.
+        // 10 m ahead, 2 m right and 0.5 m above the cameras of a robot at
+        // (1, 1) facing +y.
         let p = world_position(
-            &obs([2.0, 10.0, 0.0], 1),
+            &obs([2.0, 10.0, 0.5], 1),
             &calibration(),
             &Pose2::new(1.0, 1.0, std::f64::consts::FRAC_PI_2),
         );
-        assert!((p.0 - 3.0).abs() < 1e-12 && (p.1 - 11.0).abs() < 1e-12, "{p:?}");
+        let height = calibration().mount.height + 0.5;
+        assert!((p[0] - 3.0).abs() < 1e-12 && (p[1] - 11.0).abs() < 1e-12 && (p[2] - height).abs() < 1e-12, "{p:?}");
     }
 
     #[test]

@@ -1006,7 +1006,7 @@ impl Tracker {
         self.pairs.clear();
         for &(i, j) in &self.matches {
             let (before, after) = (keyframe.landmarks[i].point_cam, frame.landmarks[j].point_cam);
-            let cv = self.table.cv(after[0], after[1]);
+            let cv = self.table.cv(after[0], after[1], after[2]);
             self.pairs.push(match self.config.estimator {
                 EstimatorKind::Simple2d(_) if fixed => Pair { before, after, cv },
                 // The simplified estimator reads motion in the frame of a

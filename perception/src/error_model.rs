@@ -2,12 +2,14 @@
 //! of egomotion measured from one landmark is, given where the landmark sits
 //! relative to the camera.
 //!
-//! Positions are in the camera frame's floor plane: `x` to the right, `y`
-//! ahead (depth), metres. CVs are relative measures, comparable with each
-//! other, not absolute errors (thesis §3.3.3).
+//! Positions are in the camera frame: `x` to the right, `y` ahead (depth),
+//! `z` up from the cameras' level, metres. The thesis's models are planar
+//! and ignore `z`; the 3D forms (its §5.3.1 recommendation) count the image
+//! motion in both image axes. CVs are relative measures, comparable with
+//! each other, not absolute errors (thesis §3.3.3).
 
 use crate::stereo::StereoCamera;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 /// The step the error model assumes: 1 m, as in the thesis (§3.3.3).
@@ -68,9 +70,25 @@ impl GeometricModel {
     pub fn lateral_factor(&self, x: f64) -> f64 {
         1.0 / self.baseline_m.max(2.0 * x.abs())
     }
+
+    /// The CV of a landmark at `(x, y, z)` with eq. 16–23 applied in both
+    /// image axes (thesis §5.3.1): the step also moves the landmark's row,
+    /// `δv = f·|z|·s/(y(y−s))` in each image (the cameras are level, so
+    /// both rows move alike), and the signal is the summed motion of both
+    /// axes in both images. In closed form
+    /// `CV = y(y−s) / (f·s·(max(T, 2|x|) + 2|z|))`: the planar CV at the
+    /// cameras' level, smaller the farther above or below it.
+    pub fn cv_3d(&self, x: f64, y: f64, z: f64) -> f64 {
+        let y = y.max(self.min_depth());
+        let (f, s) = (self.focal_px, self.step_m);
+        let row = |depth: f64| f * z / depth;
+        let vertical = 2.0 * (row(y) - row(y - s)).abs();
+        1.0 / (1.0 / self.cv(x, y) + vertical)
+    }
 }
 
-/// The exponential model (thesis eq. 24): `CV = α·e^{βy}·e^{−γ|x|}`.
+/// The exponential model (thesis eq. 24): `CV = α·e^{βy}·e^{−γ|x|}`,
+/// with a height term `e^{−δ|z|}` for the 3D form (δ = 0: the thesis's).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExponentialModel {
@@ -80,12 +98,24 @@ pub struct ExponentialModel {
     pub beta: f64,
     /// Decay of the CV with lateral offset, 1/m.
     pub gamma: f64,
+    /// Decay of the CV with height above or below the cameras, 1/m.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub delta: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl ExponentialModel {
-    /// The CV of a landmark at `(x, y)`.
+    /// The CV of a landmark at `(x, y)` at the cameras' level.
     pub fn cv(&self, x: f64, y: f64) -> f64 {
-        self.alpha * (self.beta * y - self.gamma * x.abs()).exp()
+        self.cv_3d(x, y, 0.0)
+    }
+
+    /// The CV of a landmark at `(x, y, z)`.
+    pub fn cv_3d(&self, x: f64, y: f64, z: f64) -> f64 {
+        self.alpha * (self.beta * y - self.gamma * x.abs() - self.delta * z.abs()).exp()
     }
 }
 
@@ -98,6 +128,10 @@ pub struct FitReport {
     pub samples: usize,
     /// Depth range fitted, m.
     pub depth_range_m: [f64; 2],
+    /// Height range fitted, relative to the cameras, m; absent for the
+    /// planar form (fitted at the cameras' level, δ = 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_range_m: Option<[f64; 2]>,
     /// Coefficient of determination of the fit of ln CV.
     pub r_squared_log: f64,
     /// Median of |fitted/geometric − 1|.
@@ -109,47 +143,71 @@ pub struct FitReport {
     pub pair_order_agreement: f64,
 }
 
-/// The field of view's floor-plane sample points between two depths: every
-/// `cell` metres in depth and across, inside both cameras' views.
-fn field_of_view_samples(camera: &StereoCamera, depths: [f64; 2], cell: f64) -> Vec<(f64, f64)> {
+/// The field of view's sample points between two depths: every `cell`
+/// metres in depth and across, inside both cameras' views; at the cameras'
+/// level, or every `cell` metres between `heights` (relative to the
+/// cameras) inside the images' rows.
+fn field_of_view_samples(
+    camera: &StereoCamera,
+    depths: [f64; 2],
+    heights: Option<[f64; 2]>,
+    cell: f64,
+) -> Vec<[f64; 3]> {
     let half_fov = camera.horizontal_fov() / 2.0;
+    let [up, down] = camera.vertical_reach().map(f64::tan);
+    let levels: Vec<f64> = match heights {
+        None => vec![0.0],
+        Some([low, high]) => (0..).map(|k| low + f64::from(k) * cell).take_while(|z| *z <= high + 1e-9).collect(),
+    };
     let mut points = Vec::new();
     let mut y = depths[0];
     while y <= depths[1] + 1e-9 {
         // Inside both images: |x| + T/2 ≤ y·tan(half FOV).
         let half_width = (y * half_fov.tan() - camera.baseline_m / 2.0).max(0.0);
-        let mut x = -half_width;
-        while x <= half_width + 1e-9 {
-            points.push((x, y));
-            x += cell;
+        for &z in levels.iter().filter(|z| (-y * down..=y * up).contains(*z)) {
+            let mut x = -half_width;
+            while x <= half_width + 1e-9 {
+                points.push([x, y, z]);
+                x += cell;
+            }
         }
         y += cell;
     }
     points
 }
 
-/// Fits α, β, γ by least squares on ln CV to the model `target` (usually
-/// [`GeometricModel::cv`]) over the camera's field of view between
-/// `depths`, sampling every `cell` metres.
+/// Fits α, β, γ (and δ, given `heights`) by least squares on ln CV to the
+/// model `target(x, y, z)` (usually [`GeometricModel::cv_3d`]) over the
+/// camera's field of view between `depths` (and `heights`, relative to the
+/// cameras), sampling every `cell` metres.
 pub fn fit_exponential(
-    target: impl Fn(f64, f64) -> f64,
+    target: impl Fn(f64, f64, f64) -> f64,
     camera: &StereoCamera,
     depths: [f64; 2],
+    heights: Option<[f64; 2]>,
     cell: f64,
 ) -> FitReport {
-    let points = field_of_view_samples(camera, depths, cell);
-    // Normal equations of ln CV = a + β y − γ |x|.
-    let mut ata = Matrix3::<f64>::zeros();
-    let mut atb = Vector3::<f64>::zeros();
-    for &(x, y) in &points {
-        let row = Vector3::new(1.0, y, -x.abs());
-        ata += row * row.transpose();
-        atb += row * target(x, y).ln();
+    let points = field_of_view_samples(camera, depths, heights, cell);
+    // Normal equations of ln CV = a + β y − γ |x| (− δ |z|).
+    let terms = if heights.is_some() { 4 } else { 3 };
+    let row = |[x, y, z]: [f64; 3]| DVector::from_iterator(terms, [1.0, y, -x.abs(), -z.abs()].into_iter().take(terms));
+    let mut ata = DMatrix::<f64>::zeros(terms, terms);
+    let mut atb = DVector::<f64>::zeros(terms);
+    for &point in &points {
+        let r = row(point);
+        ata += &r * r.transpose();
+        atb += r * target(point[0], point[1], point[2]).ln();
     }
-    let solution = ata.lu().solve(&atb).unwrap_or_else(Vector3::zeros);
-    let model = ExponentialModel { alpha: solution[0].exp(), beta: solution[1], gamma: solution[2] };
+    let solution = ata.lu().solve(&atb).unwrap_or_else(|| DVector::zeros(terms));
+    let model = ExponentialModel {
+        alpha: solution[0].exp(),
+        beta: solution[1],
+        gamma: solution[2],
+        delta: if terms == 4 { solution[3] } else { 0.0 },
+    };
 
-    let logs: Vec<(f64, f64)> = points.iter().map(|&(x, y)| (target(x, y).ln(), model.cv(x, y).ln())).collect();
+    let logs: Vec<(f64, f64)> =
+        points.iter().map(|&[x, y, z]| (target(x, y, z).ln(), model.cv_3d(x, y, z).ln())).collect();
     let mean = logs.iter().map(|l| l.0).sum::<f64>() / logs.len() as f64;
     let total: f64 = logs.iter().map(|l| (l.0 - mean).powi(2)).sum();
     let residual: f64 = logs.iter().map(|l| (l.0 - l.1).powi(2)).sum();
@@ -174,11 +232,20 @@ pub fn fit_exponential(
         model,
         samples: points.len(),
         depth_range_m: depths,
+        height_range_m: heights,
         r_squared_log: 1.0 - residual / total,
         median_relative_error: quantile(0.5),
         p95_relative_error: quantile(0.95),
         pair_order_agreement: same as f64 / pairs.max(1) as f64,
     }
+}
+
+/// The heights a 3D fit covers for `camera`: from the floor to a 2.5 m
+/// ceiling (a corridor's; the renderer's walls), relative to the cameras.
+pub fn corridor_heights(camera: &StereoCamera) -> [f64; 2] {
+    const CEILING_M: f64 = 2.5;
+    let level = camera.mount.height;
+    [-level, (CEILING_M - level).max(0.0)]
 }
 
 /// Which model a behaviour or an estimator uses, as written in a scenario
@@ -189,25 +256,47 @@ pub enum ErrorModelKind {
     /// The geometric model of the camera (eq. 16–23).
     #[default]
     Geometric,
+    /// The geometric model in both image axes: landmarks above or below the
+    /// cameras move in rows too, and are better ([`GeometricModel::cv_3d`]).
+    Geometric3d,
     /// The exponential model with α, β, γ fitted to the geometric one.
     FittedExponential,
-    /// The exponential model with given parameters.
+    /// The exponential model with α, β, γ, δ fitted to the 3D geometric one
+    /// over the field of view from the floor to a 2.5 m ceiling.
+    FittedExponential3d,
+    /// The exponential model with given parameters (δ, the height term, is
+    /// optional).
     Exponential(ExponentialModel),
 }
 
-/// A precomputed table of a model's CV over the floor plane (the thesis
-/// precomputes one for speed), read by linear interpolation of ln CV.
+/// How a landmark's height above or below the cameras enters a
+/// [`CvTable`]'s information, `1/CV`.
+#[derive(Clone, Debug, PartialEq)]
+enum HeightTerm {
+    /// Not at all: the thesis's planar models.
+    Ignored,
+    /// The 3D geometric model's row motion: `2|z|` joins the lateral
+    /// factor's reciprocal, `max(T, 2|x|)`.
+    RowMotion,
+    /// The 3D exponential model's `e^{δ|z|}`, tabulated every cell from 0.
+    Exponential { delta: f64, inverse: Vec<f64> },
+}
+
+/// A precomputed table of a model's CV (the thesis precomputes one for
+/// speed), read by linear interpolation of ln CV.
 ///
-/// Both of the thesis's models factor into a depth term and a lateral term
+/// Every model here factors into a depth term and a lateral term
 /// (geometric: `y(y−s)/(f·s) · 1/max(T, 2|x|)`; exponential:
 /// `α·e^{βy} · e^{−γ|x|}`), so the table is two short one-dimensional
 /// tables rather than a grid: a few kilobytes that stay in the nearest
 /// cache, where a 5 cm grid out to 80 m took 12 MB and missed it on nearly
 /// every read. Interpolating ln CV bilinearly over a grid of such a product
-/// gives exactly the sum of the two one-dimensional interpolations.
+/// gives exactly the sum of the two one-dimensional interpolations. The 3D
+/// forms' height enters the lateral term: added to its reciprocal
+/// (geometric) or as a third factor (exponential).
 ///
-/// It is symmetric in `x`; outside its range positions are clamped to the
-/// nearest edge.
+/// It is symmetric in `x` and `z`; outside its range positions are clamped
+/// to the nearest edge.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CvTable {
     x_max: f64,
@@ -222,11 +311,26 @@ pub struct CvTable {
     /// The reciprocals of the two factors, for [`CvTable::information`].
     inverse_depth: Vec<f64>,
     inverse_lateral: Vec<f64>,
+    height: HeightTerm,
 }
+
+/// A landmark height's part in its information (see
+/// [`CvTable::height_factor`]): `1/CV = (lateral + add) · times · depth`,
+/// where `lateral` and `depth` are the reciprocals of the table's factors.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HeightFactor {
+    add: f64,
+    times: f64,
+}
+
+/// The highest `|z|` a table tabulates the exponential height factor to,
+/// m: beyond any corridor's ceiling.
+const HEIGHT_MAX_M: f64 = 10.0;
 
 impl CvTable {
     /// Tabulates `CV(x, y) = depth_factor(y) · lateral_factor(|x|)` over
-    /// `0 ≤ |x| ≤ x_max`, `y_min ≤ y ≤ y_max`, every `cell` metres.
+    /// `0 ≤ |x| ≤ x_max`, `y_min ≤ y ≤ y_max`, every `cell` metres; a
+    /// landmark's height is ignored.
     pub fn new(
         depth_factor: impl Fn(f64) -> f64,
         lateral_factor: impl Fn(f64) -> f64,
@@ -248,6 +352,7 @@ impl CvTable {
             inverse_lateral: reciprocal(&ln_lateral),
             ln_depth,
             ln_lateral,
+            height: HeightTerm::Ignored,
         }
     }
 
@@ -258,15 +363,31 @@ impl CvTable {
         let x_max = max_depth * (camera.horizontal_fov() / 2.0).tan();
         let (depths, cell) = ([geometric.min_depth(), max_depth], 0.05);
         let exponential = |m: ExponentialModel| {
-            CvTable::new(|y| m.alpha * (m.beta * y).exp(), |x| (-m.gamma * x).exp(), x_max, depths, cell)
+            let mut table =
+                CvTable::new(|y| m.alpha * (m.beta * y).exp(), |x| (-m.gamma * x).exp(), x_max, depths, cell);
+            if m.delta != 0.0 {
+                let nodes = (HEIGHT_MAX_M / cell).ceil() as usize;
+                let inverse = (0..=nodes).map(|k| (m.delta * k as f64 * cell).exp()).collect();
+                table.height = HeightTerm::Exponential { delta: m.delta, inverse };
+            }
+            table
         };
+        let planar = |x: f64, y: f64, _| geometric.cv(x, y);
+        let with_height = |x: f64, y: f64, z: f64| geometric.cv_3d(x, y, z);
         match kind {
-            ErrorModelKind::Geometric => {
-                CvTable::new(|y| geometric.depth_factor(y), |x| geometric.lateral_factor(x), x_max, depths, cell)
+            ErrorModelKind::Geometric | ErrorModelKind::Geometric3d => {
+                let mut table =
+                    CvTable::new(|y| geometric.depth_factor(y), |x| geometric.lateral_factor(x), x_max, depths, cell);
+                if kind == ErrorModelKind::Geometric3d {
+                    table.height = HeightTerm::RowMotion;
+                }
+                table
             }
             ErrorModelKind::Exponential(model) => exponential(model),
-            ErrorModelKind::FittedExponential => {
-                exponential(fit_exponential(|x, y| geometric.cv(x, y), camera, depths, 0.25).model)
+            ErrorModelKind::FittedExponential => exponential(fit_exponential(planar, camera, depths, None, 0.25).model),
+            ErrorModelKind::FittedExponential3d => {
+                let heights = Some(corridor_heights(camera));
+                exponential(fit_exponential(with_height, camera, depths, heights, 0.25).model)
             }
         }
     }
@@ -281,17 +402,38 @@ impl CvTable {
         (i, j)
     }
 
-    /// 1/CV at the node nearest `(x, y)`: the fast read for summing many
+    /// 1/CV at the node nearest `(x, y, z)`: the fast read for summing many
     /// landmarks' information (eq. 6: `1/CV_T = Σ 1/CV_i`), accurate to the
     /// table's 5 cm cells.
     #[inline]
-    pub fn information(&self, x: f64, y: f64) -> f64 {
-        let (i, j) = self.nearest(x, y);
-        self.inverse_lateral[i] * self.inverse_depth[j]
+    pub fn information(&self, x: f64, y: f64, z: f64) -> f64 {
+        self.information_at(x, y, self.height_factor(z))
     }
 
-    /// The CV at `(x, y)`.
-    pub fn cv(&self, x: f64, y: f64) -> f64 {
+    /// How a landmark `z` above (or below) the cameras has its information
+    /// scaled: the part of [`CvTable::information`] that depends on the
+    /// height alone, for a landmark read from many viewpoints.
+    #[inline]
+    pub fn height_factor(&self, z: f64) -> HeightFactor {
+        match &self.height {
+            HeightTerm::Ignored => HeightFactor { add: 0.0, times: 1.0 },
+            HeightTerm::RowMotion => HeightFactor { add: 2.0 * z.abs(), times: 1.0 },
+            HeightTerm::Exponential { inverse, .. } => {
+                let k = ((z.abs() * self.per_cell + 0.5) as usize).min(inverse.len() - 1);
+                HeightFactor { add: 0.0, times: inverse[k] }
+            }
+        }
+    }
+
+    /// [`CvTable::information`] with the height's factor given.
+    #[inline]
+    pub fn information_at(&self, x: f64, y: f64, height: HeightFactor) -> f64 {
+        let (i, j) = self.nearest(x, y);
+        (self.inverse_lateral[i] + height.add) * height.times * self.inverse_depth[j]
+    }
+
+    /// The CV at `(x, y, z)`.
+    pub fn cv(&self, x: f64, y: f64, z: f64) -> f64 {
         let interpolate = |logs: &[f64], at: f64| {
             let at = at.min((logs.len() - 1) as f64);
             let k = at.floor() as usize;
@@ -300,7 +442,11 @@ impl CvTable {
         };
         let lateral = interpolate(&self.ln_lateral, x.abs().min(self.x_max) * self.per_cell);
         let depth = interpolate(&self.ln_depth, (y.clamp(self.y_min, self.y_max) - self.y_min) * self.per_cell);
-        (lateral + depth).exp()
+        match &self.height {
+            HeightTerm::Ignored => (lateral + depth).exp(),
+            HeightTerm::RowMotion => depth.exp() / ((-lateral).exp() + 2.0 * z.abs()),
+            HeightTerm::Exponential { delta, .. } => (lateral + depth - delta * z.abs().min(HEIGHT_MAX_M)).exp(),
+        }
     }
 }
 
@@ -325,11 +471,11 @@ mod tests {
     fn both_models_factor_into_depth_and_lateral_terms() {
         // What lets the look-up table be two short tables.
         let m = model();
-        let e = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3 };
+        let e = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3, delta: 0.0 };
         let t = CvTable::for_camera(ErrorModelKind::Exponential(e), &StereoCamera::default(), 1.0, 60.0);
         for (x, y) in [(0.0, 1.5), (0.2, 3.0), (-2.0, 10.0), (4.0, 20.0), (-9.0, 45.0)] {
             assert!((m.depth_factor(y) * m.lateral_factor(x) / m.cv(x, y) - 1.0).abs() < 1e-9, "({x}, {y})");
-            assert!((t.cv(x, y) / e.cv(x, y) - 1.0).abs() < 1e-9, "({x}, {y})");
+            assert!((t.cv(x, y, 0.7) / e.cv(x, y) - 1.0).abs() < 1e-9, "({x}, {y})");
         }
     }
 
@@ -344,8 +490,8 @@ mod tests {
 
     #[test]
     fn the_fit_recovers_an_exponential_exactly() {
-        let truth = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3 };
-        let report = fit_exponential(|x, y| truth.cv(x, y), &StereoCamera::default(), [1.2, 40.0], 0.5);
+        let truth = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3, delta: 0.0 };
+        let report = fit_exponential(|x, y, _| truth.cv(x, y), &StereoCamera::default(), [1.2, 40.0], None, 0.5);
         assert!((report.model.alpha / truth.alpha - 1.0).abs() < 1e-9, "{report:?}");
         assert!((report.model.beta - truth.beta).abs() < 1e-9 && (report.model.gamma - truth.gamma).abs() < 1e-9);
         assert!((report.r_squared_log - 1.0).abs() < 1e-9);
@@ -358,7 +504,7 @@ mod tests {
         // what must hold is the shape: worse with depth, better off-centre,
         // and mostly the same ordering of landmarks.
         let m = model();
-        let report = fit_exponential(|x, y| m.cv(x, y), &StereoCamera::default(), [1.2, 40.0], 0.25);
+        let report = fit_exponential(|x, y, _| m.cv(x, y), &StereoCamera::default(), [1.2, 40.0], None, 0.25);
         assert!(report.model.beta > 0.0 && report.model.gamma > 0.0, "{report:?}");
         assert!(report.pair_order_agreement > 0.85, "{report:?}");
     }
@@ -368,16 +514,67 @@ mod tests {
         let m = model();
         let table = CvTable::for_camera(ErrorModelKind::Geometric, &StereoCamera::default(), 1.0, 60.0);
         for (x, y) in [(0.03, 4.02), (1.234, 7.77), (-5.5, 30.1)] {
-            assert!((table.cv(x, y) / m.cv(x, y) - 1.0).abs() < 0.01, "({x}, {y})");
+            assert!((table.cv(x, y, 0.0) / m.cv(x, y) - 1.0).abs() < 0.01, "({x}, {y})");
         }
         // The fast read is the nearest node's value: within half a cell.
         for (x, y) in [(0.03, 4.02), (1.234, 7.77), (-5.5, 30.1), (0.0, 1.06)] {
             let nearest = |v: f64| (v / 0.05).round() * 0.05;
             let node = m.cv(nearest(x), nearest(y) + 1.05 - nearest(1.05));
-            assert!((table.information(x, y) * node - 1.0).abs() < 1e-9, "({x}, {y})");
+            assert!((table.information(x, y, 0.5) * node - 1.0).abs() < 1e-9, "({x}, {y})");
         }
         // Beyond the table, clamped to its edge.
-        assert_eq!(table.cv(0.0, 500.0), table.cv(0.0, 60.0));
-        assert_eq!(table.information(99.0, 500.0), table.information(46.0, 60.0));
+        assert_eq!(table.cv(0.0, 500.0, 0.0), table.cv(0.0, 60.0, 0.0));
+        assert_eq!(table.information(99.0, 500.0, 0.0), table.information(46.0, 60.0, 0.0));
+    }
+
+    #[test]
+    fn the_3d_geometric_model_is_eq_16_to_23_in_both_image_axes() {
+        // Against the two images' pixels, projected before and after the
+        // step: the summed |δu| + |δv| of both images.
+        let camera = StereoCamera::default();
+        let m = model();
+        for [x, y, z] in [[0.0, 5.0, 0.0], [0.2, 3.0, -0.8], [-2.0, 10.0, 1.2], [4.0, 20.0, 0.3]] {
+            let before = camera.project([x, y, z]).unwrap();
+            let after = camera.project([x, y - 1.0, z]).unwrap();
+            let signal = (before.u_left - after.u_left).abs()
+                + (before.u_right - after.u_right).abs()
+                + 2.0 * (before.v - after.v).abs();
+            assert!((m.cv_3d(x, y, z) * signal - 1.0).abs() < 1e-9, "({x}, {y}, {z})");
+        }
+        // At the cameras' level it is the planar model; away from it,
+        // better, alike above and below.
+        assert_eq!(m.cv_3d(1.0, 8.0, 0.0), m.cv(1.0, 8.0));
+        assert!(m.cv_3d(1.0, 8.0, 0.5) < m.cv(1.0, 8.0));
+        assert!((m.cv_3d(1.0, 8.0, 0.5) / m.cv_3d(1.0, 8.0, -0.5) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_3d_tables_reproduce_their_models() {
+        let camera = StereoCamera::default();
+        let m = model();
+        let geometric = CvTable::for_camera(ErrorModelKind::Geometric3d, &camera, 1.0, 60.0);
+        let e = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3, delta: 0.4 };
+        let exponential = CvTable::for_camera(ErrorModelKind::Exponential(e), &camera, 1.0, 60.0);
+        for [x, y, z] in [[0.03, 4.02, 0.0], [1.234, 7.77, -0.6], [-5.5, 30.1, 1.3]] {
+            assert!((geometric.cv(x, y, z) / m.cv_3d(x, y, z) - 1.0).abs() < 0.01, "({x}, {y}, {z})");
+            assert!((geometric.information(x, y, z) * m.cv_3d(x, y, z) - 1.0).abs() < 0.03, "({x}, {y}, {z})");
+            assert!((exponential.cv(x, y, z) / e.cv_3d(x, y, z) - 1.0).abs() < 1e-9, "({x}, {y}, {z})");
+            assert!((exponential.information(x, y, z) * e.cv_3d(x, y, z) - 1.0).abs() < 0.05, "({x}, {y}, {z})");
+        }
+    }
+
+    #[test]
+    fn the_3d_fit_recovers_an_exponential_and_finds_height_helps() {
+        let camera = StereoCamera::default();
+        let truth = ExponentialModel { alpha: 0.02, beta: 0.1, gamma: 0.3, delta: 0.5 };
+        let report = fit_exponential(|x, y, z| truth.cv_3d(x, y, z), &camera, [1.2, 40.0], Some([-1.0, 1.5]), 0.5);
+        assert!((report.model.delta - truth.delta).abs() < 1e-9, "{report:?}");
+        assert!((report.r_squared_log - 1.0).abs() < 1e-9);
+        // Fitted to the geometric model, height lowers the CV as width does.
+        let m = model();
+        let heights = corridor_heights(&camera);
+        let report = fit_exponential(|x, y, z| m.cv_3d(x, y, z), &camera, [1.2, 40.0], Some(heights), 0.5);
+        assert!(report.model.delta > 0.0 && report.model.gamma > 0.0, "{report:?}");
+        assert_eq!(report.height_range_m, Some([-1.0, 1.5]));
     }
 }

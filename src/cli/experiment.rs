@@ -7,6 +7,7 @@ use crate::scenario::Scenario;
 use std::path::PathBuf;
 use ubf_behaviors::DecisionObjective;
 use ubf_core::Registry;
+use ubf_perception::error_model::ErrorModelKind;
 
 /// Runs one experiment and prints its table (or JSON).
 pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome {
@@ -61,12 +62,13 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
             rendered,
             layout_seed,
             objective,
+            model,
             rotate_then_translate,
         } => {
             let profile = rotate_then_translate
                 .then_some(ubf_robots::sim::MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 });
             let jobs = jobs.unwrap_or_else(super::cores);
-            let options = EndpointOptions { seeds, jobs, rendered, layout_seed, objective, profile };
+            let options = EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile };
             let result = thesis_endpoint(registry, &options).map_err(CliError::failed)?;
             super::show(&result, json)?;
         }
@@ -77,7 +79,7 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
 /// Fits, prints or draws the landmark error model, or fits the decision's
 /// costs from run logs.
 pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
-    use ubf_perception::error_model::{fit_exponential, GeometricModel};
+    use ubf_perception::error_model::{corridor_heights, fit_exponential, FitReport, GeometricModel};
     let args: &CameraArgs = match &action {
         ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
         ModelCommand::FitCosts { logs, json } => return fit_costs(logs, *json),
@@ -100,39 +102,51 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
             depths[0]
         )));
     }
-    let fit = fit_exponential(|x, y| geometric.cv(x, y), &camera, depths, 0.25);
+    let planar = fit_exponential(|x, y, _| geometric.cv(x, y), &camera, depths, None, 0.25);
+    let heights = args.heights.unwrap_or_else(|| corridor_heights(&camera));
+    let with_height = fit_exponential(|x, y, z| geometric.cv_3d(x, y, z), &camera, depths, Some(heights), 0.25);
     match action {
         ModelCommand::Fit { json: true, .. } => {
-            println!("{}", serde_json::to_string_pretty(&fit).expect("a fit report always serialises"));
+            let both = serde_json::json!({ "planar": planar, "with_height": with_height });
+            println!("{}", serde_json::to_string_pretty(&both).expect("a fit report always serialises"));
         }
         ModelCommand::Fit { .. } => {
             println!(
-                "camera          f = {:.1} px, T = {:.3} m, {}×{} px",
-                camera.focal_px, camera.baseline_m, camera.width_px, camera.height_px
+                "camera          f = {:.1} px, T = {:.3} m, {}×{} px, {:.2} m above the floor",
+                camera.focal_px, camera.baseline_m, camera.width_px, camera.height_px, camera.mount.height
             );
-            println!(
-                "model step      {} m; fitted over depths {:.2}–{:.2} m, {} points of the field of view",
-                args.step, depths[0], depths[1], fit.samples
+            println!("model step      {} m; fitted over depths {:.2}–{:.2} m", args.step, depths[0], depths[1]);
+            let row = |name: &str, a: String, b: String| println!("{name:<16}{a:<34}{b}");
+            row("", "planar (eq. 24)".into(), "3D (§5.3.1)".into());
+            row("CV(x, y, z)", "α·exp(β·y)·exp(−γ·|x|)".into(), "α·exp(β·y)·exp(−γ·|x|)·exp(−δ·|z|)".into());
+            row(
+                "fitted to",
+                "eq. 16–23 at the cameras' level".into(),
+                format!("eq. 16–23 in rows too, z {:.2} to {:.2} m", heights[0], heights[1]),
             );
-            println!("CV(x, y)        α·exp(β·y)·exp(−γ·|x|)");
-            println!("α               {:.6e}", fit.model.alpha);
-            println!("β               {:.5} 1/m", fit.model.beta);
-            println!("γ               {:.5} 1/m", fit.model.gamma);
-            println!("R² of ln CV     {:.4}", fit.r_squared_log);
-            println!(
-                "relative error  median {:.1} %, 95th percentile {:.1} %",
-                100.0 * fit.median_relative_error,
-                100.0 * fit.p95_relative_error
-            );
-            println!(
-                "pair ordering   {:.1} % of landmark pairs ranked as the geometric model ranks them",
-                100.0 * fit.pair_order_agreement
-            );
+            let both =
+                |name: &str, value: &dyn Fn(&FitReport) -> String| row(name, value(&planar), value(&with_height));
+            both("points", &|f| f.samples.to_string());
+            both("α", &|f| format!("{:.6e}", f.model.alpha));
+            both("β", &|f| format!("{:.5} 1/m", f.model.beta));
+            both("γ", &|f| format!("{:.5} 1/m", f.model.gamma));
+            both("δ", &|f| {
+                if f.height_range_m.is_some() {
+                    format!("{:.5} 1/m", f.model.delta)
+                } else {
+                    "—".into()
+                }
+            });
+            both("R² of ln CV", &|f| format!("{:.4}", f.r_squared_log));
+            both("relative error", &|f| {
+                format!("median {:.1} %, p95 {:.1} %", 100.0 * f.median_relative_error, 100.0 * f.p95_relative_error)
+            });
+            both("pair ordering", &|f| format!("{:.1} % as eq. 16–23 ranks them", 100.0 * f.pair_order_agreement));
         }
         // Answered before a camera was needed.
         ModelCommand::FitCosts { .. } => {}
         ModelCommand::Heatmap { exponential, out, .. } => {
-            let m = fit.model;
+            let m = planar.model;
             let (title, cv): (&str, &dyn Fn(f64, f64) -> f64) = if exponential {
                 ("Fitted exponential model (eq. 24)", &|x, y| m.cv(x, y))
             } else {
@@ -159,6 +173,28 @@ pub(super) fn parse_objective(text: &str) -> Result<DecisionObjective, String> {
         "cv" => Ok(DecisionObjective::Cv),
         _ => Err("expected `end-point` or `cv`".into()),
     }
+}
+
+/// Parses an error model's name.
+pub(super) fn parse_model(text: &str) -> Result<ErrorModelKind, String> {
+    match text {
+        "geometric" => Ok(ErrorModelKind::Geometric),
+        "geometric-3d" => Ok(ErrorModelKind::Geometric3d),
+        "fitted-exponential" => Ok(ErrorModelKind::FittedExponential),
+        "fitted-exponential-3d" => Ok(ErrorModelKind::FittedExponential3d),
+        _ => Err("expected `geometric`, `geometric-3d`, `fitted-exponential` or `fitted-exponential-3d`".into()),
+    }
+}
+
+/// Parses `LOW..HIGH` heights relative to the cameras, in metres.
+pub(super) fn parse_heights(text: &str) -> Result<[f64; 2], String> {
+    let (a, b) = text.split_once("..").ok_or("expected LOW..HIGH, in metres")?;
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a height in metres"));
+    let (low, high) = (number(a)?, number(b)?);
+    if !(low.is_finite() && high.is_finite() && low <= high && low >= -100.0 && high <= 100.0) {
+        return Err(format!("`{text}`: need −100 ≤ LOW ≤ HIGH ≤ 100 m"));
+    }
+    Ok([low, high])
 }
 
 /// Parses `NEAR..FAR` depths in metres.

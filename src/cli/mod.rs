@@ -19,7 +19,7 @@ mod run;
 mod sweep;
 
 use clap::{Parser, Subcommand};
-use experiment::{parse_depths, parse_objective};
+use experiment::{parse_depths, parse_heights, parse_model, parse_objective};
 use images::{parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
 use std::path::PathBuf;
@@ -27,6 +27,7 @@ use std::process::ExitCode;
 use sweep::{parse_jobs, parse_seeds};
 use ubf_behaviors::DecisionObjective;
 use ubf_core::Registry;
+use ubf_perception::error_model::ErrorModelKind;
 
 /// Exit code for bad input: a malformed file, a bad argument.
 pub const EXIT_BAD_INPUT: u8 = 2;
@@ -464,6 +465,11 @@ enum ExperimentCommand {
         /// thesis's step CV, turns free).
         #[arg(long, default_value = "end-point", value_parser = parse_objective)]
         objective: DecisionObjective,
+        /// The error model the evaluative techniques weigh landmarks by:
+        /// `geometric` (eq. 16–23), `geometric-3d` (also in image rows,
+        /// §5.3.1), `fitted-exponential` or `fitted-exponential-3d`.
+        #[arg(long, default_value = "geometric", value_parser = parse_model)]
+        model: ErrorModelKind,
         /// Drive with the thesis's decoupled motion (turn on the spot, then
         /// translate) instead of the routes' continuous profile.
         #[arg(long)]
@@ -474,7 +480,8 @@ enum ExperimentCommand {
 #[derive(Debug, Subcommand)]
 enum ModelCommand {
     /// Fit the exponential model (eq. 24) to the geometric one (eq. 16–23)
-    /// and report the fit's quality.
+    /// and report the fit's quality: the thesis's planar form beside the 3D
+    /// form, which also counts image motion in rows (§5.3.1).
     Fit {
         #[command(flatten)]
         camera: CameraArgs,
@@ -518,6 +525,10 @@ struct CameraArgs {
     /// Nearest and farthest depth of the fit, m, as `NEAR..FAR`.
     #[arg(long, default_value = "1.2..40", value_parser = parse_depths)]
     depths: [f64; 2],
+    /// Lowest and highest landmark height of the 3D fit, relative to the
+    /// cameras, m, as `LOW..HIGH` (default: the floor to a 2.5 m ceiling).
+    #[arg(long, value_parser = parse_heights, allow_hyphen_values = true)]
+    heights: Option<[f64; 2]>,
 }
 
 /// Whether `ubf` accepts `args` (the words after the program's name) as a

@@ -220,6 +220,12 @@ impl StereoCamera {
         (self.cx() / self.focal_px).atan() + (right / self.focal_px).atan()
     }
 
+    /// How far above and below its optical axis one camera sees, radians.
+    pub fn vertical_reach(&self) -> [f64; 2] {
+        let below = f64::from(self.height_px) - self.cy();
+        [(self.cy() / self.focal_px).atan(), (below / self.focal_px).atan()]
+    }
+
     /// Where `p` (camera frame) appears in both images, or `None` when it is
     /// not in front of the cameras. The pixels may lie outside the images:
     /// see [`StereoCamera::in_images`].
