@@ -79,7 +79,10 @@ done
 "$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes --overwrite >&2
 cp out/keyframes/summary.json out/keyframes.json
 rm -rf "$variants"
-scripts/camera-sources.sh > out/camera-sources.json
+# Where camera steering's error comes from (development layouts), and
+# tracking's on the two held-out layouts where it misses most on route 1->2.
+scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
+scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
     commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484)
