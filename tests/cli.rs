@@ -410,6 +410,15 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     }
     let result = ubf(&["model", "fit", "--depths", "1e-300..1e-299"]);
     assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
+    for (heights, says) in [("1.5..-1", "LOW ≤ HIGH"), ("-1..tall", "`tall` is not a height"), ("-1e9..0", "−100")]
+    {
+        let result = ubf(&["model", "fit", "--heights", heights]);
+        assert_eq!(result.status.code(), Some(2), "{heights}");
+        assert!(text(&result.stderr).contains(says), "{heights}: {}", text(&result.stderr));
+    }
+    let result = ubf(&["experiment", "thesis-endpoint", "--model", "cubic"]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(text(&result.stderr).contains("geometric-3d"), "{}", text(&result.stderr));
     // A recording of a day at 2 pairs a second: about 106 GB of images.
     let day = scenario_file(&dir, r#"Scenario(name: "t", max_time_s: 86400.0, robot: (camera: ()), root: Stop())"#);
     let frames = dir.path().join("frames");
@@ -599,6 +608,21 @@ fn the_tree_is_drawn_with_its_arbiters_weights_and_votes() {
     assert!(mermaid.starts_with("flowchart TD") && mermaid.matches(" --> ").count() == 4, "{mermaid}");
     let missing = ubf(&["tree", "no-such.ron"]);
     assert_eq!(missing.status.code(), Some(2));
+}
+
+#[test]
+fn the_model_fit_reports_the_planar_and_the_3d_form_side_by_side() {
+    let result = ubf(&["model", "fit", "--json", "--heights", "-0.5..0.5"]);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    let fit: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    // The planar fit has no height term; the 3D one a positive one, over
+    // the heights asked for.
+    assert!(fit["planar"]["model"].get("delta").is_none(), "{fit}");
+    assert!(fit["planar"].get("height_range_m").is_none(), "{fit}");
+    assert!(fit["with_height"]["model"]["delta"].as_f64().unwrap() > 0.0, "{fit}");
+    assert_eq!(fit["with_height"]["height_range_m"], serde_json::json!([-0.5, 0.5]));
+    let text = text(&ubf(&["model", "fit"]).stdout);
+    assert!(text.contains("planar (eq. 24)") && text.contains("3D (§5.3.1)"), "{text}");
 }
 
 #[test]
