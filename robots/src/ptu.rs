@@ -443,7 +443,11 @@ pub fn serve_ptu(
         let mut out = String::new();
         for &byte in &buffer[..n] {
             if byte != b' ' && byte != b'\r' && byte != b'\n' {
-                word.push(byte);
+                // A word longer than any command is garbage: kept short, so
+                // a client that never sends a delimiter cannot fill memory.
+                if word.len() < 32 {
+                    word.push(byte);
+                }
                 continue;
             }
             if word.is_empty() {
@@ -481,7 +485,9 @@ fn answer(
 ) -> String {
     let say =
         |verbose: bool, long: String, short: String| if verbose { format!("* {long}") } else { format!("* {short}") };
-    let (name, argument) = text.split_at(text.len().min(2));
+    // Two letters, then the argument; anything may arrive, so by characters.
+    let name_end = text.char_indices().nth(2).map_or(text.len(), |(i, _)| i);
+    let (name, argument) = text.split_at(name_end);
     let value: Option<i64> = (!argument.is_empty()).then(|| argument.parse().ok()).flatten();
     if !argument.is_empty() && value.is_none() {
         return "! Illegal Command argument".into();
@@ -572,5 +578,18 @@ mod tests {
         assert_eq!(first_number("185.1428 seconds arc per Pan position"), Some(185.1428));
         assert_eq!(first_number("no number"), None);
         assert_eq!(first_number("-"), None);
+    }
+
+    #[test]
+    fn the_emulator_refuses_garbage_without_panicking() {
+        let config = PtuEmulatorConfig::default();
+        let mut pan = Axis { position: 0.0, target: 0.0, speed: 1.0, limits: config.pan_limits };
+        let mut tilt = pan;
+        let (mut echo, mut verbose) = (true, true);
+        for garbage in ["\u{fffd}\u{fffd}", "P\u{20ac}5", "€", "PP99999999999999999999", "PPx", "Z"] {
+            let said = answer(garbage, &mut pan, &mut tilt, &mut echo, &mut verbose, &config);
+            assert!(said.starts_with('!'), "{garbage}: {said}");
+        }
+        assert_eq!(pan.target, 0.0);
     }
 }
