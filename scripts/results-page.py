@@ -305,13 +305,8 @@ w("The thesis leaves landmark height out of its evaluation and expects it to hel
 
 def model_gain(technique, route):
     """Geometric mean over the held-out layouts of (3D ÷ planar) end-point error, with a t interval on the logs."""
-    import math
-    logs = [math.log(held3d[l]['routes'][route]['rigid'][technique]['endpoint_error_m']['mean']
-                     / every_held[l]['routes'][route]['rigid'][technique]['endpoint_error_m']['mean']) for l in LAYOUTS]
-    mean = sum(logs) / len(logs)
-    sd = (sum((x - mean) ** 2 for x in logs) / (len(logs) - 1)) ** 0.5
-    half = 2.201 * sd / len(logs) ** 0.5  # t, 11 degrees of freedom
-    return math.exp(mean), math.exp(mean - half), math.exp(mean + half)
+    return geometric_ci([held3d[l]['routes'][route]['rigid'][technique]['endpoint_error_m']['mean']
+                         / every_held[l]['routes'][route]['rigid'][technique]['endpoint_error_m']['mean'] for l in LAYOUTS])
 
 
 w(f"Measured on the {len(LAYOUTS)} held-out layouts (each with its own 30 seeds; the same runs with either model), the end-point error with the 3D model over that with the planar one, geometric mean over layouts [95 % CI]:\n")

@@ -429,6 +429,7 @@ impl ActionAiding {
 
     fn rules(&self, camera: &StereoCamera) -> DecisionRules {
         let c = &self.config;
+        let [up_fov, down_fov] = camera.vertical_reach();
         DecisionRules {
             half_fov: camera.horizontal_fov() / 2.0,
             step_m: c.step_m,
@@ -438,8 +439,8 @@ impl ActionAiding {
             min_stereo_range_m: camera.baseline_m / 2.0 / (c.max_stereo_viewpoint_deg.to_radians() / 2.0).tan(),
             min_landmarks: c.min_landmarks,
             camera_height_m: camera.mount.height,
-            up_fov: camera.vertical_reach()[0],
-            down_fov: camera.vertical_reach()[1],
+            up_fov,
+            down_fov,
         }
     }
 

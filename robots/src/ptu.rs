@@ -308,9 +308,13 @@ impl Ptu {
         let _ = talk.command("H");
     }
 
+    /// The state shared with the thread; a panicked thread leaves it usable.
+    fn shared(&self) -> std::sync::MutexGuard<'_, Shared> {
+        self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
     fn failure(&self) -> Option<RobotError> {
-        let shared = self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        shared
+        self.shared()
             .failure
             .as_ref()
             .map(|e| RobotError::Disconnected(format!("pan-tilt unit on {}: {e}", self.config.connection)))
@@ -322,7 +326,7 @@ impl PanTilt for Ptu {
         if let Some(failure) = self.failure() {
             return Err(failure);
         }
-        self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner).target = Some(aim);
+        self.shared().target = Some(aim);
         Ok(())
     }
 
@@ -330,7 +334,7 @@ impl PanTilt for Ptu {
         if let Some(failure) = self.failure() {
             return Err(failure);
         }
-        let reading = self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner).reading;
+        let reading = self.shared().reading;
         match reading {
             Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok(aim),
             Some((at, _)) => Err(RobotError::Other(format!(
@@ -492,7 +496,13 @@ fn answer(
     if !argument.is_empty() && value.is_none() {
         return "! Illegal Command argument".into();
     }
-    let axis_name = |c: &str| if c.starts_with('P') { "Pan" } else { "Tilt" };
+    if matches!(name, "H" | "HP" | "HT") && value.is_none() {
+        pan.target = pan.position;
+        tilt.target = tilt.position;
+        return "*".into();
+    }
+    // The axis a pan (P…) or tilt (T…) command names.
+    let (axis, axis_name) = if name.starts_with('P') { (pan, "Pan") } else { (tilt, "Tilt") };
     match (name, value) {
         ("ED", None) => {
             *echo = false;
@@ -510,45 +520,35 @@ fn answer(
             *verbose = true;
             "*".into()
         }
-        ("H", None) | ("HP", None) | ("HT", None) => {
-            pan.target = pan.position;
-            tilt.target = tilt.position;
-            "*".into()
-        }
         ("PR" | "TR", None) => say(
             *verbose,
-            format!("{} seconds arc per {} position", config.arc_seconds_per_step, axis_name(name)),
+            format!("{} seconds arc per {axis_name} position", config.arc_seconds_per_step),
             config.arc_seconds_per_step.to_string(),
         ),
         ("PN" | "TN" | "PX" | "TX", None) => {
-            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
             let (word, limit) =
                 if name.ends_with('N') { ("Minimum", axis.limits[0]) } else { ("Maximum", axis.limits[1]) };
-            say(*verbose, format!("{word} {} position is {limit}", axis_name(name)), limit.to_string())
+            say(*verbose, format!("{word} {axis_name} position is {limit}"), limit.to_string())
         }
         ("PP" | "TP", None) => {
-            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
             let at = axis.position.round() as i64;
-            say(*verbose, format!("Current {} position is {at}", axis_name(name)), at.to_string())
+            say(*verbose, format!("Current {axis_name} position is {at}"), at.to_string())
         }
         ("PP" | "TP", Some(target)) => {
-            let axis = if name.starts_with('P') { pan } else { tilt };
             if target > axis.limits[1] {
-                format!("! Maximum allowable {} position is {}", axis_name(name), axis.limits[1])
+                format!("! Maximum allowable {axis_name} position is {}", axis.limits[1])
             } else if target < axis.limits[0] {
-                format!("! Minimum allowable {} position is {}", axis_name(name), axis.limits[0])
+                format!("! Minimum allowable {axis_name} position is {}", axis.limits[0])
             } else {
                 axis.target = target as f64;
                 "*".into()
             }
         }
         ("PS" | "TS", Some(speed)) if speed > 0 => {
-            let axis = if name.starts_with('P') { pan } else { tilt };
             axis.speed = speed as f64;
             "*".into()
         }
         ("PS" | "TS", None) => {
-            let axis = if name.starts_with('P') { &*pan } else { &*tilt };
             say(*verbose, format!("Target speed is {} positions/sec", axis.speed), axis.speed.to_string())
         }
         _ => "! Illegal Command argument".into(),

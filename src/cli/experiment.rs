@@ -186,11 +186,17 @@ pub(super) fn parse_model(text: &str) -> Result<ErrorModelKind, String> {
     }
 }
 
+/// Splits `A..B` into two numbers of metres, naming each (`depth`,
+/// `height`) and the form (`NEAR..FAR`) in its errors.
+fn parse_metres_pair(text: &str, form: &str, each: &str) -> Result<[f64; 2], String> {
+    let (a, b) = text.split_once("..").ok_or_else(|| format!("expected {form}, in metres"))?;
+    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a {each} in metres"));
+    Ok([number(a)?, number(b)?])
+}
+
 /// Parses `LOW..HIGH` heights relative to the cameras, in metres.
 pub(super) fn parse_heights(text: &str) -> Result<[f64; 2], String> {
-    let (a, b) = text.split_once("..").ok_or("expected LOW..HIGH, in metres")?;
-    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a height in metres"));
-    let (low, high) = (number(a)?, number(b)?);
+    let [low, high] = parse_metres_pair(text, "LOW..HIGH", "height")?;
     if !(low.is_finite() && high.is_finite() && low <= high && low >= -100.0 && high <= 100.0) {
         return Err(format!("`{text}`: need −100 ≤ LOW ≤ HIGH ≤ 100 m"));
     }
@@ -199,9 +205,7 @@ pub(super) fn parse_heights(text: &str) -> Result<[f64; 2], String> {
 
 /// Parses `NEAR..FAR` depths in metres.
 pub(super) fn parse_depths(text: &str) -> Result<[f64; 2], String> {
-    let (a, b) = text.split_once("..").ok_or("expected NEAR..FAR, in metres")?;
-    let number = |s: &str| s.trim().parse::<f64>().map_err(|_| format!("`{s}` is not a depth in metres"));
-    let (near, far) = (number(a)?, number(b)?);
+    let [near, far] = parse_metres_pair(text, "NEAR..FAR", "depth")?;
     if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far && far <= 1000.0) {
         return Err(format!("`{text}`: need 0 < NEAR < FAR ≤ 1000 m"));
     }
