@@ -530,22 +530,34 @@ fn rotation(yaw: f64) -> Matrix2<f64> {
 }
 
 /// The information matrix (inverse covariance) of the residual
-/// `a − (R b + t)` of one landmark seen as `a` before and `b` after a move.
+/// `a − (R b + t)` of one landmark seen as `a` before and `b` after a move
+/// that turned by `yaw`.
 ///
 /// Stereo measures a point's bearing well and its range poorly, so each
-/// observation's uncertainty is an ellipse stretched along its line of sight.
-/// Once the frames are aligned, `R b` lies on `a`'s line of sight, so both
-/// ellipses stretch along it: the variances add along and across that line.
-/// (Adding `b`'s ellipse unrotated would tilt it by the turn between frames,
-/// and a tilted depth error passes for a precise bearing.)
-fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b: [f64; 3]) -> Matrix2<f64> {
+/// observation's uncertainty is an ellipse stretched along its own line of
+/// sight, and the residual's is the two added: `a`'s along the line from
+/// where the robot was, `b`'s along the line from where it is now, which in
+/// the earlier frame runs along `R b`. Between viewpoints metres apart the
+/// two lines differ by a few degrees, and a far landmark's depth error,
+/// taken to lie along the other line, passes for a precise bearing (laying
+/// both ellipses along `a`'s line, as this model once did, left egomotion
+/// 20 % further off after 35 m of straight driving; see the results page).
+fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b: [f64; 3], yaw: f64) -> Matrix2<f64> {
     let range_a = a[0].hypot(a[1]).max(0.1);
     let range_b = b[0].hypot(b[1]).max(0.1);
-    let along = Vector2::new(a[0], a[1]) / range_a;
-    let across = Vector2::new(-along[1], along[0]);
-    let var_along = camera.depth_sigma(range_a, pixel_sigma).powi(2) + camera.depth_sigma(range_b, pixel_sigma).powi(2);
-    let var_across = ((range_a.powi(2) + range_b.powi(2)) * (pixel_sigma / camera.focal_px).powi(2)).max(1e-8);
-    along * along.transpose() / var_along.max(1e-8) + across * across.transpose() / var_across
+    let (depth_a, depth_b) = (camera.depth_sigma(range_a, pixel_sigma), camera.depth_sigma(range_b, pixel_sigma));
+    let bearing2 = (pixel_sigma / camera.focal_px).powi(2);
+    let line_a = Vector2::new(a[0], a[1]) / range_a;
+    let line_b = rotation(yaw) * Vector2::new(b[0], b[1]) / range_b;
+    // An ellipse along `line` with these variances along and across it.
+    let ellipse = |line: Vector2<f64>, along: f64, across: f64| {
+        let normal = Vector2::new(-line[1], line[0]);
+        line * line.transpose() * along + normal * normal.transpose() * across
+    };
+    let covariance = ellipse(line_a, depth_a.powi(2), range_a.powi(2) * bearing2)
+        + ellipse(line_b, depth_b.powi(2), range_b.powi(2) * bearing2)
+        + Matrix2::identity() * 1e-8;
+    covariance.try_inverse().unwrap_or_else(Matrix2::zeros)
 }
 
 impl Rigid {
@@ -598,18 +610,26 @@ impl Rigid {
         h.try_inverse().map(|c| c * (cost / dof).max(1.0))
     }
 
+    /// The motion between the frames of `pairs`, the landmarks it rests
+    /// on and its covariance. `turned` is the turn between the frames as
+    /// odometry measured it (or, without odometry, as egomotion last put
+    /// it): it lays each landmark's later line of sight in the earlier
+    /// frame. The visual estimate's own turn would not do: far landmarks
+    /// leave it coupled with the sideways motion, and a tenth of a degree
+    /// off tilts a far landmark's depth error into a false bearing.
     fn estimate(
         config: &RigidConfig,
         camera: &StereoCamera,
         pairs: &[Pair],
         max_step: f64,
+        turned: f64,
         rng: &mut ChaCha8Rng,
     ) -> Option<(PlanarMotion, usize, Matrix3<f64>)> {
         if pairs.len() < 3 {
             return None;
         }
         let info: Vec<Matrix2<f64>> =
-            pairs.iter().map(|p| residual_information(camera, config.pixel_sigma, p.before, p.after)).collect();
+            pairs.iter().map(|p| residual_information(camera, config.pixel_sigma, p.before, p.after, turned)).collect();
         let mahalanobis = |yaw: f64, t: &Vector2<f64>, i: usize| {
             let p = &pairs[i];
             let e = Vector2::new(p.before[0], p.before[1]) - (rotation(yaw) * Vector2::new(p.after[0], p.after[1]) + t);
@@ -765,6 +785,13 @@ impl Tracker {
     /// What egomotion has made of the frames so far.
     pub fn state(&self) -> EgomotionState {
         self.state
+    }
+
+    /// The covariance of the latest pose (x, y, heading) as the estimator's
+    /// own information puts it: the anchor keyframe's chained estimates and
+    /// the latest match to it.
+    pub fn pose_covariance(&self) -> Matrix3<f64> {
+        self.covariance
     }
 
     /// The error model's look-up table the tracker weighs landmarks with.
@@ -1027,8 +1054,11 @@ impl Tracker {
         let (motion, landmarks, covariance) = match &self.config.estimator {
             EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase)
                 .map(|(motion, landmarks)| (motion, landmarks, None)),
-            EstimatorKind::Rigid(c) => Rigid::estimate(c, &self.camera, &self.pairs, max_step, &mut self.rng)
-                .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance))),
+            EstimatorKind::Rigid(c) => {
+                let turned = odometry.relative_to(&keyframe.odometry).theta;
+                Rigid::estimate(c, &self.camera, &self.pairs, max_step, turned, &mut self.rng)
+                    .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance)))
+            }
         }?;
         // Frames that share landmarks cannot have looked further apart than
         // the view is wide, nor can the robot have turned faster than it
@@ -1285,6 +1315,53 @@ mod tests {
             }
         }
         observations
+    }
+
+    #[test]
+    fn the_residual_information_matches_the_spread_of_stereo_residuals() {
+        use rand::{Rng, SeedableRng};
+        // A landmark 40 m off, seen before and after 10 m of driving and a 3°
+        // turn, each time through noisy pixels: at the true motion, the
+        // residuals weighed by the model's information are χ² with two
+        // degrees of freedom (mean 2). Laying both ellipses along the first
+        // line of sight, as the model once did, ignores the parallax between
+        // the viewpoints, and the far depth error, tilted by it, passes for
+        // a precise bearing.
+        let camera = StereoCamera::default();
+        let pixel_sigma = 0.3;
+        let motion = Pose2::new(10.0, 0.5, 3f64.to_radians());
+        let landmark = (40.0, 8.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut gaussian = move || {
+            let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-12), rng.random());
+            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        let mut observe = |from: &Pose2| {
+            let seen = Pose2::new(landmark.0, landmark.1, 0.0).relative_to(from);
+            let (x, y) = (seen.x, seen.y);
+            let exact = camera.project(camera.mount.robot_to_cam([x, y, camera.mount.height])).unwrap();
+            let noisy = StereoPixels {
+                u_left: exact.u_left + pixel_sigma * gaussian(),
+                u_right: exact.u_right + pixel_sigma * gaussian(),
+                v: exact.v + pixel_sigma * gaussian(),
+            };
+            camera.mount.cam_to_robot(camera.triangulate(&noisy).unwrap())
+        };
+        let (mut new, mut old, n) = (0.0, 0.0, 4000);
+        for _ in 0..n {
+            let (a, b) = (observe(&Pose2::default()), observe(&motion));
+            let e = Vector2::new(a[0], a[1])
+                - (rotation(motion.theta) * Vector2::new(b[0], b[1]) + Vector2::new(motion.x, motion.y));
+            let info = residual_information(&camera, pixel_sigma, a, b, motion.theta);
+            new += (e.transpose() * info * e)[0] / f64::from(n);
+            // `b` turned onto `a`'s line of sight: the old model.
+            let range_b = b[0].hypot(b[1]);
+            let along_a = rotation(-motion.theta) * Vector2::new(a[0], a[1]) * (range_b / a[0].hypot(a[1]));
+            let info = residual_information(&camera, pixel_sigma, a, [along_a[0], along_a[1], b[2]], motion.theta);
+            old += (e.transpose() * info * e)[0] / f64::from(n);
+        }
+        assert!((1.6..2.4).contains(&new), "χ² mean {new}");
+        assert!(old > 2.0 * new, "the old model's χ² mean {old}, the new {new}");
     }
 
     fn at(number: u64, time: f64, landmarks: Vec<LandmarkObservation>) -> StereoFrame {
