@@ -20,6 +20,7 @@ for route in route-1-2 route-2-1 feature-poor; do
         sed "s/technique: None/technique: $technique, objective: Cv/" \
             "scenarios/thesis/$route.ron" > "$scenarios/$route-$technique.ron"
     done
+    sed "s/technique: None/technique: Tracking/" "scenarios/thesis/$route.ron" > "$scenarios/$route-Tracking-EndPoint.ron"
 done
 rm -rf "$out"
 "$ubf" sweep "$scenarios"/*.ron --seeds "$seeds" --out "$out" --trajectories >&2

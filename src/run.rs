@@ -68,6 +68,10 @@ pub struct RunReport {
     /// driven (from odometry and the step CVs, with the default
     /// coefficients), m: compare with `endpoint_error_m`.
     pub predicted_endpoint_sigma_m: Option<f64>,
+    /// The position σ of the last pose by egomotion's own covariance (the
+    /// estimator's inverse information, chained through the keyframes),
+    /// m: a second prediction to compare with `endpoint_error_m`.
+    pub egomotion_sigma_m: Option<f64>,
     /// Egomotion outages: stretches of frames no keyframe matched, bridged
     /// by odometry.
     pub outages: Option<u32>,
@@ -117,6 +121,9 @@ impl std::fmt::Display for RunReport {
             writeln!(f, "egomotion       end-point error {error:.2} m; {steps} steps, {failures} failed")?;
             if let Some(sigma) = self.predicted_endpoint_sigma_m {
                 writeln!(f, "predicted       end-point σ {sigma:.2} m (the decision's error model)")?;
+            }
+            if let Some(sigma) = self.egomotion_sigma_m {
+                writeln!(f, "                σ {sigma:.2} m (egomotion's own covariance)")?;
             }
             writeln!(
                 f,
@@ -265,6 +272,10 @@ pub fn run_until(
     }
 
     let egomotion = robot.tracker().map(|t| t.state());
+    let egomotion_sigma = robot.tracker().map(|t| {
+        let c = t.pose_covariance();
+        (c[(0, 0)] + c[(1, 1)]).sqrt()
+    });
     let sim = robot.inner();
     let (truth, estimate) = (sim.true_pose(), sim.odometry_pose());
     let endpoint_error =
@@ -291,6 +302,7 @@ pub fn run_until(
         predicted_endpoint_sigma_m: egomotion
             .and(end_point.odometry_at_frame)
             .map(|p| end_point.predictor.sigma((p.x, p.y))),
+        egomotion_sigma_m: egomotion_sigma,
         outages: egomotion.map(|e| e.outages),
         outage_s: egomotion.map(|e| e.outage_s),
         outage_m: egomotion.map(|e| e.outage_m),
