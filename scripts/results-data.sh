@@ -16,6 +16,7 @@ ubf=target/release/ubf
 "$ubf" experiment thesis-table2 --json > out/table2.json
 OUT=out/fit-costs scripts/fit-costs.sh --json > out/fit-costs.json
 SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs-130.json
+python3 scripts/fit-costs-check.py out/fit-costs-130 > out/fit-costs-check.txt
 "$ubf" experiment thesis-table4 --json > out/table4.json
 "$ubf" experiment thesis-endpoint --json > out/endpoint.json
 "$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
@@ -83,9 +84,12 @@ rm -rf "$variants"
 # tracking's on the two held-out layouts where it misses most on route 1->2.
 scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
 scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
+# How much the end point depends on the line driven: ten training layouts,
+# kept apart from every held-out table, on the cost fit's seeds.
+scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
-    commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484)
+    commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484 8c2df86)
     scratch=$(mktemp -d)
     trap 'git worktree remove --force "$scratch/tree" 2>/dev/null || true; rm -rf "$scratch"' EXIT
     for k in "${!commits[@]}"; do
