@@ -106,11 +106,16 @@ def nnls(rows, columns):
     return {}
 
 
+if len(sys.argv) != 2:
+    sys.exit(f"usage: {sys.argv[0]} LOGDIR   (the OUT directory of scripts/fit-costs.sh)")
 runs = []
 for path in glob.glob(os.path.join(sys.argv[1], '**', 'trajectory.csv'), recursive=True):
-    seed = int(re.search(r'seed-(\d+)', path).group(1))
-    runs.append((seed, checkpoints(path)))
+    seed = re.search(r'seed-(\d+)', path)
+    if seed:  # a sweep's layout: DIR/SCENARIO/seed-N/trajectory.csv
+        runs.append((int(seed.group(1)), checkpoints(path)))
 seeds = sorted({s for s, _ in runs})
+if len(seeds) < 3:
+    sys.exit(f"{sys.argv[1]}: need logs of at least three seeds (seed-N directories with trajectory.csv), found {len(seeds)}")
 cut = seeds[len(seeds) * 2 // 3]
 train = [c for s, cs in runs if s < cut for c in cs]
 test = [c for s, cs in runs if s >= cut for c in cs if c[2]]

@@ -271,11 +271,15 @@ pub fn run_until(
         return Err(e);
     }
 
-    let egomotion = robot.tracker().map(|t| t.state());
-    let egomotion_sigma = robot.tracker().map(|t| {
-        let c = t.pose_covariance();
-        (c[(0, 0)] + c[(1, 1)]).sqrt()
-    });
+    // What egomotion made of the run, and the position σ its own
+    // covariance gives the last pose.
+    let (egomotion, egomotion_sigma) = robot
+        .tracker()
+        .map(|t| {
+            let c = t.pose_covariance();
+            (t.state(), (c[(0, 0)] + c[(1, 1)]).sqrt())
+        })
+        .unzip();
     let sim = robot.inner();
     let (truth, estimate) = (sim.true_pose(), sim.odometry_pose());
     let endpoint_error =

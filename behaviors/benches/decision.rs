@@ -6,51 +6,19 @@
 //! `cargo bench -p ubf-behaviors --bench decision`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
-use ubf_behaviors::decision::{best_heading, best_look, DecisionCosts, DecisionRules, Objective};
+use ubf_behaviors::decision::{best_heading, best_look, Objective};
 use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
+
+#[path = "common/decision_case.rs"]
+mod case;
 
 fn decision(c: &mut Criterion) {
     let camera = StereoCamera::default();
     let table = CvTable::for_camera(ErrorModelKind::Geometric, &camera, MODEL_STEP_M, 80.0);
-    let rules = DecisionRules {
-        half_fov: camera.horizontal_fov() / 2.0,
-        step_m: 1.0,
-        min_slant_m: 0.5,
-        max_range_m: 80.0,
-        baseline_m: camera.baseline_m,
-        min_stereo_range_m: 1.12,
-        min_landmarks: 4,
-        camera_height_m: 1.0,
-        up_fov: camera.vertical_reach()[0],
-        down_fov: camera.vertical_reach()[1],
-    };
-    // 1 000 landmarks on the walls and far end of a 6 m × 60 m corridor,
-    // 0.3 to 2 m above the floor (as the route scenarios place them).
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let at = (10.0, 0.0);
-    let landmarks: Vec<[f64; 3]> = (0..1000)
-        .map(|_| {
-            let height = rng.random_range(0.3..2.0);
-            match rng.random_range(0..3) {
-                0 => [rng.random_range(0.0..60.0), 3.0, height],
-                1 => [rng.random_range(0.0..60.0), -3.0, height],
-                _ => [60.0, rng.random_range(-3.0..3.0), height],
-            }
-        })
-        .collect();
-    let objective = Objective::EndPoint {
-        heading: 0.1,
-        goal_bearing: 0.0,
-        remaining_m: 30.0,
-        turn_tolerance: 2f64.to_radians(),
-        costs: DecisionCosts::default(),
-    };
-    // 73 headings: ±90° every 2.5°.
-    let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
+    let (rules, landmarks, objective, candidates, at) =
+        (case::rules(&camera), case::landmarks(), case::objective(), case::candidates(), case::AT);
     c.bench_function("decision/73_headings_1000_landmarks", |b| {
         b.iter(|| black_box(best_heading(&table, &rules, &landmarks, at, candidates.iter().copied(), &objective)))
     });

@@ -11,12 +11,13 @@
 //! The difference of the two totals over 20 is one decision's count. The
 //! model is `geometric`, `geometric-3d` or `exponential-3d`.
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
-use ubf_behaviors::decision::{best_heading, DecisionCosts, DecisionRules, Objective};
+use ubf_behaviors::decision::best_heading;
 use ubf_perception::error_model::{CvTable, ErrorModelKind, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
+
+#[path = "../benches/common/decision_case.rs"]
+mod case;
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -30,45 +31,14 @@ fn main() {
     };
     let camera = StereoCamera::default();
     let table = CvTable::for_camera(kind, &camera, MODEL_STEP_M, 80.0);
-    let [up_fov, down_fov] = camera.vertical_reach();
-    let rules = DecisionRules {
-        half_fov: camera.horizontal_fov() / 2.0,
-        step_m: 1.0,
-        min_slant_m: 0.5,
-        max_range_m: 80.0,
-        baseline_m: camera.baseline_m,
-        min_stereo_range_m: 1.12,
-        min_landmarks: 4,
-        camera_height_m: 1.0,
-        up_fov,
-        down_fov,
-    };
-    // The same landmarks as `benches/decision.rs`.
-    let mut rng = ChaCha8Rng::seed_from_u64(1);
-    let landmarks: Vec<[f64; 3]> = (0..1000)
-        .map(|_| {
-            let height = rng.random_range(0.3..2.0);
-            match rng.random_range(0..3) {
-                0 => [rng.random_range(0.0..60.0), 3.0, height],
-                1 => [rng.random_range(0.0..60.0), -3.0, height],
-                _ => [60.0, rng.random_range(-3.0..3.0), height],
-            }
-        })
-        .collect();
-    let objective = Objective::EndPoint {
-        heading: 0.1,
-        goal_bearing: 0.0,
-        remaining_m: 30.0,
-        turn_tolerance: 2f64.to_radians(),
-        costs: DecisionCosts::default(),
-    };
-    let candidates: Vec<f64> = (-36..=36).map(|k| f64::from(k) * 2.5f64.to_radians()).collect();
+    let (rules, landmarks, objective, candidates) =
+        (case::rules(&camera), case::landmarks(), case::objective(), case::candidates());
     for _ in 0..n {
         black_box(best_heading(
             &table,
             &rules,
             black_box(&landmarks),
-            (10.0, 0.0),
+            case::AT,
             candidates.iter().copied(),
             &objective,
         ));
