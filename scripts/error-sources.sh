@@ -23,28 +23,25 @@ cargo build --release --quiet
 ubf=target/release/ubf
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-for layout in $layouts; do
-    for route in $routes; do
-        for variant in base no-outliers no-pixel-noise no-slip no-noise $variants; do
-            slip=0.2 outliers=0.08 pixels=0.047 aided_unit=$unit aided_tree=$tree
-            case $variant in
-                no-outliers) outliers=0.0 ;;
-                no-pixel-noise) pixels=0.0 ;;
-                no-slip) slip=0.0 ;;
-                no-noise) slip=0.0 outliers=0.0 pixels=0.0 ;;
-                exact-encoders) slip=0.0 outliers=0.0 pixels=0.0 aided_unit='pan_tilt: (noise_deg: 0.0, resolution_deg: 0.0), ' ;;
-                dear-turns) aided_tree="$tree, costs: (heading_var_per_turn: 3.6e-5, heading_var_per_rad: 2.79e-5)" ;;
-            esac
-            edits=(-E -e "s/(random_landmarks: \(.*seed: )[0-9]+\)/\1$layout)/"
-                -e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: $slip/"
-                -e "s/pixel_noise_px: 0.047, outlier_share: 0.08/pixel_noise_px: $pixels, outlier_share: $outliers/")
-            sed "${edits[@]}" "scenarios/thesis/$route.ron" > "$work/$layout~$route~$variant~straight.ron"
-            sed "${edits[@]}" -e "s/technique: None/$aided_tree/" \
-                -e "s/camera: \(/camera: ($aided_unit/" "scenarios/thesis/$route.ron" > "$work/$layout~$route~$variant~aided.ron"
-        done
+for route in $routes; do
+    for variant in base no-outliers no-pixel-noise no-slip no-noise $variants; do
+        slip=0.2 outliers=0.08 pixels=0.047 aided_unit=$unit aided_tree=$tree
+        case $variant in
+            no-outliers) outliers=0.0 ;;
+            no-pixel-noise) pixels=0.0 ;;
+            no-slip) slip=0.0 ;;
+            no-noise) slip=0.0 outliers=0.0 pixels=0.0 ;;
+            exact-encoders) slip=0.0 outliers=0.0 pixels=0.0 aided_unit='pan_tilt: (noise_deg: 0.0, resolution_deg: 0.0), ' ;;
+            dear-turns) aided_tree="$tree, costs: (heading_var_per_turn: 3.6e-5, heading_var_per_rad: 2.79e-5)" ;;
+        esac
+        edits=(-E -e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: $slip/"
+            -e "s/pixel_noise_px: 0.047, outlier_share: 0.08/pixel_noise_px: $pixels, outlier_share: $outliers/")
+        sed "${edits[@]}" "scenarios/thesis/$route.ron" > "$work/$route~$variant~straight.ron"
+        sed "${edits[@]}" -e "s/technique: None/$aided_tree/" \
+            -e "s/camera: \(/camera: ($aided_unit/" "scenarios/thesis/$route.ron" > "$work/$route~$variant~aided.ron"
     done
 done
-"$ubf" sweep "$work"/*.ron --seeds "$seeds" --out "$work/runs" >&2
+"$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
 python3 - "$work/runs" <<'EOF'
 import glob, json, math, os, sys
 from statistics import mean, stdev
@@ -52,7 +49,8 @@ from statistics import mean, stdev
 runs = {}
 for path in glob.glob(os.path.join(sys.argv[1], '*', '*', 'report.json')):
     scenario, seed = path.split(os.sep)[-3:-1]
-    layout, route, variant, steer = scenario.split('~')
+    kind, layout = scenario.split('@')
+    route, variant, steer = kind.split('~')
     runs.setdefault((route, variant), {}).setdefault((layout, seed), {})[steer] = json.load(open(path))
 out = {}
 for (route, variant), pairs in sorted(runs.items()):

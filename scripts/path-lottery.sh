@@ -23,17 +23,13 @@ cargo build --release --quiet
 ubf=target/release/ubf
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-for layout in $layouts; do
-    for line in -0.6 0.0 0.6; do
-        sed -E -e "s/(random_landmarks: \(.*seed: )[0-9]+\)/\1$layout)/" \
-            -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $line)/" \
-            -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $line,/" \
-            scenarios/thesis/route-1-2.ron > "$work/$layout~$line.ron"
-    done
-    sed -E -e "s/(random_landmarks: \(.*seed: )[0-9]+\)/\1$layout)/" -e "s/technique: None/technique: Tracking/" \
-        scenarios/thesis/route-1-2.ron > "$work/$layout~tracking.ron"
+for line in -0.6 0.0 0.6; do
+    sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $line)/" \
+        -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $line,/" \
+        scenarios/thesis/route-1-2.ron > "$work/$line.ron"
 done
-"$ubf" sweep "$work"/*.ron --seeds "$seeds" --out "$work/runs" >&2
+sed -e "s/technique: None/technique: Tracking/" scenarios/thesis/route-1-2.ron > "$work/tracking.ron"
+"$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
 python3 - "$work/runs" <<'EOF'
 import glob, json, math, os, sys
 from statistics import mean
@@ -51,7 +47,7 @@ def correlation(pairs):
 runs = {}
 for path in glob.glob(os.path.join(sys.argv[1], '*', '*', 'report.json')):
     scenario = path.split(os.sep)[-3]
-    layout, line = scenario.split('~')
+    line, layout = scenario.split('@')
     runs.setdefault(layout, {}).setdefault(line, []).append(json.load(open(path)))
 predictions = {'decision_model': 'predicted_endpoint_sigma_m', 'egomotion_covariance': 'egomotion_sigma_m'}
 layouts = {}

@@ -154,3 +154,46 @@ fn shards_merged_give_the_same_summary_byte_for_byte() {
     let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..3", "--out", "unused", "--shard", "3/3"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// A report without its wall-clock time, the one field that differs
+/// between two runs of the same scenario and seed.
+fn report_without_wall_time(path: &Path) -> serde_json::Value {
+    let mut report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    report.as_object_mut().unwrap().remove("wall_time_s");
+    report
+}
+
+#[test]
+fn layout_seeds_redraw_the_landmarks_as_the_scenario_file_would() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("layouts");
+    let route = "scenarios/thesis/route-1-2.ron";
+    let sweep = ubf(&["sweep", route, "--seeds", "0", "--layout-seeds", "2121,2222", "--out", out.to_str().unwrap()]);
+    assert!(sweep.status.success(), "{}", String::from_utf8_lossy(&sweep.stderr));
+    // The same run with the layout's seed written into the file.
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(route)).unwrap();
+    let edited = dir.path().join("route-1-2.ron");
+    std::fs::write(&edited, text.replace("seed: 12)", "seed: 2222)")).unwrap();
+    let by_file = dir.path().join("by-file");
+    let sweep = ubf(&["sweep", edited.to_str().unwrap(), "--seeds", "0", "--out", by_file.to_str().unwrap()]);
+    assert!(sweep.status.success(), "{}", String::from_utf8_lossy(&sweep.stderr));
+
+    let report = |dir: &Path, label: &str| report_without_wall_time(&dir.join(label).join("seed-0/report.json"));
+    assert_eq!(report(&out, "route-1-2@2222"), report(&by_file, "route-1-2"));
+    assert_ne!(report(&out, "route-1-2@2121"), report(&out, "route-1-2@2222"));
+}
+
+#[test]
+fn layout_seeds_are_refused_where_nothing_can_be_redrawn() {
+    let cases = [
+        ("scenarios/goto-open-floor.ron", "5", "scenarios/goto-open-floor.ron: --layout-seeds redraws"),
+        ("scenarios/thesis/route-1-2.ron", "5,3..7", "layout seed 5 is listed twice"),
+        ("scenarios/thesis/route-1-2.ron", "5,x", "`x` is not a seed"),
+    ];
+    for (file, layouts, message) in cases {
+        let out = ubf(&["sweep", file, "--seeds", "0", "--layout-seeds", layouts, "--out", "unused"]);
+        assert_eq!(out.status.code(), Some(2), "{layouts}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(message), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("unused").exists());
+}

@@ -183,6 +183,11 @@ enum Command {
         /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
         #[arg(long, required = true, value_parser = parse_seeds)]
         seeds: Option<std::ops::Range<u64>>,
+        /// Also run each scenario in these landmark layouts (its
+        /// `random_landmarks` redrawn from each seed: `2121,2222,3000..3003`),
+        /// labelled `NAME@SEED`: results on layouts nobody tuned on.
+        #[arg(long, value_name = "SEEDS", value_parser = sweep::parse_layout_seeds)]
+        layout_seeds: Option<sweep::LayoutSeeds>,
         /// Runs at once (at least 1); by default one per core.
         #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
@@ -572,12 +577,32 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Tree { file, mermaid } => inspect::tree(&registry, &file, mermaid),
         Command::Behaviors { describe, names } => inspect::behaviors(&registry, describe, &names),
         Command::Sweep { action: Some(SweepAction::Merge { dirs, out }), .. } => sweep::merge(&dirs, out.as_deref()),
-        Command::Sweep { action: None, files, seeds, jobs, out, shard, trajectories, overwrite, huge } => {
+        Command::Sweep {
+            action: None,
+            files,
+            seeds,
+            layout_seeds,
+            jobs,
+            out,
+            shard,
+            trajectories,
+            overwrite,
+            huge,
+        } => {
             let (Some(seeds), Some(out)) = (seeds, out) else {
                 unreachable!("clap requires --seeds and --out without a subcommand")
             };
-            let request =
-                sweep::SweepRequest { files: &files, seeds, shard, jobs, out: &out, trajectories, overwrite, huge };
+            let request = sweep::SweepRequest {
+                files: &files,
+                seeds,
+                layout_seeds: layout_seeds.as_ref().map(|l| l.0.as_slice()),
+                shard,
+                jobs,
+                out: &out,
+                trajectories,
+                overwrite,
+                huge,
+            };
             sweep::command(&registry, request)
         }
         Command::Model { action } => experiment::model(&registry, action),

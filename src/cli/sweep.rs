@@ -13,6 +13,7 @@ const MOST_SWEEP_RUNS: u64 = 100_000;
 pub(super) struct SweepRequest<'a> {
     pub files: &'a [PathBuf],
     pub seeds: std::ops::Range<u64>,
+    pub layout_seeds: Option<&'a [u64]>,
     pub shard: Option<Shard>,
     pub jobs: Option<usize>,
     pub out: &'a Path,
@@ -24,13 +25,14 @@ pub(super) struct SweepRequest<'a> {
 /// Runs every scenario with every seed (or a shard's share of them) and
 /// summarises; exit code 1 if any run failed.
 pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
-    let SweepRequest { files, seeds, shard, jobs, out, trajectories, overwrite, huge } = request;
+    let SweepRequest { files, seeds, layout_seeds, shard, jobs, out, trajectories, overwrite, huge } = request;
     let share = shard.map_or(1, |s| s.count);
-    let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).div_ceil(share);
+    let layouts = layout_seeds.map_or(1, <[u64]>::len) as u64;
+    let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).saturating_mul(layouts).div_ceil(share);
     if runs > MOST_SWEEP_RUNS && !huge {
         return Err(CliError::bad_input(format!(
-            "{runs} runs ({} seeds × {} files), more than {MOST_SWEEP_RUNS}: each leaves a \
-             directory and a report; narrow --seeds, or pass --huge to run them anyway",
+            "{runs} runs ({} seeds × {} files × {layouts} layouts), more than {MOST_SWEEP_RUNS}: each \
+             leaves a directory and a report; narrow --seeds, or pass --huge to run them anyway",
             seeds.end - seeds.start,
             files.len()
         )));
@@ -44,13 +46,17 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
         let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
         let scenario = loaded.map_err(CliError::bad_input)?;
         let stem = file.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned());
-        let mut label = stem.clone();
-        let mut n = 2;
-        while items.iter().any(|i| i.label == label) {
-            label = format!("{stem}_{n}");
-            n += 1;
+        for (scenario, stem) in in_layouts(scenario, &stem, layout_seeds)
+            .map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?
+        {
+            let mut label = stem.clone();
+            let mut n = 2;
+            while items.iter().any(|i| i.label == label) {
+                label = format!("{stem}_{n}");
+                n += 1;
+            }
+            items.push(SweepItem { scenario, label });
         }
-        items.push(SweepItem { scenario, label });
     }
     let jobs = jobs.unwrap_or_else(super::cores);
     let stopwatch = ubf_core::Stopwatch::start();
@@ -96,6 +102,26 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
         eprintln!("error: {label} seed {seed}: {error}");
     }
     Ok(if failed.is_empty() { Exit::Success } else { Exit::Failure })
+}
+
+/// `scenario` once per layout seed, its random landmarks redrawn from each
+/// and its label `stem@seed`; or as it is, labelled `stem`, without
+/// layout seeds.
+fn in_layouts(scenario: Scenario, stem: &str, layout_seeds: Option<&[u64]>) -> Result<Vec<(Scenario, String)>, String> {
+    let Some(layout_seeds) = layout_seeds else { return Ok(vec![(scenario, stem.to_owned())]) };
+    if scenario.world.random_landmarks.is_none() {
+        return Err("--layout-seeds redraws a scenario's `random_landmarks`, and this one has none".into());
+    }
+    Ok(layout_seeds
+        .iter()
+        .map(|&seed| {
+            let mut redrawn = scenario.clone();
+            if let Some(landmarks) = redrawn.world.random_landmarks.as_mut() {
+                landmarks.seed = Some(seed);
+            }
+            (redrawn, format!("{stem}@{seed}"))
+        })
+        .collect())
 }
 
 /// Combines shards into the summary one sweep writes.
@@ -198,6 +224,31 @@ pub(super) fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
     }
     Ok(range)
 }
+
+/// Landmark layout seeds: a comma-separated list of seeds and ranges as
+/// [`parse_seeds`] reads them (`2121,2222,3000..3003`), each at most once.
+pub(super) fn parse_layout_seeds(text: &str) -> Result<LayoutSeeds, String> {
+    let mut seeds = Vec::new();
+    for part in text.split(',') {
+        for seed in parse_seeds(part)? {
+            if seeds.contains(&seed) {
+                return Err(format!("layout seed {seed} is listed twice"));
+            }
+            if seeds.len() == MOST_LAYOUTS {
+                return Err(format!("`{text}` holds more than {MOST_LAYOUTS} layout seeds"));
+            }
+            seeds.push(seed);
+        }
+    }
+    Ok(LayoutSeeds(seeds))
+}
+
+/// The most layout seeds one sweep takes.
+const MOST_LAYOUTS: usize = 10_000;
+
+/// Seeds of landmark layouts, as `--layout-seeds` takes them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LayoutSeeds(pub Vec<u64>);
 
 /// Parses a number of jobs, at least 1.
 pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
