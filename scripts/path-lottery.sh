@@ -8,8 +8,10 @@
 # covariance); then, over the side lines against the centre line of the same
 # layout, the spread of the error ratios, and for each prediction how often
 # it gets the direction of the change right and the correlation of its log
-# ratio with the actual one. Beside them, tracking on the centre line over
-# straight driving on it, the same layouts and seeds.
+# ratio with the actual one. Beside them, two lines crossing the same
+# offsets diagonally (from 0.6 m one side to 0.6 m the other, 1.69° off the
+# axis) over the centre line, and tracking on the centre line over straight
+# driving on it, the same layouts and seeds.
 #
 #   scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
 set -euo pipefail
@@ -27,6 +29,13 @@ for line in -0.6 0.0 0.6; do
     sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $line)/" \
         -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $line,/" \
         scenarios/thesis/route-1-2.ron > "$work/$line.ron"
+done
+# The same lateral offsets crossed diagonally, 1.69° off the axis, both ways.
+for way in up:-0.6:0.6:1.69 down:0.6:-0.6:-1.69; do
+    IFS=: read -r name from to heading <<< "$way"
+    sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $from, heading_deg: $heading)/" \
+        -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $to,/" \
+        scenarios/thesis/route-1-2.ron > "$work/diagonal-$name.ron"
 done
 sed -e "s/technique: None/technique: Tracking/" scenarios/thesis/route-1-2.ron > "$work/tracking.ron"
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
@@ -60,9 +69,10 @@ for layout, lines in sorted(runs.items()):
         }
         for line, reports in sorted(lines.items())
     }
-ratios, agreement, tracking = [], {}, []
+ratios, agreement, tracking, diagonal = [], {}, [], []
 for lines in layouts.values():
     tracking.append(lines.pop('tracking')['error_rms_m'] / lines['0.0']['error_rms_m'])
+    diagonal.append([lines.pop(d)['error_rms_m'] / lines['0.0']['error_rms_m'] for d in ('diagonal-up', 'diagonal-down')])
     centre = lines['0.0']
     for line in ('-0.6', '0.6'):
         actual = math.log(lines[line]['error_rms_m'] / centre['error_rms_m'])
@@ -78,6 +88,7 @@ print(json.dumps({
         'beyond_1_1': sum(r > 1.1 for r in ratios),
         'below_0_9': sum(r < 0.9 for r in ratios),
     },
+    'diagonal_over_centre': diagonal,
     'tracking_over_centre': sorted(tracking),
     'predictions': {
         name: {

@@ -46,6 +46,10 @@ held_out 6000..6030 1111 1212 1313
 # runs of the second and third sets (808 seed 3010, 1111 seed 6001, 909
 # seed 3025).
 held_out 7000..7030 1414 1515 1616
+# A fifth, first run with the code of the fourth unchanged in what it
+# measures, after the information-based step term had been tried on the
+# training layouts and dropped: nothing was tried on it.
+held_out 8000..8030 1717 1818 1919
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
 # Whether the 3D error model predicts egomotion's step errors better: the
 # routes driven straight and with tracking, the step CVs from each model,
