@@ -46,9 +46,9 @@ held_out 6000..6030 1111 1212 1313
 # runs of the second and third sets (808 seed 3010, 1111 seed 6001, 909
 # seed 3025).
 held_out 7000..7030 1414 1515 1616
-# A fifth, first run with the code of the fourth unchanged in what it
-# measures, after the information-based step term had been tried on the
-# training layouts and dropped: nothing was tried on it.
+# A fifth, first run on the committed code after the line-of-sight fix, and
+# after an information-based step term had been tried on the training
+# layouts and dropped: nothing was developed or tried on it.
 held_out 8000..8030 1717 1818 1919
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
 # Whether the 3D error model predicts egomotion's step errors better: the
