@@ -15,9 +15,9 @@
 //! with `CV` each matched straight frame's fused step CV, `d` the metres it
 //! drove, a turn a stretch of frames whose heading changes by more than
 //! half a degree each, and `lever` the distance from the turn to the end.
-//! (`scripts/fit-costs-check.py` compares this form, on seeds kept apart,
-//! with others and with fitting at every tenth frame instead of the end:
-//! none predicts the end points better.) The heading error across each turn
+//! (`ubf model fit-costs --check`, [`crate::cost_forms`], compares this
+//! form, on seeds kept apart, with others and with fitting at every tenth
+//! frame instead of the end: none predicts the end points better.) The heading error across each turn
 //! and the single steps' translation error are reported beside the fit.
 //!
 //! The odometry bridge's heading drift is measured directly instead: the
@@ -53,6 +53,12 @@ pub enum CostFitError {
         line: usize,
         /// What is wrong.
         message: String,
+    },
+    /// The logs come from too few seeds to keep some apart.
+    #[error("need logs of at least three seeds (seed-N directories with trajectory.csv, as ubf sweep leaves them); found {seeds}")]
+    TooFewSeeds {
+        /// Seeds found.
+        seeds: usize,
     },
     /// The logs hold too few turns or steps to fit.
     #[error("too little to fit: {turns} turn(s) and {steps} straight step(s) in {logs} log(s); need 3 of each")]
@@ -116,11 +122,15 @@ impl CostFit {
 
 /// One stereo frame as a log records it.
 #[derive(Clone, Copy, Debug)]
-struct Frame {
-    truth: Pose2,
-    ego: Pose2,
-    matched: bool,
-    step_cv: Option<f64>,
+pub(crate) struct Frame {
+    /// The true pose.
+    pub truth: Pose2,
+    /// Egomotion's pose.
+    pub ego: Pose2,
+    /// Whether egomotion matched the frame.
+    pub matched: bool,
+    /// The matched step's fused CV.
+    pub step_cv: Option<f64>,
 }
 
 /// What one log says of its whole run.
@@ -164,7 +174,8 @@ pub fn find_logs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, CostFitError> {
     Ok(out)
 }
 
-fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
+/// The stereo frames of the log at `path`.
+pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
     let text = std::fs::read_to_string(path).map_err(|source| CostFitError::Read { path: path.to_owned(), source })?;
     let format = |line: usize, message: String| CostFitError::Format { path: path.to_owned(), line, message };
     let mut lines = text.lines();
@@ -207,13 +218,13 @@ fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
     Ok(frames)
 }
 
-/// Least squares of `y = c·x` over `rows` with every coefficient ≥ 0: the
-/// unconstrained solution, refitted without any coefficient that came out
-/// negative until none does.
-fn non_negative_least_squares(rows: &[([f64; 3], f64)]) -> [f64; 3] {
-    let mut active = [true; 3];
+/// Least squares of `y = c·x` over `rows` with every coefficient ≥ 0 and
+/// only the `allowed` ones non-zero: the unconstrained solution, refitted
+/// without the most negative coefficient until none is.
+pub(crate) fn non_negative_least_squares<const N: usize>(rows: &[([f64; N], f64)], allowed: [bool; N]) -> [f64; N] {
+    let mut active = allowed;
     loop {
-        let index: Vec<usize> = (0..3).filter(|&k| active[k]).collect();
+        let index: Vec<usize> = (0..N).filter(|&k| active[k]).collect();
         let n = index.len();
         let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
         let mut b = nalgebra::DVector::<f64>::zeros(n);
@@ -226,7 +237,7 @@ fn non_negative_least_squares(rows: &[([f64; 3], f64)]) -> [f64; 3] {
             }
         }
         let solution = a.lu().solve(&b).unwrap_or_else(|| nalgebra::DVector::zeros(n));
-        let mut out = [0.0; 3];
+        let mut out = [0.0; N];
         let mut negative = None;
         for (i, &p) in index.iter().enumerate() {
             out[p] = solution[i];
@@ -239,7 +250,7 @@ fn non_negative_least_squares(rows: &[([f64; 3], f64)]) -> [f64; 3] {
             None => return out,
         }
         if !active.iter().any(|a| *a) {
-            return [0.0; 3];
+            return [0.0; N];
         }
     }
 }
@@ -314,7 +325,7 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
             ([run.step_cv_m2, per_turn, per_rad], run.error2)
         })
         .collect();
-    let [step_var_per_cv2, per_turn, per_rad] = non_negative_least_squares(&rows);
+    let [step_var_per_cv2, per_turn, per_rad] = non_negative_least_squares(&rows, [true; 3]);
     let mean = |v: &[(f64, f64)], f: &dyn Fn(&(f64, f64)) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
     Ok(CostFit {
         logs: paths.len(),
@@ -433,13 +444,13 @@ mod tests {
     fn least_squares_recover_coefficients_and_keep_them_non_negative() {
         let xs = [[1.0, 0.0, 2.0], [0.5, 3.0, 1.0], [2.0, 1.0, 0.0], [1.0, 1.0, 1.0], [0.0, 2.0, 5.0]];
         let exact: Vec<([f64; 3], f64)> = xs.iter().map(|x| (*x, 2.0 * x[0] + 0.5 * x[1] + 0.1 * x[2])).collect();
-        let c = non_negative_least_squares(&exact);
+        let c = non_negative_least_squares(&exact, [true; 3]);
         for (got, want) in c.iter().zip([2.0, 0.5, 0.1]) {
             assert!((got - want).abs() < 1e-9, "{c:?}");
         }
         // A coefficient the data want negative is dropped, not kept below 0.
         let negative: Vec<([f64; 3], f64)> = xs.iter().map(|x| (*x, 2.0 * x[0] - 0.5 * x[1])).collect();
-        let c = non_negative_least_squares(&negative);
+        let c = non_negative_least_squares(&negative, [true; 3]);
         assert!(c.iter().all(|v| *v >= 0.0), "{c:?}");
         assert_eq!(c[1], 0.0, "{c:?}");
     }

@@ -9,6 +9,7 @@
 //! - [`sweep`]: many runs in parallel, summarised;
 //! - [`experiment`]: the thesis's experiments;
 //! - [`cost_fit`]: egomotion's error coefficients, fitted from run logs;
+//! - [`cost_forms`]: whether another form of that model predicts better;
 //! - [`environment_map`]: where action aiding beats driving straight;
 //! - [`cli`]: the `ubf` command line, which a user's crate can reuse with its
 //!   own registry so that its behaviours work from scenario files by name.
@@ -17,6 +18,7 @@
 
 pub mod cli;
 pub mod cost_fit;
+pub mod cost_forms;
 pub mod drive;
 pub mod environment_map;
 pub mod experiment;

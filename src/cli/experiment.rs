@@ -82,7 +82,7 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     use ubf_perception::error_model::{corridor_heights, fit_exponential, FitReport, GeometricModel};
     let args: &CameraArgs = match &action {
         ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
-        ModelCommand::FitCosts { logs, json } => return fit_costs(logs, *json),
+        ModelCommand::FitCosts { logs, check, json } => return fit_costs(logs, *check, *json),
     };
     if !(args.step.is_finite() && args.step > 0.0) {
         return Err(CliError::bad_input("--step must be a positive number of metres"));
@@ -159,10 +159,16 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     Ok(Exit::Success)
 }
 
-fn fit_costs(logs: &[PathBuf], json: bool) -> Outcome {
+fn fit_costs(logs: &[PathBuf], check: bool, json: bool) -> Outcome {
     use crate::cost_fit::{find_logs, fit_costs};
-    let fit = find_logs(logs).and_then(|paths| fit_costs(&paths)).map_err(CliError::bad_input)?;
-    super::show(&fit, json)?;
+    let paths = find_logs(logs).map_err(CliError::bad_input)?;
+    if check {
+        let forms = crate::cost_forms::check_forms(&paths).map_err(CliError::bad_input)?;
+        super::show(&forms, json)?;
+    } else {
+        let fit = fit_costs(&paths).map_err(CliError::bad_input)?;
+        super::show(&fit, json)?;
+    }
     Ok(Exit::Success)
 }
 

@@ -502,6 +502,12 @@ enum ModelCommand {
         /// Logs or directories of logs.
         #[arg(required = true)]
         logs: Vec<PathBuf>,
+        /// Instead of fitting, compare the model's form with others on
+        /// seeds kept apart (the logs must be in a sweep's `seed-N`
+        /// directories, at least three seeds): the first two thirds of the
+        /// seeds fit, the end points of the rest test.
+        #[arg(long)]
+        check: bool,
         /// Print the fit as JSON.
         #[arg(long)]
         json: bool,
