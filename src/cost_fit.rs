@@ -174,6 +174,46 @@ pub fn find_logs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, CostFitError> {
     Ok(out)
 }
 
+/// A stretch of a log between frames: a turn, from frame `from` to `to`
+/// with every interval between them turning, or one interval without a
+/// turn, from frame `from` to the next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Stretch {
+    /// A whole turn: until the robot stops turning.
+    Turn {
+        /// Its first frame.
+        from: usize,
+        /// Its last frame.
+        to: usize,
+    },
+    /// An interval without a turn.
+    Interval {
+        /// Its first frame.
+        from: usize,
+    },
+}
+
+/// `frames` cut into turns and the intervals between them, in order.
+pub(crate) fn stretches(frames: &[Frame]) -> Vec<Stretch> {
+    let turning = |k: usize| turned(&frames[k + 1].truth.relative_to(&frames[k].truth));
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k + 1 < frames.len() {
+        if turning(k) {
+            let mut to = k + 1;
+            while to + 1 < frames.len() && turning(to) {
+                to += 1;
+            }
+            out.push(Stretch::Turn { from: k, to });
+            k = to;
+        } else {
+            out.push(Stretch::Interval { from: k });
+            k += 1;
+        }
+    }
+    out
+}
+
 /// The stereo frames of the log at `path`.
 pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
     let text = std::fs::read_to_string(path).map_err(|source| CostFitError::Read { path: path.to_owned(), source })?;
@@ -267,43 +307,34 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
     for path in paths {
         let frames = read_frames(path)?;
         let mut run = RunSummary::default();
-        let mut k = 0;
-        while k + 1 < frames.len() {
-            let (a, b) = (frames[k], frames[k + 1]);
-            let true_step = b.truth.relative_to(&a.truth);
-            if turned(&true_step) {
-                // The whole turn: until the robot stops turning.
-                let mut end = k + 1;
-                while end + 1 < frames.len() {
-                    if !turned(&frames[end + 1].truth.relative_to(&frames[end].truth)) {
-                        break;
+        for stretch in stretches(&frames) {
+            match stretch {
+                Stretch::Turn { from, to } => {
+                    let (a, b) = (frames[from], frames[to]);
+                    let turned = angle_difference(b.truth.theta, a.truth.theta);
+                    run.turns.push(((b.truth.x, b.truth.y), turned.abs()));
+                    if a.matched && b.matched {
+                        let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), turned);
+                        turns.push((turned.abs(), error * error));
                     }
-                    end += 1;
                 }
-                let (a, b) = (frames[k], frames[end]);
-                let turned = angle_difference(b.truth.theta, a.truth.theta);
-                run.turns.push(((b.truth.x, b.truth.y), turned.abs()));
-                if a.matched && b.matched {
-                    let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), turned);
-                    turns.push((turned.abs(), error * error));
-                }
-                k = end;
-                continue;
-            }
-            let driven = true_step.x.hypot(true_step.y);
-            if !b.matched && drove_straight(&true_step) {
-                let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
-                bridged.push((driven, error * error));
-            }
-            if a.matched && b.matched && drove_straight(&true_step) {
-                if let Some(cv) = b.step_cv {
-                    let ego_step = b.ego.relative_to(&a.ego);
-                    let error = (ego_step.x - true_step.x).hypot(ego_step.y - true_step.y);
-                    steps.push((cv * driven, error * error));
-                    run.step_cv_m2 += (cv * driven).powi(2);
+                Stretch::Interval { from } => {
+                    let (a, b) = (frames[from], frames[from + 1]);
+                    let true_step = b.truth.relative_to(&a.truth);
+                    let driven = true_step.x.hypot(true_step.y);
+                    if !b.matched && drove_straight(&true_step) {
+                        let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
+                        bridged.push((driven, error * error));
+                    }
+                    let matched_straight = a.matched && b.matched && drove_straight(&true_step);
+                    if let Some(cv) = b.step_cv.filter(|_| matched_straight) {
+                        let ego_step = b.ego.relative_to(&a.ego);
+                        let error = (ego_step.x - true_step.x).hypot(ego_step.y - true_step.y);
+                        steps.push((cv * driven, error * error));
+                        run.step_cv_m2 += (cv * driven).powi(2);
+                    }
                 }
             }
-            k += 1;
         }
         if let Some(last) = frames.last() {
             run.end = (last.truth.x, last.truth.y);
@@ -428,6 +459,29 @@ mod tests {
 
     /// The columns the fit reads, as `ubf run` writes them.
     const HEADER: &str = "time_s,true_x,true_y,true_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame\n";
+
+    #[test]
+    fn a_log_is_cut_into_whole_turns_and_the_intervals_between() {
+        // Headings at the frames: straight, a turn over two intervals, then
+        // straight again; a turn of a fifth of a degree is no turn.
+        let headings = [0.0, 0.0, 10.0, 20.0, 20.0, 20.2];
+        let frames: Vec<Frame> = headings
+            .iter()
+            .enumerate()
+            .map(|(k, h)| {
+                let pose = Pose2::new(0.3 * k as f64, 0.0, f64::to_radians(*h));
+                Frame { truth: pose, ego: pose, matched: true, step_cv: Some(0.1) }
+            })
+            .collect();
+        let expected = [
+            Stretch::Interval { from: 0 },
+            Stretch::Turn { from: 1, to: 3 },
+            Stretch::Interval { from: 3 },
+            Stretch::Interval { from: 4 },
+        ];
+        assert_eq!(stretches(&frames), expected);
+        assert_eq!(stretches(&frames[..1]), []);
+    }
 
     #[test]
     fn rank_correlation_is_spearmans() {

@@ -9,10 +9,10 @@
 //! log-likelihood of the test runs' end-point errors under its fitted σ (a
 //! 2D Gaussian: lower is better).
 
-use crate::cost_fit::{non_negative_least_squares, read_frames, CostFitError};
+use crate::cost_fit::{non_negative_least_squares, read_frames, stretches, CostFitError, Stretch};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use ubf_behaviors::decision::{drove_straight, turned};
+use ubf_behaviors::decision::drove_straight;
 use ubf_core::angle_difference;
 
 /// The terms a form may weigh, in the order of a checkpoint's features.
@@ -86,31 +86,27 @@ fn checkpoints(path: &Path) -> Result<Vec<Checkpoint>, CostFitError> {
         let error2 = (f.ego.x - f.truth.x).powi(2) + (f.ego.y - f.truth.y).powi(2);
         Checkpoint { features: [cv2, per_turn, per_rad, turns.len() as f64, d2], error2, end }
     };
-    let mut k = 0;
-    while k + 1 < frames.len() {
-        if k % 10 == 9 && frames[k].matched {
-            out.push(checkpoint(k, &turns, cv2, d2, false));
+    for stretch in stretches(&frames) {
+        let (Stretch::Turn { from, .. } | Stretch::Interval { from }) = stretch;
+        if from % 10 == 9 && frames[from].matched {
+            out.push(checkpoint(from, &turns, cv2, d2, false));
         }
-        let (a, b) = (frames[k], frames[k + 1]);
-        let step = b.truth.relative_to(&a.truth);
-        if turned(&step) {
-            let mut end = k + 1;
-            while end + 1 < frames.len() && turned(&frames[end + 1].truth.relative_to(&frames[end].truth)) {
-                end += 1;
+        match stretch {
+            Stretch::Turn { from, to } => {
+                let at = frames[to].truth;
+                turns.push(((at.x, at.y), angle_difference(at.theta, frames[from].truth.theta).abs()));
             }
-            let at = frames[end].truth;
-            turns.push(((at.x, at.y), angle_difference(at.theta, a.truth.theta).abs()));
-            k = end;
-            continue;
-        }
-        if a.matched && b.matched && drove_straight(&step) {
-            if let Some(cv) = b.step_cv {
-                let d = step.x.hypot(step.y);
-                cv2 += (cv * d).powi(2);
-                d2 += d * d;
+            Stretch::Interval { from } => {
+                let (a, b) = (frames[from], frames[from + 1]);
+                let step = b.truth.relative_to(&a.truth);
+                let matched_straight = a.matched && b.matched && drove_straight(&step);
+                if let Some(cv) = b.step_cv.filter(|_| matched_straight) {
+                    let d = step.x.hypot(step.y);
+                    cv2 += (cv * d).powi(2);
+                    d2 += d * d;
+                }
             }
         }
-        k += 1;
     }
     if !frames.is_empty() {
         out.push(checkpoint(frames.len() - 1, &turns, cv2, d2, true));
