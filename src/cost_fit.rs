@@ -17,8 +17,9 @@
 //! half a degree each, and `lever` the distance from the turn to the end.
 //! (`ubf model fit-costs --check`, [`crate::cost_forms`], compares this
 //! form, on seeds kept apart, with others and with fitting at every tenth
-//! frame instead of the end: none predicts the end points better.) The heading error across each turn
-//! and the single steps' translation error are reported beside the fit.
+//! frame instead of the end: none predicts the end points better.) The
+//! heading error across each turn and the single steps' translation error
+//! are reported beside the fit.
 //!
 //! The odometry bridge's heading drift is measured directly instead: the
 //! heading error each bridged step adds, per metre driven. Fitted at the
@@ -131,6 +132,13 @@ pub(crate) struct Frame {
     pub matched: bool,
     /// The matched step's fused CV.
     pub step_cv: Option<f64>,
+}
+
+impl Frame {
+    /// The squared distance between egomotion's position and the truth, m².
+    pub fn error2(&self) -> f64 {
+        (self.ego.x - self.truth.x).powi(2) + (self.ego.y - self.truth.y).powi(2)
+    }
 }
 
 /// What one log says of its whole run.
@@ -338,7 +346,7 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
         }
         if let Some(last) = frames.last() {
             run.end = (last.truth.x, last.truth.y);
-            run.error2 = (last.ego.x - last.truth.x).powi(2) + (last.ego.y - last.truth.y).powi(2);
+            run.error2 = last.error2();
             runs.push(run);
         }
     }

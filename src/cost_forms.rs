@@ -83,8 +83,7 @@ fn checkpoints(path: &Path) -> Result<Vec<Checkpoint>, CostFitError> {
         let lever2 = |(x, y): (f64, f64)| (f.truth.x - x).powi(2) + (f.truth.y - y).powi(2);
         let per_turn: f64 = turns.iter().map(|(p, _)| lever2(*p)).sum();
         let per_rad: f64 = turns.iter().map(|(p, t)| t * lever2(*p)).sum();
-        let error2 = (f.ego.x - f.truth.x).powi(2) + (f.ego.y - f.truth.y).powi(2);
-        Checkpoint { features: [cv2, per_turn, per_rad, turns.len() as f64, d2], error2, end }
+        Checkpoint { features: [cv2, per_turn, per_rad, turns.len() as f64, d2], error2: f.error2(), end }
     };
     for stretch in stretches(&frames) {
         let (Stretch::Turn { from, .. } | Stretch::Interval { from }) = stretch;
@@ -129,7 +128,9 @@ pub fn check_forms(paths: &[PathBuf]) -> Result<FormCheck, CostFitError> {
     if seeds.len() < 3 {
         return Err(CostFitError::TooFewSeeds { seeds: seeds.len() });
     }
-    let cut = seeds[seeds.len() * 2 / 3];
+    // Seeds are sorted: those before the split fit, the rest test.
+    let split = seeds.len() * 2 / 3;
+    let cut = seeds[split];
     let train: Vec<Checkpoint> = runs.iter().filter(|(s, _)| *s < cut).flat_map(|(_, c)| c.iter().copied()).collect();
     let test: Vec<Checkpoint> =
         runs.iter().filter(|(s, _)| *s >= cut).flat_map(|(_, c)| c.iter().copied()).filter(|c| c.end).collect();
@@ -151,12 +152,10 @@ pub fn check_forms(paths: &[PathBuf]) -> Result<FormCheck, CostFitError> {
             scores.push(FormScore { fitted_at, form, nll, coefficients });
         }
     }
-    let last = seeds.last().copied().unwrap_or(cut);
-    let fitted_last = seeds.iter().copied().filter(|s| *s < cut).max().unwrap_or(cut);
     Ok(FormCheck {
         logs: runs.len(),
-        fitted_seeds: [seeds[0], fitted_last],
-        tested_seeds: [cut, last],
+        fitted_seeds: [seeds[0], seeds[split - 1]],
+        tested_seeds: [cut, seeds[seeds.len() - 1]],
         tested: test.len(),
         scores,
     })
@@ -167,22 +166,18 @@ fn three_digits(x: f64) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{x}");
     }
-    let exponent = x.abs().log10().floor() as i32;
-    let rounded: f64 = format!("{x:.2e}").parse().unwrap_or(x);
-    let exponent = if rounded.abs() >= 10f64.powi(exponent + 1) { exponent + 1 } else { exponent };
-    if !(-4..3).contains(&exponent) {
-        let text = format!("{x:.2e}");
-        let (mantissa, power) = text.split_once('e').unwrap_or((&text, "0"));
-        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-        let power: i32 = power.parse().unwrap_or(0);
-        return format!("{mantissa}e{}{:02}", if power < 0 { '-' } else { '+' }, power.abs());
-    }
-    let decimals = (2 - exponent).max(0) as usize;
-    let text = format!("{x:.decimals$}");
-    if text.contains('.') {
-        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    // `{:.2e}` rounds to three digits and gives the exponent after
+    // rounding: "2.34e-5".
+    let scientific = format!("{x:.2e}");
+    let (mantissa, power) = scientific.split_once('e').expect("exponent format has an `e`");
+    let power: i32 = power.parse().expect("exponent format ends in a whole number");
+    let trimmed =
+        |t: &str| if t.contains('.') { t.trim_end_matches('0').trim_end_matches('.').to_owned() } else { t.to_owned() };
+    if (-4..3).contains(&power) {
+        let decimals = (2 - power) as usize;
+        trimmed(&format!("{x:.decimals$}"))
     } else {
-        text
+        format!("{}e{}{:02}", trimmed(mantissa), if power < 0 { '-' } else { '+' }, power.abs())
     }
 }
 
