@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::ops::Range;
 use ubf_behaviors::{DecisionObjective, Steer, Technique};
 use ubf_core::{BehaviorSpec, Registry};
-use ubf_perception::egomotion::{EstimatorKind, RigidConfig, Simple2dConfig};
+use ubf_perception::egomotion::{EstimatorKind, OdometryFusion, RigidConfig, Simple2dConfig};
 use ubf_perception::error_model::ErrorModelKind;
 use ubf_robots::sim::{MotionProfile, PanTiltConfig};
 
@@ -261,6 +261,10 @@ pub struct Endpoint {
     pub model: ErrorModelKind,
     /// The motion profile, when it replaced the routes' own.
     pub profile: Option<MotionProfile>,
+    /// What of odometry's motion the rigid estimator's motions were
+    /// combined with, when anything.
+    #[serde(skip_serializing_if = "is_off")]
+    pub odometry_fusion: OdometryFusion,
     /// Where the landmarks came from: `geometric` (the camera model
     /// projects them) or `rendered` (the feature pipeline finds them in
     /// rendered images).
@@ -298,6 +302,10 @@ fn is_geometric(model: &ErrorModelKind) -> bool {
     *model == ErrorModelKind::Geometric
 }
 
+fn is_off(fusion: &OdometryFusion) -> bool {
+    *fusion == OdometryFusion::Off
+}
+
 /// How the end-point experiment is run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EndpointOptions {
@@ -319,12 +327,17 @@ pub struct EndpointOptions {
     /// (continuous): the thesis's rotate-then-translate suits the
     /// simplified estimator.
     pub profile: Option<MotionProfile>,
+    /// What of odometry's motion the rigid estimator's visual motions are
+    /// combined with (`Off`: the purely visual egomotion the thesis
+    /// measured).
+    pub odometry_fusion: OdometryFusion,
 }
 
 /// End-point egomotion error of every technique on every route with both
 /// estimators.
 pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result<Endpoint, ExperimentError> {
-    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile } = options.clone();
+    let EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile, odometry_fusion } =
+        options.clone();
     let estimators = [
         ("rigid", EstimatorKind::Rigid(RigidConfig::default())),
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
@@ -340,6 +353,9 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         }
         if let Some(profile) = profile {
             base.robot.motion = profile;
+        }
+        if let Some(egomotion) = base.robot.egomotion.as_mut() {
+            egomotion.odometry_fusion = odometry_fusion;
         }
         for (estimator, kind) in estimators {
             for aid in ENDPOINT_AIDS {
@@ -366,6 +382,7 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         objective,
         model,
         profile,
+        odometry_fusion,
         camera,
         routes: BTreeMap::new(),
     };

@@ -62,7 +62,7 @@ impl TrajectoryWriter {
         if self.columns.truth {
             write!(self.out, "true_x,true_y,true_theta,")?;
         }
-        write!(self.out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,cmd_velocity,cmd_rot_velocity,winner")?;
+        write!(self.out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,ego_anchor,cmd_velocity,cmd_rot_velocity,winner")?;
         if self.columns.hold {
             write!(self.out, ",hold")?;
         }
@@ -102,6 +102,10 @@ impl TrajectoryWriter {
             None => write!(self.out, ",")?,
         }
         write!(self.out, "{},", record.state.stereo.number)?;
+        match egomotion.anchor_frame {
+            Some(anchor) => write!(self.out, "{anchor},")?,
+            None => write!(self.out, ",")?,
+        }
         write!(self.out, "{v:.4},{w:.4},{winner}")?;
         if self.columns.hold {
             match record.hold {

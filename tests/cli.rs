@@ -87,6 +87,18 @@ fn unknown_scenario_field_is_refused() {
 }
 
 #[test]
+fn an_unknown_odometry_fusion_names_the_ones_there_are() {
+    let body = r#"Scenario(name: "t", max_time_s: 1.0,
+    robot: (camera: (), egomotion: (odometry_fusion: Half)),
+    root: Stop())"#;
+    let (code, err) = check(body);
+    assert_eq!(code, 2);
+    assert!(err.contains("FILE:2:") && err.contains("`Sideways`") && err.contains("`Full`"), "{err}");
+    let (code, err) = check(&body.replace("Half", "Sideways"));
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
 fn unknown_behaviour_is_named() {
     let (code, err) = check(&GOOD.replace("GoTo(", "Wander("));
     assert_eq!(code, 2);
@@ -419,6 +431,9 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     let result = ubf(&["experiment", "thesis-endpoint", "--model", "cubic"]);
     assert_eq!(result.status.code(), Some(2));
     assert!(text(&result.stderr).contains("geometric-3d"), "{}", text(&result.stderr));
+    let result = ubf(&["experiment", "thesis-endpoint", "--odometry-fusion", "half"]);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(text(&result.stderr).contains("`sideways`"), "{}", text(&result.stderr));
     // A recording of a day at 2 pairs a second: about 106 GB of images.
     let day = scenario_file(&dir, r#"Scenario(name: "t", max_time_s: 86400.0, robot: (camera: ()), root: Stop())"#);
     let frames = dir.path().join("frames");

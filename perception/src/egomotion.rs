@@ -232,6 +232,30 @@ pub struct EgomotionConfig {
     /// landmarks and rejected, °/s.
     #[serde(deserialize_with = "positive")]
     pub max_turn_rate_deg: f64,
+    /// Whether each visual motion that passes the odometry gate is
+    /// combined with odometry's over the same stretch, weighed by the
+    /// estimator's covariance and the gate's `noise` model (the rigid
+    /// estimator only; without a gate or its `noise` nothing is combined).
+    pub odometry_fusion: OdometryFusion,
+}
+
+/// What of odometry's motion egomotion combines with the visual one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+pub enum OdometryFusion {
+    /// Nothing: egomotion stays purely visual, as the thesis measured it.
+    #[default]
+    Off,
+    /// Odometry's sideways motion only. Matched mostly to far landmarks, a
+    /// visual motion cannot tell a sideways slide from a slight turn (both
+    /// move a far bearing alike), while the wheels barely err sideways over
+    /// a few metres; a wheel scale error, which odometry's distance and
+    /// turns carry, leaves its sideways motion alone.
+    Sideways,
+    /// Forward, sideways and heading: better still where odometry errs only
+    /// at random, as the gate's `noise` says, and worse than none where its
+    /// wheel scale is off (a systematic error the noise model does not
+    /// cover is carried into the pose frame after frame).
+    Full,
 }
 
 fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
@@ -256,6 +280,7 @@ impl Default for EgomotionConfig {
             max_speed: 0.6,
             max_turn_rate_deg: 100.0,
             odometry_gate: Some(OdometryGate::default()),
+            odometry_fusion: OdometryFusion::Off,
         }
     }
 }
@@ -336,21 +361,73 @@ impl Default for OdometryNoise {
 }
 
 impl OdometryNoise {
-    /// Whether a visual `motion` with covariance `visual` (forward, left,
-    /// yaw) is consistent with `odometric`, driven over `driven` metres.
-    fn consistent(&self, motion: &PlanarMotion, visual: &Matrix3<f64>, odometric: &Pose2, driven: f64) -> bool {
+    /// The covariance (forward, left, yaw) of odometry's motion over a
+    /// stretch of `driven` metres.
+    fn covariance(&self, driven: f64) -> Matrix3<f64> {
         let position = self.position_m + self.position_share * driven;
         let heading2 =
             (self.heading_deg.powi(2) + self.heading_deg_per_sqrt_m.powi(2) * driven) * 1f64.to_radians().powi(2);
-        let odometry = Matrix3::from_diagonal(&Vector3::new(position * position, position * position, heading2));
-        let difference = Vector3::new(
+        Matrix3::from_diagonal(&Vector3::new(position * position, position * position, heading2))
+    }
+
+    /// `odometric` as a vector (forward, left, yaw), its yaw unwrapped to
+    /// lie within half a turn of `motion`'s.
+    fn difference(motion: &PlanarMotion, odometric: &Pose2) -> Vector3<f64> {
+        Vector3::new(
             motion.forward - odometric.x,
             motion.left - odometric.y,
             angle_difference(motion.yaw, odometric.theta),
-        );
-        (visual + odometry)
+        )
+    }
+
+    /// Whether a visual `motion` with covariance `visual` (forward, left,
+    /// yaw) is consistent with `odometric`, driven over `driven` metres.
+    fn consistent(&self, motion: &PlanarMotion, visual: &Matrix3<f64>, odometric: &Pose2, driven: f64) -> bool {
+        let difference = Self::difference(motion, odometric);
+        (visual + self.covariance(driven))
             .try_inverse()
             .is_some_and(|inverse| (difference.transpose() * inverse * difference)[0] <= self.chi2)
+    }
+
+    /// The visual `motion` (covariance `visual`) and what `fusion` takes of
+    /// `odometric`, driven over `driven` metres, combined by their
+    /// information: the motion both measurements make most likely, and its
+    /// covariance. `None` if a covariance is singular.
+    ///
+    /// Each corrects the other where it is weak. Matched mostly to far
+    /// landmarks, the visual motion cannot tell a sideways slide from a
+    /// slight turn, while odometry's sideways error over a few metres is
+    /// centimetres; with the sideways motion pinned, the far bearings fix
+    /// the turn.
+    fn fuse(
+        &self,
+        fusion: OdometryFusion,
+        motion: &PlanarMotion,
+        visual: &Matrix3<f64>,
+        odometric: &Pose2,
+        driven: f64,
+    ) -> Option<(PlanarMotion, Matrix3<f64>)> {
+        let (visual_info, mut odometry_info) = (visual.try_inverse()?, self.covariance(driven).try_inverse()?);
+        // The covariance is diagonal: dropping a row and column of its
+        // information leaves the others as they were.
+        match fusion {
+            OdometryFusion::Off => return None,
+            OdometryFusion::Sideways => {
+                odometry_info[(0, 0)] = 0.0;
+                odometry_info[(2, 2)] = 0.0;
+            }
+            OdometryFusion::Full => {}
+        }
+        let covariance = (visual_info + odometry_info).try_inverse()?;
+        // The correction to the visual motion, from the difference alone, so
+        // that a yaw near ±π does not wrap.
+        let correction = covariance * odometry_info * -Self::difference(motion, odometric);
+        let fused = PlanarMotion {
+            forward: motion.forward + correction[0],
+            left: motion.left + correction[1],
+            yaw: motion.yaw + correction[2],
+        };
+        Some((fused, covariance))
     }
 }
 
@@ -670,6 +747,8 @@ impl Rigid {
 #[derive(Clone, Debug)]
 struct Keyframe {
     landmarks: Vec<LandmarkObservation>,
+    /// The frame's number.
+    number: u64,
     time: f64,
     /// Egomotion's pose of the robot when it was taken.
     pose: Pose2,
@@ -862,6 +941,7 @@ impl Tracker {
                 self.state.last_step_cv = estimate.step_cv;
                 self.state.journey_cv += estimate.step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
                 self.state.bridging = false;
+                self.state.anchor_frame = Some(keyframe.number);
                 self.last_match = frame.time;
                 if let Some(since) = self.outage_since.take() {
                     self.state.outage_s += frame.time - since;
@@ -878,6 +958,7 @@ impl Tracker {
                 self.state.failures += 1;
                 self.state.last_step_cv = None;
                 self.state.bridging = true;
+                self.state.anchor_frame = None;
                 self.state.outage_m += driven;
                 if self.outage_since.is_none() {
                     self.outage_since = Some(self.last_match);
@@ -931,6 +1012,7 @@ impl Tracker {
         }
         self.keyframes.push(Keyframe {
             landmarks: frame.landmarks.clone(),
+            number: frame.number,
             time: frame.time,
             pose,
             odometry,
@@ -1051,7 +1133,7 @@ impl Tracker {
         }
         let dt = (frame.time - keyframe.time).max(1e-6);
         let max_step = self.config.max_speed * dt * 1.5 + 0.02;
-        let (motion, landmarks, covariance) = match &self.config.estimator {
+        let (mut motion, landmarks, mut covariance) = match &self.config.estimator {
             EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase)
                 .map(|(motion, landmarks)| (motion, landmarks, None)),
             EstimatorKind::Rigid(c) => {
@@ -1084,9 +1166,14 @@ impl Tracker {
             }
             // Far landmarks with a few gross mismatches among them can agree
             // on a motion decimetres off whose covariance claims centimetres.
-            if let (Some(noise), Some(covariance)) = (&gate.noise, &covariance) {
-                if !noise.consistent(&motion, covariance, &odometric, driven) {
+            if let (Some(noise), Some(visual)) = (&gate.noise, &covariance) {
+                if !noise.consistent(&motion, visual, &odometric, driven) {
                     return None;
+                }
+                if let Some((fused, fused_covariance)) =
+                    noise.fuse(self.config.odometry_fusion, &motion, visual, &odometric, driven)
+                {
+                    (motion, covariance) = (fused, Some(fused_covariance));
                 }
             }
         }
@@ -1097,6 +1184,7 @@ impl Tracker {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
     use ubf_core::{Descriptor, StereoPixels};
 
     /// Observations of `points` (world frame, metres) from `pose`, exact.
@@ -1487,6 +1575,82 @@ mod tests {
         assert!(!noise.consistent(&motion(5.3, 0.0), &sharp, &odometric, 5.0));
         assert!(noise.consistent(&motion(5.3, 0.0), &vague, &odometric, 5.0));
         assert!(!noise.consistent(&motion(5.0, 2.0), &sharp, &odometric, 5.0));
+    }
+
+    #[test]
+    fn fusing_odometry_resolves_what_far_landmarks_leave_open() {
+        // Landmarks 30 m ahead fix where they lie in bearing, so the visual
+        // motion can slide sideways by s and turn by −s/30 m at little cost:
+        // its covariance is stretched along that line. Here it has slid
+        // 0.3 m. Odometry is 2 cm off sideways and 0.3° in heading. Fused,
+        // the sideways motion comes from odometry and the heading from the
+        // landmarks' bearings: better than either alone, whether odometry's
+        // sideways motion alone is taken or all of it.
+        let noise = OdometryNoise::default();
+        let lever = 30.0;
+        let slide = Vector3::new(0.0, 1.0, -1.0 / lever).normalize();
+        let visual = slide * slide.transpose() * 0.5 + Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-8));
+        let seen = PlanarMotion { forward: 5.0, left: 0.3, yaw: -0.3 / lever };
+        let odometric = Pose2::new(5.0, 0.02, 0.3f64.to_radians());
+        for fusion in [OdometryFusion::Sideways, OdometryFusion::Full] {
+            let (fused, covariance) = noise.fuse(fusion, &seen, &visual, &odometric, 5.0).unwrap();
+            assert!(fused.left.abs() < 0.03, "{fusion:?}: {fused:?}");
+            // Odometry's 2 cm sideways over the 30 m lever: 0.04°.
+            assert!(fused.yaw.abs() < 0.2 * odometric.theta, "{fusion:?}: {fused:?}");
+            assert!(covariance[(1, 1)] < noise.covariance(5.0)[(1, 1)], "{fusion:?}: {covariance}");
+            // Sideways and heading both gain; forward only from all of it.
+            assert!(covariance[(1, 1)] < visual[(1, 1)] && covariance[(2, 2)] < visual[(2, 2)], "{covariance}");
+            assert!(covariance[(0, 0)] <= visual[(0, 0)] + 1e-12, "{fusion:?}: {covariance}");
+        }
+        assert_eq!(noise.fuse(OdometryFusion::Off, &seen, &visual, &odometric, 5.0), None);
+        // Sideways only, a forward distance odometry has 2 % long stays the
+        // visual one.
+        let long = Pose2::new(5.1, 0.02, 0.3f64.to_radians());
+        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0).unwrap();
+        assert!((fused.forward - 5.0).abs() < 1e-3, "{fused:?}");
+        // Across ±π the two headings are 0.02 rad apart, not 2π.
+        let back = PlanarMotion { forward: 0.0, left: 0.0, yaw: PI - 0.01 };
+        let (fused, _) = noise
+            .fuse(OdometryFusion::Full, &back, &Matrix3::identity(), &Pose2::new(0.0, 0.0, -PI + 0.01), 0.0)
+            .unwrap();
+        assert!(angle_difference(fused.yaw, PI).abs() < 0.011, "{fused:?}");
+    }
+
+    #[test]
+    fn fusing_odometry_corrects_a_drive_towards_far_landmarks() {
+        // Driving 8 m towards a far wall whose landmarks' ranges are off by
+        // 3 % (σ, fresh in every frame, as stereo's are); odometry is exact.
+        // The fused pose is nearer the truth sideways than the purely visual
+        // one.
+        use rand::{Rng, SeedableRng};
+        let camera = StereoCamera::default();
+        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
+        let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+        let seen = |k: u32| {
+            let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
+            let mut observations = frame(&far, pose(k), &camera);
+            for o in &mut observations {
+                let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-12), rng.random());
+                let normal = (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos();
+                let scale = 1.0 + 0.03 * normal;
+                o.point_cam = o.point_cam.map(|v: f64| v * scale);
+            }
+            observations
+        };
+        let end_error = |odometry_fusion| {
+            let config = EgomotionConfig { odometry_fusion, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
+            for k in 0..=32u32 {
+                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen(k)), &pose(k));
+            }
+            assert_eq!(tracker.state().failures, 0);
+            tracker.state().pose.unwrap().y.abs()
+        };
+        let visual = end_error(OdometryFusion::Off);
+        for fusion in [OdometryFusion::Sideways, OdometryFusion::Full] {
+            let fused = end_error(fusion);
+            assert!(fused < 0.25 * visual, "{fusion:?}: {fused} m sideways, visual {visual} m");
+        }
     }
 
     #[test]

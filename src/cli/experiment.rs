@@ -7,6 +7,7 @@ use crate::scenario::Scenario;
 use std::path::PathBuf;
 use ubf_behaviors::DecisionObjective;
 use ubf_core::Registry;
+use ubf_perception::egomotion::OdometryFusion;
 use ubf_perception::error_model::ErrorModelKind;
 
 /// Runs one experiment and prints its table (or JSON).
@@ -64,11 +65,13 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
             objective,
             model,
             rotate_then_translate,
+            odometry_fusion,
         } => {
             let profile = rotate_then_translate
                 .then_some(ubf_robots::sim::MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 });
             let jobs = jobs.unwrap_or_else(super::cores);
-            let options = EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile };
+            let options =
+                EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile, odometry_fusion };
             let result = thesis_endpoint(registry, &options).map_err(CliError::failed)?;
             super::show(&result, json)?;
         }
@@ -178,6 +181,16 @@ pub(super) fn parse_objective(text: &str) -> Result<DecisionObjective, String> {
         "end-point" => Ok(DecisionObjective::EndPoint),
         "cv" => Ok(DecisionObjective::Cv),
         _ => Err("expected `end-point` or `cv`".into()),
+    }
+}
+
+/// Parses `off`, `sideways` or `full`.
+pub(super) fn parse_fusion(text: &str) -> Result<OdometryFusion, String> {
+    match text {
+        "off" => Ok(OdometryFusion::Off),
+        "sideways" => Ok(OdometryFusion::Sideways),
+        "full" => Ok(OdometryFusion::Full),
+        _ => Err("expected `off`, `sideways` or `full`".into()),
     }
 }
 

@@ -19,7 +19,7 @@ mod run;
 mod sweep;
 
 use clap::{Parser, Subcommand};
-use experiment::{parse_depths, parse_heights, parse_model, parse_objective};
+use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_objective};
 use images::{parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
 use std::path::PathBuf;
@@ -27,6 +27,7 @@ use std::process::ExitCode;
 use sweep::{parse_jobs, parse_seeds};
 use ubf_behaviors::DecisionObjective;
 use ubf_core::Registry;
+use ubf_perception::egomotion::OdometryFusion;
 use ubf_perception::error_model::ErrorModelKind;
 
 /// Exit code for bad input: a malformed file, a bad argument.
@@ -479,6 +480,12 @@ enum ExperimentCommand {
         /// translate) instead of the routes' continuous profile.
         #[arg(long)]
         rotate_then_translate: bool,
+        /// What of odometry's motion the rigid estimator's visual motions
+        /// are combined with: `off` (the purely visual egomotion the thesis
+        /// measured), `sideways` or `full` (see `odometry_fusion` in
+        /// docs/scenario-format.md).
+        #[arg(long, default_value = "off", value_parser = parse_fusion)]
+        odometry_fusion: OdometryFusion,
     },
 }
 

@@ -84,6 +84,10 @@ pub struct EgomotionState {
     /// The latest frame matched no keyframe: the pose is carried on by
     /// odometry until one does.
     pub bridging: bool,
+    /// The number of the keyframe the latest frame was matched to (`None`
+    /// while bridging): with each keyframe's own anchor, the chain of
+    /// estimates a pose rests on.
+    pub anchor_frame: Option<u64>,
 }
 
 /// Everything a behaviour may know this tick.
