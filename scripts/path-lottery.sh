@@ -16,15 +16,7 @@
 #   scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ $# -ne 2 ]; then
-    echo "usage: $0 \"LAYOUT...\" FROM..TO   (e.g. \"2121 2222\" 100..130)" >&2
-    exit 2
-fi
-layouts=$1 seeds=$2
-cargo build --release --quiet
-ubf=target/release/ubf
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+. scripts/layouts-and-seeds.sh
 # NAME:FROM:TO:HEADING: the three parallel lines, then the same lateral
 # offsets crossed diagonally, 1.69° off the axis, both ways.
 for line in -0.6:-0.6:-0.6:0 0.0:0.0:0.0:0 0.6:0.6:0.6:0 diagonal-up:-0.6:0.6:1.69 diagonal-down:0.6:-0.6:-1.69; do

@@ -30,6 +30,10 @@ held_out() {
         "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --json > "out/endpoint-held-$layout.json"
         "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --model geometric-3d --json \
             > "out/endpoint-held-$layout-3d.json"
+        for fusion in sideways full; do
+            "$ubf" experiment thesis-endpoint --seeds "$seeds" --layout-seed "$layout" --odometry-fusion "$fusion" \
+                --json > "out/endpoint-held-$layout-$fusion.json"
+        done
     done
 }
 held_out 1000..1030 101 202 303
@@ -91,6 +95,11 @@ scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/trackin
 # How much the end point depends on the line driven: ten training layouts,
 # kept apart from every held-out table, on the cost fit's seeds.
 scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
+# Which links of egomotion's chain carry that error, on the same lines.
+scripts/error-chain.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/error-chain.json
+# What odometry fusion buys, and what it costs when the wheels err more
+# than odometry's noise model says (training layouts).
+scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
     commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484 8c2df86)
