@@ -7,7 +7,7 @@
 # than the encoders think (distance and turns 1 % long), and with a steady
 # veer of 0.05° per metre that odometry does not see. Prints JSON: per
 # route, odometry and fusion, each technique's mean end-point error with a
-# 95 % interval and its failures per run.
+# 95 % interval, its failures per run and the runs that hit the time limit.
 #
 #   scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
 set -euo pipefail
@@ -53,6 +53,7 @@ for (route, odometry, fusion, technique), reports in sorted(runs.items()):
         'mean_m': round(mean(errors), 4),
         'ci95_m': [round(mean(errors) - half, 4), round(mean(errors) + half, 4)],
         'failures_per_run': round(mean(r['egomotion_failures'] for r in reports), 2),
+        'time_limit_runs': sum(r['end'] == 'time_limit' for r in reports),
     }
 json.dump(out, sys.stdout, indent=1)
 print()
