@@ -606,9 +606,14 @@ impl std::fmt::Display for Endpoint {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let layout = self.layout_seed.map_or("each route's own layout".into(), |s| format!("layout seed {s}"));
         let model = if is_geometric(&self.model) { String::new() } else { format!(", {:?} model", self.model) };
+        let fusion = if is_off(&self.odometry_fusion) {
+            String::new()
+        } else {
+            format!(", {:?} odometry fusion", self.odometry_fusion)
+        };
         writeln!(
             f,
-            "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective{model}",
+            "End-point egomotion error, m: mean [95 % CI] over seeds {}..{}, {} camera, {layout}, {:?} objective{model}{fusion}",
             self.seeds[0], self.seeds[1], self.camera, self.objective
         )?;
         for (route, estimators) in &self.routes {

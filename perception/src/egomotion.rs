@@ -407,16 +407,15 @@ impl OdometryNoise {
         odometric: &Pose2,
         driven: f64,
     ) -> Option<(PlanarMotion, Matrix3<f64>)> {
+        if fusion == OdometryFusion::Off {
+            return None;
+        }
         let (visual_info, mut odometry_info) = (visual.try_inverse()?, self.covariance(driven).try_inverse()?);
         // The covariance is diagonal: dropping a row and column of its
         // information leaves the others as they were.
-        match fusion {
-            OdometryFusion::Off => return None,
-            OdometryFusion::Sideways => {
-                odometry_info[(0, 0)] = 0.0;
-                odometry_info[(2, 2)] = 0.0;
-            }
-            OdometryFusion::Full => {}
+        if fusion == OdometryFusion::Sideways {
+            odometry_info[(0, 0)] = 0.0;
+            odometry_info[(2, 2)] = 0.0;
         }
         let covariance = (visual_info + odometry_info).try_inverse()?;
         // The correction to the visual motion, from the difference alone, so
