@@ -3,8 +3,11 @@
 # odometry is worse than its noise model says: the thesis routes driven
 # straight and with tracking, egomotion purely visual (`odometry_fusion:
 # Off`), with odometry's sideways motion (`Sideways`) and with all of it
-# (`Full`), on the routes' odometry (random slip only), on wheels 1 % larger
-# than the encoders think (distance and turns 1 % long), and with a steady
+# (`Full`), and with the sideways fusion steering the robot (`navigate:
+# true`; otherwise it steers by odometry, as the thesis's robot did), on
+# the routes' odometry (random slip only), on wheels 1 % larger
+# than the encoders think (the robot goes 1 % further and turns 1 % more
+# than odometry says), and with a steady
 # veer of 0.05° per metre that odometry does not see. Prints JSON: per
 # route, odometry and fusion, each technique's mean end-point error with a
 # 95 % interval, its failures per run and the runs that hit the time limit.
@@ -20,10 +23,12 @@ for route in route-1-2 route-2-1 feature-poor; do
             scale) errors='slip_deg_per_sqrt_m: 0.2, left_scale: 1.01, right_scale: 1.01' ;;
             veer) errors='slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05' ;;
         esac
-        for fusion in Off Sideways Full; do
+        for fusion in Off Sideways Full SidewaysNavigating; do
+            settings="odometry_fusion: $fusion"
+            [ "$fusion" = SidewaysNavigating ] && settings='odometry_fusion: Sideways, navigate: true'
             for technique in None Tracking; do
                 sed -e "s/slip_deg_per_sqrt_m: 0.2/$errors/" \
-                    -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), odometry_fusion: $fusion)/" \
+                    -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), $settings)/" \
                     -e "s/technique: None/technique: $technique/" \
                     "scenarios/thesis/$route.ron" > "$work/$route~$odometry~$fusion~$technique.ron"
             done

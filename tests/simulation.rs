@@ -318,3 +318,26 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     let widest = trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs()).fold(0.0, f64::max);
     assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
 }
+
+#[test]
+fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in_the_wall() {
+    // A veer odometry does not see, with this seed's slip, walks a robot
+    // steering by odometry 1.4 m off the goal line, 0.6 m from the wall;
+    // odometry puts the goal towards the wall, and every turn towards it
+    // sweeps the robot's corner into the wall until the time limit.
+    // Steering by egomotion (with odometry's sideways motion), it does not.
+    let veer = ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05");
+    let layout = ("seed: 21)", "seed: 2121)");
+    let by_odometry = edited("thesis/route-2-1.ron", &[veer, layout, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
+    let report = run(&by_odometry, 104, None).unwrap();
+    assert_eq!(report.end, EndReason::TimeLimit, "{report:?}");
+    assert!(report.collisions > 100, "{report:?}");
+    let navigating = (
+        "egomotion: (estimator: Rigid())",
+        "egomotion: (estimator: Rigid(), odometry_fusion: Sideways, navigate: true)",
+    );
+    let by_egomotion = edited("thesis/route-2-1.ron", &[veer, layout, navigating]);
+    let report = run(&by_egomotion, 104, None).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert_eq!(report.collisions, 0, "{report:?}");
+}

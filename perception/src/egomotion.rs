@@ -237,6 +237,11 @@ pub struct EgomotionConfig {
     /// estimator's covariance and the gate's `noise` model (the rigid
     /// estimator only; without a gate or its `noise` nothing is combined).
     pub odometry_fusion: OdometryFusion,
+    /// Navigate by egomotion: the robot's pose that behaviours steer by
+    /// becomes egomotion's pose at the newest frame, carried on by what
+    /// odometry says the robot did since, instead of odometry alone. Off
+    /// by default: the thesis's robot navigated by odometry.
+    pub navigate: bool,
 }
 
 /// What of odometry's motion egomotion combines with the visual one.
@@ -281,6 +286,7 @@ impl Default for EgomotionConfig {
             max_turn_rate_deg: 100.0,
             odometry_gate: Some(OdometryGate::default()),
             odometry_fusion: OdometryFusion::Off,
+            navigate: false,
         }
     }
 }
@@ -870,6 +876,19 @@ impl Tracker {
     /// the latest match to it.
     pub fn pose_covariance(&self) -> Matrix3<f64> {
         self.covariance
+    }
+
+    /// Where the robot is now by egomotion, if it navigates by it
+    /// (`navigate`) and a frame has been taken in: the pose at the newest
+    /// frame, carried on by what `odometry` (the odometric pose now) says
+    /// the robot did since. Frames come a few times a second; a controller
+    /// ticking faster steers by this rather than by a pose that stands
+    /// still between frames.
+    pub fn navigation_pose(&self, odometry: &Pose2) -> Option<Pose2> {
+        if !self.config.navigate || self.newest.0 == 0 {
+            return None;
+        }
+        Some(self.state.pose?.compose(&odometry.relative_to(&self.newest.1)))
     }
 
     /// The error model's look-up table the tracker weighs landmarks with.
@@ -1574,6 +1593,33 @@ mod tests {
         assert!(!noise.consistent(&motion(5.3, 0.0), &sharp, &odometric, 5.0));
         assert!(noise.consistent(&motion(5.3, 0.0), &vague, &odometric, 5.0));
         assert!(!noise.consistent(&motion(5.0, 2.0), &sharp, &odometric, 5.0));
+    }
+
+    #[test]
+    fn a_navigating_tracker_carries_its_pose_on_by_odometry_between_frames() {
+        let camera = StereoCamera::default();
+        let start = Pose2::new(1.0, 2.0, 0.0);
+        let seen = |pose: Pose2| frame(&landmarks(), pose, &camera);
+        for navigate in [false, true] {
+            let config = EgomotionConfig { navigate, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, start, 0);
+            assert_eq!(tracker.navigation_pose(&start), None, "no frame yet");
+            // Odometry starts elsewhere and reads 2 % short: egomotion's
+            // pose at the frame is the truth, and the 0.3 m since the frame
+            // comes from odometry.
+            let odometry = Pose2::new(0.0, 0.0, 0.0);
+            tracker.update(&at(1, 0.0, seen(start)), &odometry);
+            let moved = Pose2::new(0.98 * 0.25, 0.0, 0.0);
+            tracker.update(&at(2, 0.5, seen(Pose2::new(1.25, 2.0, 0.0))), &moved);
+            assert_eq!(tracker.state().failures, 0);
+            let now = tracker.navigation_pose(&Pose2::new(moved.x + 0.3, 0.0, 0.0));
+            if navigate {
+                let now = now.unwrap();
+                assert!(now.distance_to(1.55, 2.0) < 1e-6 && now.theta.abs() < 1e-9, "{now:?}");
+            } else {
+                assert_eq!(now, None);
+            }
+        }
     }
 
     #[test]

@@ -5,8 +5,9 @@ use ubf_core::{Command, Limits, Robot, RobotError, State};
 use ubf_perception::egomotion::Tracker;
 
 /// Wraps a robot and, when given a tracker, runs egomotion on its stereo
-/// frames every tick, filling [`State::egomotion`]. Without a tracker it
-/// passes everything straight through.
+/// frames every tick, filling [`State::egomotion`] (and, where the tracker
+/// navigates, replacing the odometric [`State::pose`] with egomotion's).
+/// Without a tracker it passes everything straight through.
 pub struct EgomotionRobot<R> {
     inner: R,
     tracker: Option<Tracker>,
@@ -40,6 +41,9 @@ impl<R: Robot> Robot for EgomotionRobot<R> {
         if let Some(tracker) = &mut self.tracker {
             tracker.update(&state.stereo, &state.pose);
             state.egomotion = tracker.state();
+            if let Some(pose) = tracker.navigation_pose(&state.pose) {
+                state.pose = pose;
+            }
         }
         Ok(())
     }
