@@ -10,14 +10,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/layouts-and-seeds.sh
+. scripts/route-line.sh
 # NAME:FROM:TO:HEADING, as in scripts/path-lottery.sh.
 for line in centre:0.0:0.0:0 diagonal-up:-0.6:0.6:1.69 diagonal-down:0.6:-0.6:-1.69; do
     IFS=: read -r name from to heading <<< "$line"
     for fusion in Off Sideways; do
-        sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $from, heading_deg: $heading)/" \
-            -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $to,/" \
-            -e "s/egomotion: \(estimator: Rigid\(\)\)/egomotion: (estimator: Rigid(), odometry_fusion: $fusion)/" \
-            scenarios/thesis/route-1-2.ron > "$work/$name~$fusion.ron"
+        route_line "$from" "$to" "$heading" \
+            | sed -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), odometry_fusion: $fusion)/" \
+            > "$work/$name~$fusion.ron"
         grep -q "odometry_fusion" "$work/$name~$fusion.ron" || { echo "route-1-2.ron: the egomotion line did not match" >&2; exit 1; }
     done
 done

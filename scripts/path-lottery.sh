@@ -17,13 +17,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/layouts-and-seeds.sh
+. scripts/route-line.sh
 # NAME:FROM:TO:HEADING: the three parallel lines, then the same lateral
 # offsets crossed diagonally, 1.69° off the axis, both ways.
 for line in -0.6:-0.6:-0.6:0 0.0:0.0:0.0:0 0.6:0.6:0.6:0 diagonal-up:-0.6:0.6:1.69 diagonal-down:0.6:-0.6:-1.69; do
     IFS=: read -r name from to heading <<< "$line"
-    sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $from, heading_deg: $heading)/" \
-        -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $to,/" \
-        scenarios/thesis/route-1-2.ron > "$work/$name.ron"
+    route_line "$from" "$to" "$heading" > "$work/$name.ron"
 done
 sed -e "s/technique: None/technique: Tracking/" scenarios/thesis/route-1-2.ron > "$work/tracking.ron"
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2

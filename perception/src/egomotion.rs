@@ -376,8 +376,8 @@ impl OdometryNoise {
         Matrix3::from_diagonal(&Vector3::new(position * position, position * position, heading2))
     }
 
-    /// `odometric` as a vector (forward, left, yaw), its yaw unwrapped to
-    /// lie within half a turn of `motion`'s.
+    /// `motion − odometric` (forward, left, yaw), the yaw difference
+    /// wrapped to within half a turn.
     fn difference(motion: &PlanarMotion, odometric: &Pose2) -> Vector3<f64> {
         Vector3::new(
             motion.forward - odometric.x,
@@ -1425,7 +1425,7 @@ mod tests {
 
     #[test]
     fn the_residual_information_matches_the_spread_of_stereo_residuals() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         // A landmark 40 m off, seen before and after 10 m of driving and a 3°
         // turn, each time through noisy pixels: at the true motion, the
         // residuals weighed by the model's information are χ² with two
@@ -1438,10 +1438,7 @@ mod tests {
         let motion = Pose2::new(10.0, 0.5, 3f64.to_radians());
         let landmark = (40.0, 8.0);
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let mut gaussian = move || {
-            let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-12), rng.random());
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-        };
+        let mut gaussian = move || standard_normal(&mut rng);
         let mut observe = |from: &Pose2| {
             let seen = Pose2::new(landmark.0, landmark.1, 0.0).relative_to(from);
             let (x, y) = (seen.x, seen.y);
@@ -1468,6 +1465,13 @@ mod tests {
         }
         assert!((1.6..2.4).contains(&new), "χ² mean {new}");
         assert!(old > 2.0 * new, "the old model's χ² mean {old}, the new {new}");
+    }
+
+    /// A standard normal draw (Box–Muller).
+    fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
+        use rand::Rng;
+        let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-12), rng.random());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
     }
 
     fn at(number: u64, time: f64, landmarks: Vec<LandmarkObservation>) -> StereoFrame {
@@ -1667,7 +1671,7 @@ mod tests {
         // 3 % (σ, fresh in every frame, as stereo's are); odometry is exact.
         // The fused pose is nearer the truth sideways than the purely visual
         // one.
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let camera = StereoCamera::default();
         let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
         let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
@@ -1675,9 +1679,7 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
             let mut observations = frame(&far, pose(k), &camera);
             for o in &mut observations {
-                let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-12), rng.random());
-                let normal = (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos();
-                let scale = 1.0 + 0.03 * normal;
+                let scale = 1.0 + 0.03 * standard_normal(&mut rng);
                 o.point_cam = o.point_cam.map(|v: f64| v * scale);
             }
             observations
