@@ -9,8 +9,9 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{
-    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2, Registry,
-    Robot, RobotError, SafetyGuard, SafetyPolicy, State, TracingSink, WallClock,
+    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2,
+    ProgressCheck, ProgressWatch, Registry, Robot, RobotError, SafetyGuard, SafetyPolicy, State, TracingSink,
+    WallClock,
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
@@ -293,6 +294,12 @@ pub struct DriveConfig {
     /// believes it is at the goal; `ubf drive --until-goal` sets it.
     #[serde(default)]
     pub until_goal: bool,
+    /// Give up (robot stopped, session closed, exit code 1) once the robot,
+    /// by its own pose, has stayed within `radius_m` of one spot for
+    /// `window_s`: pressed against a wall its goal lies behind, say.
+    /// Unset, only the goal, the time limit or the operator ends a drive.
+    #[serde(default)]
+    pub progress: Option<ProgressCheck>,
     /// The behaviour tree.
     pub root: BehaviorSpec,
 }
@@ -491,6 +498,8 @@ pub enum DriveEnd {
     GoalReached,
     /// The link was lost and the configuration says exit.
     LinkLost,
+    /// The robot got nowhere for the `progress` check's window.
+    NoProgress,
 }
 
 /// What a drive leaves: how it ended and the logs it wrote, one per
@@ -570,6 +579,7 @@ fn status_line<R: Robot>(controller: &Controller<SafetyGuard<R>>) -> String {
 enum SessionEnd {
     Stopped,
     GoalReached,
+    NoProgress,
     LinkLost(String),
     Failed(DriveError),
 }
@@ -629,7 +639,8 @@ fn drive_sessions(
         controller.add_sink(Box::new(TracingSink));
         let ended = match attach_logs(&mut controller, config, model, logs) {
             Ok(()) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                run_session(&mut controller, stop, &out_of_time, config.until_goal, status)
+                let ends = SessionEnds { until_goal: config.until_goal, progress: config.progress };
+                run_session(&mut controller, stop, &out_of_time, ends, status)
             }))
             .unwrap_or_else(|panic| {
                 SessionEnd::Failed(DriveError::Panic(ubf_core::panic_message(panic.as_ref()).to_owned()))
@@ -646,6 +657,7 @@ fn drive_sessions(
         match ended {
             SessionEnd::Stopped => return Ok(DriveEnd::Stopped),
             SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
+            SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
             SessionEnd::Failed(why) => return Err(why),
             SessionEnd::LinkLost(why) => {
                 eprintln!("link lost: {why}");
@@ -725,23 +737,34 @@ fn open_session_mcap(
     }
 }
 
-/// Ticks until stopped, the link is lost, or something fails. The safety
-/// guard around the robot holds it on stale data and declares a lost link;
-/// the controller's sinks log every tick.
+/// What besides the operator, the time limit and failures ends a session.
+#[derive(Clone, Copy)]
+struct SessionEnds {
+    until_goal: bool,
+    progress: Option<ProgressCheck>,
+}
+
+/// Ticks until stopped, the link is lost, something fails, or `ends` says.
+/// The safety guard around the robot holds it on stale data and declares a
+/// lost link; the controller's sinks log every tick.
 fn run_session<R: Robot>(
     controller: &mut Controller<SafetyGuard<R>>,
     stop: &AtomicBool,
     out_of_time: &dyn Fn() -> bool,
-    until_goal: bool,
+    ends: SessionEnds,
     status: Status,
 ) -> SessionEnd {
     let mut shown = Instant::now();
+    let mut progress = ends.progress.map(ProgressWatch::new);
     let ended = loop {
         if stop.load(Ordering::SeqCst) || out_of_time() {
             break SessionEnd::Stopped;
         }
         match controller.tick() {
-            Ok(record) if until_goal && record.state.goal_reached() => break SessionEnd::GoalReached,
+            Ok(record) if ends.until_goal && record.state.goal_reached() => break SessionEnd::GoalReached,
+            Ok(record) if progress.as_mut().is_some_and(|p| p.stalled(record.state.time, &record.state.pose)) => {
+                break SessionEnd::NoProgress
+            }
             Ok(_) => {}
             Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
             Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),

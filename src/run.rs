@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
-use ubf_core::{BuildContext, Controller, ControllerError, Pose2, SimClock, Stopwatch, TickRecord, TracingSink};
+use ubf_core::{
+    BuildContext, Controller, ControllerError, Pose2, ProgressWatch, SimClock, Stopwatch, TickRecord, TracingSink,
+};
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
@@ -28,6 +30,9 @@ pub enum EndReason {
     BehaviorFailed,
     /// Ctrl-C or SIGTERM stopped the run; the report covers what ran.
     Interrupted,
+    /// The robot stayed within the scenario's `progress` radius for its
+    /// window: it was getting nowhere, and the run gave up.
+    NoProgress,
 }
 
 /// What a run did: `report.json`.
@@ -103,6 +108,7 @@ impl std::fmt::Display for RunReport {
             EndReason::TimeLimit => "time limit",
             EndReason::BehaviorFailed => "a behaviour failed; the robot was stopped",
             EndReason::Interrupted => "interrupted",
+            EndReason::NoProgress => "no progress: the robot stayed on one spot, and the run gave up",
         };
         let pose = |p: &Pose2| format!("({:.3}, {:.3}) m, {:.1}°", p.x, p.y, p.theta.to_degrees());
         writeln!(f, "scenario        {} (seed {})", self.scenario, self.seed)?;
@@ -230,6 +236,7 @@ pub fn run_until(
 
     let max_ticks = scenario.max_ticks();
     let mut end_point = EndPointWitness::default();
+    let mut progress = scenario.progress.map(ProgressWatch::new);
     let mut failure = None;
     let mut behavior_failure = None;
     let end = loop {
@@ -238,6 +245,9 @@ pub fn run_until(
                 end_point.observe(record);
                 if record.state.goal_reached() {
                     break EndReason::GoalReached;
+                }
+                if progress.as_mut().is_some_and(|p| p.stalled(record.state.time, &record.state.pose)) {
+                    break EndReason::NoProgress;
                 }
                 if record.tick + 1 >= max_ticks {
                     break EndReason::TimeLimit;

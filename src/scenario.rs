@@ -20,7 +20,7 @@
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use ubf_core::config::{checked, RonError};
-use ubf_core::{BehaviorSpec, Goal, OnBehaviorPanic, Registry};
+use ubf_core::{BehaviorSpec, Goal, OnBehaviorPanic, ProgressCheck, Registry};
 use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 
 /// A headless run: a simulated robot, a goal and the behaviour tree.
@@ -51,6 +51,11 @@ pub struct Scenario {
     /// Where the robot should go; without one the run lasts `max_time_s`.
     #[serde(default)]
     pub goal: Option<Goal>,
+    /// End the run (`end: no_progress`) once the robot, by the pose it
+    /// believes, has stayed within `radius_m` of one spot for `window_s`;
+    /// unset, only the goal or the time limit ends it.
+    #[serde(default)]
+    pub progress: Option<ProgressCheck>,
     /// What a panicking behaviour does: `Stop` (the default) ends the run
     /// with its report; `SkipBehavior` carries on without it.
     #[serde(default)]

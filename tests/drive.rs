@@ -469,6 +469,26 @@ fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
 }
 
 #[test]
+fn a_robot_that_gets_nowhere_is_stopped_and_the_drive_gives_up() {
+    // Pressed against the wall of a 4 m room, its goal beyond: without a
+    // progress check the drive would hold it there until the time limit.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--room", "4x4"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 60.0, progress: (radius_m: 0.3, window_s: 2.0),";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
+    let started = std::time::Instant::now();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no progress"), "{stderr}");
+    assert!(started.elapsed() < Duration::from_secs(30), "gave up after {:?}", started.elapsed());
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out: {line}");
+}
+
+#[test]
 fn a_panicking_behaviour_stops_the_robot_and_is_named() {
     let (mut emulator, address, mut out) = emulator();
     let dir = tempfile::tempdir().unwrap();

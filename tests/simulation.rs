@@ -341,3 +341,21 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
 }
+
+#[test]
+fn a_robot_that_gets_nowhere_gives_up_instead_of_bumping_a_wall_to_the_time_limit() {
+    // The veer case above, steering by odometry: pinned beside the wall,
+    // the robot turns into it again and again. A progress check ends the
+    // run on the robot's own pose, long before the time limit.
+    let edits = [
+        ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05"),
+        ("seed: 21)", "seed: 2121)"),
+        ("max_time_s: 2500.0,", "max_time_s: 2500.0, progress: (radius_m: 0.5, window_s: 30.0),"),
+    ];
+    let report = run(&edited("thesis/route-2-1.ron", &edits), 104, None).unwrap();
+    assert_eq!(report.end, EndReason::NoProgress, "{report:?}");
+    assert!(report.sim_time_s < 300.0, "{report:?}");
+    // Where the robot gets somewhere, the check never fires.
+    let report = run(&edited("thesis/route-2-1.ron", &edits[1..]), 104, None).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+}

@@ -46,6 +46,10 @@ pub(super) fn drive(registry: &Registry, file: &Path, dry_run: bool, status: boo
             Ok(Exit::Success)
         }
         DriveEnd::LinkLost => Ok(Exit::Failure),
+        DriveEnd::NoProgress => {
+            eprintln!("no progress: the robot stayed on one spot for the progress check's window; stopped");
+            Ok(Exit::Failure)
+        }
     }
 }
 

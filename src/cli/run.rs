@@ -30,7 +30,7 @@ pub(super) fn command(
     Ok(match report.end {
         EndReason::BehaviorFailed => Exit::Failure,
         EndReason::Interrupted => Exit::Interrupted,
-        EndReason::GoalReached | EndReason::TimeLimit => Exit::Success,
+        EndReason::GoalReached | EndReason::TimeLimit | EndReason::NoProgress => Exit::Success,
     })
 }
 
