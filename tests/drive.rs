@@ -332,20 +332,32 @@ fn report_line(out: &mut BufReader<std::process::ChildStdout>) -> String {
 
 const GO_ONLY: &str = "Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: 0.3))])";
 
+/// Drives `root` to its end on an emulator started with `emulator_args`,
+/// the robot file carrying `extra`: the drive's output, the emulator's
+/// report line on the session, and the directory with `log.csv`.
+fn drive_on(emulator_args: &[&str], extra: &str, root: &str) -> (std::process::Output, String, tempfile::TempDir) {
+    let (mut emulator, address, mut out) = emulator_with(emulator_args);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, root)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    (drive, line, dir)
+}
+
 #[test]
 fn stale_data_stops_motion_and_the_link_is_declared_lost_on_time() {
     // SIPs stop 3 s into the session while commands still reach the robot:
     // a tree with nothing but GoTo would command motion blind.
-    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--silence", "3:5"]);
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
     let extra = "on_link_loss: Exit, goal: (x: 20.0, y: 0.0),";
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
-    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let (drive, line, dir) = drive_on(&["--listen", "127.0.0.1:0", "--silence", "3:5"], extra, GO_ONLY);
     let stderr = String::from_utf8_lossy(&drive.stderr);
     assert_eq!(drive.status.code(), Some(1), "{stderr}");
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
     assert!(line.contains("closed true"), "{line}");
     assert_eq!(field(&line, "motion_before_first_sip"), Some(0.0), "{line}");
     // Documented: no motion command once data is 0.25 s old, so the last
@@ -451,15 +463,9 @@ fn a_second_interrupt_forces_the_exit_after_stop() {
 fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
     // Driven into the wall of a 4 m room with nothing to avoid it: the
     // robot stalls once and then stays stopped.
-    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--room", "4x4"]);
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
     let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 8.0, safety: (resume_after_s: None),";
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
-    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let (drive, line, dir) = drive_on(&["--listen", "127.0.0.1:0", "--room", "4x4"], extra, GO_ONLY);
     assert!(drive.status.success(), "{}", String::from_utf8_lossy(&drive.stderr));
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
     let stalled = field(&line, "stalled_cycles").unwrap();
     // Held on the first stall report: a few cycles, against one every
     // 0.2 s for the whole run when nothing latched.
@@ -472,40 +478,24 @@ fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
 fn a_robot_that_gets_nowhere_is_stopped_and_the_drive_gives_up() {
     // Pressed against the wall of a 4 m room, its goal beyond: without a
     // progress check the drive would hold it there until the time limit.
-    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--room", "4x4"]);
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
     let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 60.0, progress: (radius_m: 0.3, window_s: 2.0),";
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, GO_ONLY)).unwrap();
     let started = std::time::Instant::now();
-    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let (drive, line, _dir) = drive_on(&["--listen", "127.0.0.1:0", "--room", "4x4"], extra, GO_ONLY);
     let stderr = String::from_utf8_lossy(&drive.stderr);
     assert_eq!(drive.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("no progress"), "{stderr}");
     assert!(started.elapsed() < Duration::from_secs(30), "gave up after {:?}", started.elapsed());
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
     assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out: {line}");
 }
 
 #[test]
 fn a_panicking_behaviour_stops_the_robot_and_is_named() {
-    let (mut emulator, address, mut out) = emulator();
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
     let root = "Composite(arbiter: CommandFusion, children: [
         (behavior: InjectFault(after_s: 1.5, message: \"lost my mind\")), (behavior: GoTo(cruise_speed: 0.3))])";
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", root)).unwrap();
-    let drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["drive", file.to_str().unwrap()])
-        .env("RUST_BACKTRACE", "0")
-        .output()
-        .unwrap();
+    let (drive, line, dir) = drive_on(&["--listen", "127.0.0.1:0"], "goal: (x: 20.0, y: 0.0),", root);
     let stderr = String::from_utf8_lossy(&drive.stderr);
     assert_eq!(drive.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("error: behaviour root/InjectFault panicked: lost my mind"), "{stderr}");
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
     assert!(line.contains("closed true"), "{line}");
     assert!(std::fs::read_to_string(dir.path().join("log.csv")).unwrap().lines().count() > 10);
 }
