@@ -42,11 +42,6 @@ impl ProgressWatch {
         ProgressWatch { check, since: None }
     }
 
-    /// The check it applies.
-    pub fn check(&self) -> ProgressCheck {
-        self.check
-    }
-
     /// Takes the robot at `pose` at `time`, s, and says whether it has now
     /// stayed within the radius of the window's first pose for the whole
     /// window. Leaving the radius starts a new window where it left.
