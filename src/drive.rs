@@ -762,9 +762,7 @@ fn run_session<R: Robot>(
         }
         match controller.tick() {
             Ok(record) if ends.until_goal && record.state.goal_reached() => break SessionEnd::GoalReached,
-            Ok(record) if progress.as_mut().is_some_and(|p| p.stalled(record.state.time, &record.state.pose)) => {
-                break SessionEnd::NoProgress
-            }
+            Ok(record) if progress.as_mut().is_some_and(|p| p.stalled(&record.state)) => break SessionEnd::NoProgress,
             Ok(_) => {}
             Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
             Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),

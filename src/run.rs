@@ -246,7 +246,7 @@ pub fn run_until(
                 if record.state.goal_reached() {
                     break EndReason::GoalReached;
                 }
-                if progress.as_mut().is_some_and(|p| p.stalled(record.state.time, &record.state.pose)) {
+                if progress.as_mut().is_some_and(|p| p.stalled(&record.state)) {
                     break EndReason::NoProgress;
                 }
                 if record.tick + 1 >= max_ticks {

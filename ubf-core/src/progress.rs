@@ -9,10 +9,10 @@
 //! [`ProgressWatch`] ends the attempt once the robot has stayed within a
 //! radius of one spot for a stated time, by the pose the robot believes
 //! (all a real robot has), so the same check runs in the simulator and on
-//! the robot.
+//! the robot. Standing at the goal is not a stall.
 
 use crate::config::positive;
-use crate::Pose2;
+use crate::State;
 use serde::Deserialize;
 
 /// How little movement, for how long, counts as no progress.
@@ -42,12 +42,16 @@ impl ProgressWatch {
         ProgressWatch { check, since: None }
     }
 
-    /// Takes the robot at `pose` at `time`, s, and says whether it has now
-    /// stayed within the radius of the window's first pose for the whole
-    /// window. Leaving the radius starts a new window where it left.
-    pub fn stalled(&mut self, time: f64, pose: &Pose2) -> bool {
+    /// Takes the robot's `state` and says whether it has now stayed within
+    /// the radius of the window's first pose for the whole window. Leaving
+    /// the radius starts a new window where it left; so does believing it
+    /// is at the goal, where standing still is the point.
+    pub fn stalled(&mut self, state: &State) -> bool {
+        let (time, pose) = (state.time, &state.pose);
         match self.since {
-            Some((start, x, y)) if pose.distance_to(x, y) <= self.check.radius_m => time - start >= self.check.window_s,
+            Some((start, x, y)) if pose.distance_to(x, y) <= self.check.radius_m && !state.goal_reached() => {
+                time - start >= self.check.window_s
+            }
             _ => {
                 self.since = Some((time, pose.x, pose.y));
                 false
@@ -59,14 +63,18 @@ impl ProgressWatch {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{Goal, Pose2};
 
     const CHECK: ProgressCheck = ProgressCheck { radius_m: 0.5, window_s: 10.0 };
 
     /// The first time, in steps of 0.1 s, at which the watch says stalled
-    /// for a robot at `pose(t)`.
+    /// for a robot at `pose(t)`, with a goal at (10, 0).
     fn stalled_at(pose: impl Fn(f64) -> Pose2, until: f64) -> Option<f64> {
         let mut watch = ProgressWatch::new(CHECK);
-        (0..=(until * 10.0) as u32).map(|k| f64::from(k) / 10.0).find(|&t| watch.stalled(t, &pose(t)))
+        let goal = Some(Goal { x: 10.0, y: 0.0, tolerance: 0.2 });
+        (0..=(until * 10.0) as u32)
+            .map(|k| f64::from(k) / 10.0)
+            .find(|&t| watch.stalled(&State { time: t, pose: pose(t), goal, ..State::default() }))
     }
 
     #[test]
@@ -94,6 +102,11 @@ mod tests {
         let pose = |t: f64| Pose2::new(0.1 * t.min(10.0), 0.0, 0.0);
         let at = stalled_at(pose, 40.0).unwrap();
         assert!((15.0..=20.1).contains(&at), "{at}");
+    }
+
+    #[test]
+    fn a_robot_waiting_at_its_goal_is_not_stalled() {
+        assert_eq!(stalled_at(|_| Pose2::new(10.1, 0.0, 0.0), 100.0), None);
     }
 
     #[test]
