@@ -1805,7 +1805,8 @@ mod tests {
                     .collect();
                 let mut t = Vector2::new(motion.forward, motion.left);
                 let (_, _, cost) = Rigid::normal_equations(&pairs, &info, yaw, t);
-                let pull = yaw_pull(&camera, config.pixel_sigma, &pairs, &info, turned) * cost / (2.0 * 10.0 - 3.0);
+                let pull =
+                    yaw_pull(&camera, config.pixel_sigma, &pairs, &info, turned) * cost / (2 * pairs.len() - 3) as f64;
                 for _ in 0..8 {
                     let (h, mut g, _) = Rigid::normal_equations(&pairs, &info, yaw, t);
                     g[2] -= pull;
