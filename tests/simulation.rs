@@ -319,6 +319,12 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
 }
 
+/// Route 2->1's edits for a veer odometry does not see, on layout 2121:
+/// with seed 104's slip, a robot steering by odometry ends pinned beside a
+/// wall.
+const VEER: (&str, &str) = ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05");
+const LAYOUT_2121: (&str, &str) = ("seed: 21)", "seed: 2121)");
+
 #[test]
 fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in_the_wall() {
     // A veer odometry does not see, with this seed's slip, walks a robot
@@ -326,9 +332,7 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     // odometry puts the goal towards the wall, and every turn towards it
     // sweeps the robot's corner into the wall until the time limit.
     // Steering by egomotion (with odometry's sideways motion), it does not.
-    let veer = ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05");
-    let layout = ("seed: 21)", "seed: 2121)");
-    let by_odometry = edited("thesis/route-2-1.ron", &[veer, layout, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
+    let by_odometry = edited("thesis/route-2-1.ron", &[VEER, LAYOUT_2121, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
     let report = run(&by_odometry, 104, None).unwrap();
     assert_eq!(report.end, EndReason::TimeLimit, "{report:?}");
     assert!(report.collisions > 100, "{report:?}");
@@ -336,7 +340,7 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
         "egomotion: (estimator: Rigid())",
         "egomotion: (estimator: Rigid(), odometry_fusion: Sideways, navigate: true)",
     );
-    let by_egomotion = edited("thesis/route-2-1.ron", &[veer, layout, navigating]);
+    let by_egomotion = edited("thesis/route-2-1.ron", &[VEER, LAYOUT_2121, navigating]);
     let report = run(&by_egomotion, 104, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
@@ -347,11 +351,8 @@ fn a_robot_that_gets_nowhere_gives_up_instead_of_bumping_a_wall_to_the_time_limi
     // The veer case above, steering by odometry: pinned beside the wall,
     // the robot turns into it again and again. A progress check ends the
     // run on the robot's own pose, long before the time limit.
-    let edits = [
-        ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05"),
-        ("seed: 21)", "seed: 2121)"),
-        ("max_time_s: 2500.0,", "max_time_s: 2500.0, progress: (radius_m: 0.5, window_s: 30.0),"),
-    ];
+    let edits =
+        [VEER, LAYOUT_2121, ("max_time_s: 2500.0,", "max_time_s: 2500.0, progress: (radius_m: 0.5, window_s: 30.0),")];
     let report = run(&edited("thesis/route-2-1.ron", &edits), 104, None).unwrap();
     assert_eq!(report.end, EndReason::NoProgress, "{report:?}");
     assert!(report.sim_time_s < 300.0, "{report:?}");

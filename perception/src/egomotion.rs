@@ -627,19 +627,22 @@ fn rotation(yaw: f64) -> Matrix2<f64> {
 fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b: [f64; 3], yaw: f64) -> Matrix2<f64> {
     let range_a = a[0].hypot(a[1]).max(0.1);
     let range_b = b[0].hypot(b[1]).max(0.1);
-    let (depth_a, depth_b) = (camera.depth_sigma(range_a, pixel_sigma), camera.depth_sigma(range_b, pixel_sigma));
-    let bearing2 = (pixel_sigma / camera.focal_px).powi(2);
     let line_a = Vector2::new(a[0], a[1]) / range_a;
     let line_b = rotation(yaw) * Vector2::new(b[0], b[1]) / range_b;
-    // An ellipse along `line` with these variances along and across it.
-    let ellipse = |line: Vector2<f64>, along: f64, across: f64| {
-        let normal = Vector2::new(-line[1], line[0]);
-        line * line.transpose() * along + normal * normal.transpose() * across
-    };
-    let covariance = ellipse(line_a, depth_a.powi(2), range_a.powi(2) * bearing2)
-        + ellipse(line_b, depth_b.powi(2), range_b.powi(2) * bearing2)
+    let covariance = sight_covariance(camera, pixel_sigma, line_a, range_a)
+        + sight_covariance(camera, pixel_sigma, line_b, range_b)
         + Matrix2::identity() * 1e-8;
     covariance.try_inverse().unwrap_or_else(Matrix2::zeros)
+}
+
+/// The covariance on the floor plane of a point triangulated `range` m
+/// away along the unit `line`: an ellipse long with the depth error along
+/// the line and thin with the bearing's across it.
+fn sight_covariance(camera: &StereoCamera, pixel_sigma: f64, line: Vector2<f64>, range: f64) -> Matrix2<f64> {
+    let normal = Vector2::new(-line[1], line[0]);
+    let along = camera.depth_sigma(range, pixel_sigma).powi(2);
+    let across = range.powi(2) * (pixel_sigma / camera.focal_px).powi(2);
+    line * line.transpose() * along + normal * normal.transpose() * across
 }
 
 impl Rigid {
@@ -1836,10 +1839,7 @@ mod tests {
             .zip(info)
             .map(|(p, l)| {
                 let range = p.after[0].hypot(p.after[1]);
-                let line = Vector2::new(p.after[0], p.after[1]) / range;
-                let normal = Vector2::new(-line[1], line[0]);
-                let own = line * line.transpose() * camera.depth_sigma(range, pixel_sigma).powi(2)
-                    + normal * normal.transpose() * (range * pixel_sigma / camera.focal_px).powi(2);
+                let own = sight_covariance(camera, pixel_sigma, Vector2::new(p.after[0], p.after[1]) / range, range);
                 (generator.transpose() * turn.transpose() * l * turn * own).trace()
             })
             .sum()
