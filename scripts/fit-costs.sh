@@ -3,7 +3,10 @@
 # runs the thesis routes straight and with the techniques that turn
 # (tracking and the scan with the thesis's CV-only objective, and the
 # zig-zag) on training seeds, keeps every run's trajectory.csv, and fits the
-# coefficients to them.
+# coefficients to each run's difference from the straight run of the same
+# route and seed: what choosing a path changes, which is what the decision
+# weighs. (`ubf model fit-costs DIR` without `--against` fits the end points
+# as they are: the coefficients of the predicted σ runs report.)
 #
 #   scripts/fit-costs.sh                 # seeds 100..110, logs in out/fit-costs
 #   SEEDS=200..230 OUT=/tmp/logs scripts/fit-costs.sh
@@ -24,4 +27,4 @@ for route in route-1-2 route-2-1 feature-poor; do
 done
 rm -rf "$out"
 "$ubf" sweep "$scenarios"/*.ron --seeds "$seeds" --out "$out" --trajectories >&2
-"$ubf" model fit-costs "$out" "$@"
+"$ubf" model fit-costs "$out" --against "$out"/*-None "$@"

@@ -16,6 +16,8 @@ ubf=target/release/ubf
 "$ubf" experiment thesis-table2 --json > out/table2.json
 OUT=out/fit-costs scripts/fit-costs.sh --json > out/fit-costs.json
 SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs-130.json
+"$ubf" model fit-costs out/fit-costs --json > out/fit-costs-levels.json
+"$ubf" model fit-costs out/fit-costs-130 --json > out/fit-costs-levels-130.json
 "$ubf" model fit-costs out/fit-costs-130 --check > out/fit-costs-check.txt
 "$ubf" experiment thesis-table4 --json > out/table4.json
 "$ubf" experiment thesis-endpoint --json > out/endpoint.json

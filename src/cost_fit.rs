@@ -21,6 +21,14 @@
 //! heading error across each turn and the single steps' translation error
 //! are reported beside the fit.
 //!
+//! Fitted that way, across runs of different routes, the step term is
+//! credited with whatever separates the routes: one whose landmarks are far
+//! has both larger CVs and larger errors. The decision chooses between
+//! paths through the same place, so with `--against` each run is paired
+//! with a straight run of the same scenario and seed, and the same form is
+//! fitted to the differences: `Δe_end² ≈ σ_cv² · ΔΣ (CV · d)² + …`, what a
+//! path's turns and views changed against driving straight.
+//!
 //! The odometry bridge's heading drift is measured directly instead: the
 //! heading error each bridged step adds, per metre driven. Fitted at the
 //! end point beside the others it came out twelve times larger, because
@@ -61,11 +69,32 @@ pub enum CostFitError {
         /// Seeds found.
         seeds: usize,
     },
+    /// A log has no straight run to be paired with.
+    #[error("{}: no straight run of scenario `{scenario}` and seed {seed} among the logs given to --against", path.display())]
+    Unpaired {
+        /// The log.
+        path: PathBuf,
+        /// Its scenario, as its report.json names it.
+        scenario: String,
+        /// Its seed.
+        seed: u64,
+    },
+    /// A log's report, which names its scenario and seed, is missing or
+    /// unreadable.
+    #[error("{}: {message} (pairing runs needs the report.json `ubf run` and `ubf sweep` leave beside each trajectory.csv)", path.display())]
+    Report {
+        /// The report.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// The logs hold too few turns or steps to fit.
-    #[error("too little to fit: {turns} turn(s) and {steps} straight step(s) in {logs} log(s); need 3 of each")]
+    #[error("too little to fit: {turns} turn(s), {steps} straight step(s) and {runs} run(s) to fit in {logs} log(s); need 3 turns, 3 steps and a run")]
     TooLittle {
         /// Logs read.
         logs: usize,
+        /// Runs to fit (not counting the straight runs of `--against`).
+        runs: usize,
         /// Turns found.
         turns: usize,
         /// Straight steps found.
@@ -82,6 +111,9 @@ pub struct CostFit {
     pub turns: usize,
     /// Straight steps fitted.
     pub steps: usize,
+    /// Runs fitted as differences against a straight run of the same
+    /// scenario and seed; 0 when the runs were fitted as they are.
+    pub paired: usize,
     /// Heading variance a turn leaves, per radian turned, rad².
     pub heading_var_per_rad: f64,
     /// Heading variance any turn leaves, rad².
@@ -89,6 +121,11 @@ pub struct CostFit {
     /// Translation σ per unit of step CV and metre driven that stays in the
     /// end point.
     pub step_sigma_per_cv: f64,
+    /// The same least squares free in sign: σ_cv² (m² per (CV·m)²), the
+    /// heading variance per turn and per radian (rad²). A coefficient the
+    /// fit keeps at zero that is negative here is one the runs contradict,
+    /// not merely one they cannot measure.
+    pub unconstrained: [f64; 3],
     /// RMS heading error of the turns, °, and their mean size, °.
     pub turn_rms_error_deg: f64,
     /// Mean turn, °.
@@ -266,36 +303,40 @@ pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
     Ok(frames)
 }
 
+/// Least squares of `y = c·x` over `rows` with only the `active`
+/// coefficients non-zero, each free in sign (all zero if singular).
+pub(crate) fn least_squares<const N: usize>(rows: &[([f64; N], f64)], active: [bool; N]) -> [f64; N] {
+    let index: Vec<usize> = (0..N).filter(|&k| active[k]).collect();
+    let n = index.len();
+    let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+    let mut b = nalgebra::DVector::<f64>::zeros(n);
+    for (x, y) in rows {
+        for (i, &p) in index.iter().enumerate() {
+            b[i] += x[p] * y;
+            for (j, &q) in index.iter().enumerate() {
+                a[(i, j)] += x[p] * x[q];
+            }
+        }
+    }
+    let solution = a.lu().solve(&b).unwrap_or_else(|| nalgebra::DVector::zeros(n));
+    let mut out = [0.0; N];
+    for (i, &p) in index.iter().enumerate() {
+        out[p] = solution[i];
+    }
+    out
+}
+
 /// Least squares of `y = c·x` over `rows` with every coefficient ≥ 0 and
 /// only the `allowed` ones non-zero: the unconstrained solution, refitted
 /// without the most negative coefficient until none is.
 pub(crate) fn non_negative_least_squares<const N: usize>(rows: &[([f64; N], f64)], allowed: [bool; N]) -> [f64; N] {
     let mut active = allowed;
     loop {
-        let index: Vec<usize> = (0..N).filter(|&k| active[k]).collect();
-        let n = index.len();
-        let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
-        let mut b = nalgebra::DVector::<f64>::zeros(n);
-        for (x, y) in rows {
-            for (i, &p) in index.iter().enumerate() {
-                b[i] += x[p] * y;
-                for (j, &q) in index.iter().enumerate() {
-                    a[(i, j)] += x[p] * x[q];
-                }
-            }
-        }
-        let solution = a.lu().solve(&b).unwrap_or_else(|| nalgebra::DVector::zeros(n));
-        let mut out = [0.0; N];
-        let mut negative = None;
-        for (i, &p) in index.iter().enumerate() {
-            out[p] = solution[i];
-            if solution[i] < 0.0 && negative.is_none_or(|(_, v)| solution[i] < v) {
-                negative = Some((p, solution[i]));
-            }
-        }
+        let c = least_squares(rows, active);
+        let negative = (0..N).filter(|&k| c[k] < 0.0).min_by(|&a, &b| c[a].total_cmp(&c[b]));
         match negative {
-            Some((p, _)) => active[p] = false,
-            None => return out,
+            Some(k) => active[k] = false,
+            None => return c,
         }
         if !active.iter().any(|a| *a) {
             return [0.0; N];
@@ -303,16 +344,33 @@ pub(crate) fn non_negative_least_squares<const N: usize>(rows: &[([f64; N], f64)
     }
 }
 
-/// Fits the coefficients to the logs at `paths`.
-pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
-    // (|turn| rad, e² rad²) and (CV·d, e² m²) over all logs; per log, the
-    // places of its turns, Σ (CV·d)² and its end-point error².
-    let mut turns: Vec<(f64, f64)> = Vec::new();
-    let mut steps: Vec<(f64, f64)> = Vec::new();
-    // (metres driven, heading error² rad²) of each bridged step.
-    let mut bridged: Vec<(f64, f64)> = Vec::new();
-    let mut runs: Vec<RunSummary> = Vec::new();
-    for path in paths {
+impl RunSummary {
+    /// What the end-point form's coefficients multiply: Σ (CV·d)², and the
+    /// turns' Σ lever² and Σ |turn|·lever².
+    fn features(&self) -> [f64; 3] {
+        let lever2 = |(x, y): (f64, f64)| (self.end.0 - x).powi(2) + (self.end.1 - y).powi(2);
+        let per_turn: f64 = self.turns.iter().map(|(at, _)| lever2(*at)).sum();
+        let per_rad: f64 = self.turns.iter().map(|(at, t)| t * lever2(*at)).sum();
+        [self.step_cv_m2, per_turn, per_rad]
+    }
+}
+
+/// What the logs read so far hold of single turns, steps and bridged
+/// steps, reported beside the fit.
+#[derive(Default)]
+struct Samples {
+    /// (|turn| rad, heading error² rad²) of each turn egomotion matched.
+    turns: Vec<(f64, f64)>,
+    /// (CV·d, translation error² m²) of each matched straight step.
+    steps: Vec<(f64, f64)>,
+    /// (metres driven, heading error² rad²) of each bridged step.
+    bridged: Vec<(f64, f64)>,
+}
+
+impl Samples {
+    /// Reads the log at `path`: its turns and steps join the samples, and
+    /// its run's summary is returned (`None` for a log without frames).
+    fn read(&mut self, path: &Path) -> Result<Option<RunSummary>, CostFitError> {
         let frames = read_frames(path)?;
         let mut run = RunSummary::default();
         for stretch in stretches(&frames) {
@@ -323,7 +381,7 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                     run.turns.push(((b.truth.x, b.truth.y), turned.abs()));
                     if a.matched && b.matched {
                         let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), turned);
-                        turns.push((turned.abs(), error * error));
+                        self.turns.push((turned.abs(), error * error));
                     }
                 }
                 Stretch::Interval { from } => {
@@ -332,47 +390,86 @@ pub fn fit_costs(paths: &[PathBuf]) -> Result<CostFit, CostFitError> {
                     let driven = true_step.x.hypot(true_step.y);
                     if !b.matched && drove_straight(&true_step) {
                         let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
-                        bridged.push((driven, error * error));
+                        self.bridged.push((driven, error * error));
                     }
                     let matched_straight = a.matched && b.matched && drove_straight(&true_step);
                     if let Some(cv) = b.step_cv.filter(|_| matched_straight) {
                         let ego_step = b.ego.relative_to(&a.ego);
                         let error = (ego_step.x - true_step.x).hypot(ego_step.y - true_step.y);
-                        steps.push((cv * driven, error * error));
+                        self.steps.push((cv * driven, error * error));
                         run.step_cv_m2 += (cv * driven).powi(2);
                     }
                 }
             }
         }
-        if let Some(last) = frames.last() {
+        Ok(frames.last().map(|last| {
             run.end = (last.truth.x, last.truth.y);
             run.error2 = last.error2();
-            runs.push(run);
+            run
+        }))
+    }
+}
+
+/// The scenario and seed of the run whose log is `path`, as the
+/// `report.json` beside it names them.
+fn run_name(path: &Path) -> Result<(String, u64), CostFitError> {
+    let report = path.with_file_name("report.json");
+    let fail = |message: String| CostFitError::Report { path: report.clone(), message };
+    let text = std::fs::read_to_string(&report).map_err(|e| fail(e.to_string()))?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
+    match (value["scenario"].as_str(), value["seed"].as_u64()) {
+        (Some(scenario), Some(seed)) => Ok((scenario.to_owned(), seed)),
+        _ => Err(fail("no `scenario` name and `seed`".into())),
+    }
+}
+
+/// Fits the coefficients to the logs at `paths`: to their end points as
+/// they are, or, with logs of straight runs in `against`, to each log's
+/// difference from the straight run of its scenario and seed (a log that
+/// is itself in `against` is not fitted).
+pub fn fit_costs(paths: &[PathBuf], against: &[PathBuf]) -> Result<CostFit, CostFitError> {
+    let mut samples = Samples::default();
+    let mut straight = std::collections::BTreeMap::new();
+    for path in against {
+        if let Some(run) = samples.read(path)? {
+            straight.insert(run_name(path)?, run);
         }
     }
-    if turns.len() < 3 || steps.len() < 3 {
-        return Err(CostFitError::TooLittle { logs: paths.len(), turns: turns.len(), steps: steps.len() });
-    }
     // What stays in the end point, fitted over the runs at once:
-    // e² ≈ σ_cv² · Σ (CV·d)² + Σ_turns (per_turn + per_rad · |turn|) · lever².
-    let rows: Vec<([f64; 3], f64)> = runs
-        .iter()
-        .map(|run| {
-            let lever2 = |(x, y): (f64, f64)| (run.end.0 - x).powi(2) + (run.end.1 - y).powi(2);
-            let per_turn: f64 = run.turns.iter().map(|(at, _)| lever2(*at)).sum();
-            let per_rad: f64 = run.turns.iter().map(|(at, t)| t * lever2(*at)).sum();
-            ([run.step_cv_m2, per_turn, per_rad], run.error2)
-        })
-        .collect();
+    // e² ≈ σ_cv² · Σ (CV·d)² + Σ_turns (per_turn + per_rad · |turn|) · lever²,
+    // or the same of the differences from the straight runs.
+    let mut rows: Vec<([f64; 3], f64)> = Vec::new();
+    let fitted: Vec<&PathBuf> = paths.iter().filter(|p| !against.contains(p)).collect();
+    for path in &fitted {
+        let Some(run) = samples.read(path)? else { continue };
+        if against.is_empty() {
+            rows.push((run.features(), run.error2));
+            continue;
+        }
+        let (scenario, seed) = run_name(path)?;
+        let Some(base) = straight.get(&(scenario.clone(), seed)) else {
+            return Err(CostFitError::Unpaired { path: path.to_path_buf(), scenario, seed });
+        };
+        let (x, b) = (run.features(), base.features());
+        rows.push(([x[0] - b[0], x[1] - b[1], x[2] - b[2]], run.error2 - base.error2));
+    }
+    let Samples { turns, steps, bridged } = samples;
+    let logs = fitted.len() + against.len();
+    if turns.len() < 3 || steps.len() < 3 || rows.is_empty() {
+        return Err(CostFitError::TooLittle { logs, turns: turns.len(), steps: steps.len(), runs: rows.len() });
+    }
     let [step_var_per_cv2, per_turn, per_rad] = non_negative_least_squares(&rows, [true; 3]);
+    let unconstrained = least_squares(&rows, [true; 3]);
     let mean = |v: &[(f64, f64)], f: &dyn Fn(&(f64, f64)) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
     Ok(CostFit {
-        logs: paths.len(),
+        logs,
         turns: turns.len(),
         steps: steps.len(),
+        paired: if against.is_empty() { 0 } else { rows.len() },
         heading_var_per_rad: per_rad,
         heading_var_per_turn: per_turn,
         step_sigma_per_cv: step_var_per_cv2.sqrt(),
+        unconstrained,
         turn_rms_error_deg: mean(&turns, &|t| t.1).sqrt().to_degrees(),
         turn_mean_deg: mean(&turns, &|t| t.0).to_degrees(),
         step_rms_error_m: mean(&steps, &|s| s.1).sqrt(),
@@ -425,6 +522,13 @@ fn rank_correlation(pairs: &[(f64, f64)]) -> f64 {
 impl std::fmt::Display for CostFit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "logs            {} ({} turns, {} straight steps)", self.logs, self.turns, self.steps)?;
+        if self.paired > 0 {
+            writeln!(
+                f,
+                "fitted          {} runs, each as its difference from the straight run of its scenario and seed",
+                self.paired
+            )?;
+        }
         writeln!(
             f,
             "turns           mean {:.1}°, RMS heading error {:.3}°",
@@ -448,7 +552,20 @@ impl std::fmt::Display for CostFit {
                 self.bridged_steps
             )?,
         }
-        writeln!(f, "as the decision's costs (paste into ActionAiding(costs: ...)):")?;
+        let [cv2, per_turn, per_rad] = self.unconstrained;
+        writeln!(
+            f,
+            "free in sign    σ_cv² {cv2:.3e}, heading variance per turn {per_turn:.3e}, per radian {per_rad:.3e} \
+             (a negative one is contradicted by the runs; the decision takes it as 0)"
+        )?;
+        if self.paired > 0 {
+            writeln!(f, "as the decision's costs (paste into ActionAiding(costs: ...)):")?;
+        } else {
+            writeln!(
+                f,
+                "as the levels a run's predicted σ takes (the decision's own costs are fitted --against straight runs):"
+            )?;
+        }
         writeln!(
             f,
             "  (step_sigma_per_cv: {:.4e}, heading_var_per_rad: {:.4e}, heading_var_per_turn: {:.4e}, \
@@ -545,14 +662,14 @@ mod tests {
             }
         }
         std::fs::write(&path, text).unwrap();
-        let fit = fit_costs(std::slice::from_ref(&path)).unwrap();
+        let fit = fit_costs(std::slice::from_ref(&path), &[]).unwrap();
         assert_eq!((fit.logs, fit.turns), (1, 6));
         assert!((fit.turn_rms_error_deg - 0.01f64.to_degrees()).abs() < 1e-6, "{fit:?}");
         assert!((fit.turn_mean_deg - 0.5f64.to_degrees()).abs() < 1e-6, "{fit:?}");
         assert!(fit.step_rms_error_m < 0.01, "steps inherit only the turns' error: {fit:?}");
         // A log without ground truth is refused with its line.
         std::fs::write(&path, format!("{HEADER}0,,,,1,2,3,0,,1\n")).unwrap();
-        let e = fit_costs(&[path]).unwrap_err().to_string();
+        let e = fit_costs(&[path], &[]).unwrap_err().to_string();
         assert!(e.contains(":2:") && e.contains("ground truth"), "{e}");
     }
 
@@ -594,7 +711,7 @@ mod tests {
         }
         std::fs::write(&turning, text).unwrap();
         logs.push(turning);
-        let fit = fit_costs(&logs).unwrap();
+        let fit = fit_costs(&logs, &[]).unwrap();
         assert_eq!(fit.bridged_steps, 5);
         let measured = fit.bridge_heading_var_per_m.unwrap();
         assert!((measured - 1e-4 / 0.3).abs() < 1e-12, "{measured}");

@@ -70,8 +70,9 @@ pub struct RunReport {
     /// Egomotion steps that failed for want of usable landmarks.
     pub egomotion_failures: Option<u32>,
     /// The end-point σ the decision's error model predicts for the path
-    /// driven (from odometry and the step CVs, with the default
-    /// coefficients), m: compare with `endpoint_error_m`.
+    /// driven (from odometry and the step CVs, with the coefficients fitted
+    /// to end points as they are, [`DecisionCosts::levels`]), m: compare
+    /// with `endpoint_error_m`.
     pub predicted_endpoint_sigma_m: Option<f64>,
     /// The position σ of the last pose by egomotion's own covariance (the
     /// estimator's inverse information, chained through the keyframes),
@@ -362,7 +363,7 @@ impl Default for EndPointWitness {
             frame: 0,
             truth_at_frame: None,
             odometry_at_frame: None,
-            predictor: EndPointPredictor::new(DecisionCosts::default()),
+            predictor: EndPointPredictor::new(DecisionCosts::levels()),
         }
     }
 }

@@ -842,11 +842,13 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "costs",
                 "costs",
                 "",
-                "(step_sigma_per_cv: 0.90, heading_var_per_rad: 9.3e-6, heading_var_per_turn: 1.2e-5, \
-                 bridge_heading_var_per_m: 1.17e-5)",
+                "(step_sigma_per_cv: 0.0, heading_var_per_rad: 1.41e-5, heading_var_per_turn: 0.0, \
+                 bridge_heading_var_per_m: 1.15e-5)",
                 "each ≥ 0",
-                "the end-point objective's coefficients, measured: as `ubf model fit-costs` fits them from run logs \
-                 (`scripts/fit-costs.sh`); a turn within `heading_tolerance_deg` is steered while driving and costs no \
+                "the end-point objective's coefficients, measured: as `ubf model fit-costs --against` fits them from \
+                 run logs, each run against a straight run of the same route and seed (`scripts/fit-costs.sh`; on the \
+                 thesis routes the steps' CVs did not tell which path ends nearer, so the step term is 0 and the \
+                 robot turns only where the goal bearing would leave egomotion too few landmarks); a turn within `heading_tolerance_deg` is steered while driving and costs no \
                  turn; `bridge_heading_var_per_m` is the heading variance a metre on the odometry bridge adds",
             ),
             Field::new(

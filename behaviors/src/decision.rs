@@ -38,8 +38,11 @@ pub struct DecisionRules {
     pub down_fov: f64,
 }
 
-/// The error coefficients of egomotion the end-point objective weighs, both
-/// measured from run logs by `ubf model fit-costs`.
+/// The error coefficients of egomotion the end-point objective weighs,
+/// measured from run logs by `ubf model fit-costs`. The defaults are what
+/// choosing a path changes, fitted to each run's difference from a straight
+/// run of the same route and seed; [`DecisionCosts::levels`] are what
+/// predicts how large a run's error will be.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DecisionCosts {
@@ -104,18 +107,20 @@ impl DecisionCosts {
     }
 }
 
-/// Measured by `scripts/fit-costs.sh`: `ubf model fit-costs` on 120 runs of
-/// the thesis routes driven straight, with tracking, the scan and the
-/// zig-zag (seeds 100..110), fitting what stays in the end point; see
-/// `docs/results.md`.
-const STEP_SIGMA_PER_CV: f64 = 0.90;
-/// As above: 0.17° per radian turned.
-const HEADING_VAR_PER_RAD: f64 = 9.3e-6;
-/// As above: 0.20° per turn on the spot.
-const HEADING_VAR_PER_TURN: f64 = 1.2e-5;
-/// Measured directly on the 742 bridged steps of `scripts/fit-costs.sh`
-/// with seeds 100..130: 0.20° per √m, the slip the routes' odometry has.
-const BRIDGE_HEADING_VAR_PER_M: f64 = 1.17e-5;
+/// Measured by `SEEDS=100..130 scripts/fit-costs.sh` (`ubf model
+/// fit-costs --against` the straight runs, on 360 runs of the thesis routes
+/// with tracking, the scan and the zig-zag; see `docs/results.md`): what a
+/// path's views change in its end point against driving straight. None: the
+/// runs whose steps had the smaller CVs did not end nearer (free in sign,
+/// the least squares put the term below zero).
+const STEP_SIGMA_PER_CV: f64 = 0.0;
+/// As above: 0.22° per √rad turned.
+const HEADING_VAR_PER_RAD: f64 = 1.41e-5;
+/// As above: none for a turn as such.
+const HEADING_VAR_PER_TURN: f64 = 0.0;
+/// Measured directly on the 504 bridged steps of the same runs: 0.19° per
+/// √m, the slip the routes' odometry has.
+const BRIDGE_HEADING_VAR_PER_M: f64 = 1.15e-5;
 
 impl Default for DecisionCosts {
     fn default() -> Self {
@@ -128,13 +133,26 @@ impl Default for DecisionCosts {
     }
 }
 
+impl DecisionCosts {
+    /// The coefficients fitted to the same runs' end points as they are
+    /// (`ubf model fit-costs` without `--against`): across routes, the
+    /// steps' CVs do go with the error (a route whose landmarks are far
+    /// has both larger), so these predict how large a run's error will be,
+    /// for reporting beside the actual error, though not which of two paths
+    /// through the same place ends nearer.
+    pub fn levels() -> Self {
+        DecisionCosts { step_sigma_per_cv: 0.614, heading_var_per_rad: 2.19e-5, ..DecisionCosts::default() }
+    }
+}
+
 /// The end-point error the decision's model predicts for a path, from what
 /// the robot knew while driving it (odometry and egomotion's step CVs, no
 /// ground truth): each step's translation variance, plus the heading
 /// variance of each turn and each step on the odometry bridge, carried over
-/// the distance from there to the end. It is the sum the
-/// end-point objective minimises one step at a time, so a run's actual error
-/// over this σ says how well the model is calibrated.
+/// the distance from there to the end. It is the sum the end-point
+/// objective minimises one step at a time; given
+/// [`DecisionCosts::levels`], a run's actual error over this σ says how
+/// well the model is calibrated.
 #[derive(Clone, Debug, Default)]
 pub struct EndPointPredictor {
     costs: DecisionCosts,

@@ -85,7 +85,7 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     use ubf_perception::error_model::{corridor_heights, fit_exponential, FitReport, GeometricModel};
     let args: &CameraArgs = match &action {
         ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
-        ModelCommand::FitCosts { logs, check, json } => return fit_costs(logs, *check, *json),
+        ModelCommand::FitCosts { logs, check, against, json } => return fit_costs(logs, *check, against, *json),
     };
     if !(args.step.is_finite() && args.step > 0.0) {
         return Err(CliError::bad_input("--step must be a positive number of metres"));
@@ -162,14 +162,15 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     Ok(Exit::Success)
 }
 
-fn fit_costs(logs: &[PathBuf], check: bool, json: bool) -> Outcome {
+fn fit_costs(logs: &[PathBuf], check: bool, against: &[PathBuf], json: bool) -> Outcome {
     use crate::cost_fit::{find_logs, fit_costs};
     let paths = find_logs(logs).map_err(CliError::bad_input)?;
+    let against = find_logs(against).map_err(CliError::bad_input)?;
     if check {
         let forms = crate::cost_forms::check_forms(&paths).map_err(CliError::bad_input)?;
         super::show(&forms, json)?;
     } else {
-        let fit = fit_costs(&paths).map_err(CliError::bad_input)?;
+        let fit = fit_costs(&paths, &against).map_err(CliError::bad_input)?;
         super::show(&fit, json)?;
     }
     Ok(Exit::Success)

@@ -513,8 +513,16 @@ enum ModelCommand {
         /// seeds kept apart (the logs must be in a sweep's `seed-N`
         /// directories, at least three seeds): the first two thirds of the
         /// seeds fit, the end points of the rest test.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "against")]
         check: bool,
+        /// Logs (or directories of logs) of straight runs: fit each other
+        /// log's difference from the straight run of the same scenario and
+        /// seed (named by the report.json beside each log), which is what
+        /// the decision chooses between, instead of the end points as they
+        /// are, where the step term is also credited with whatever
+        /// separates one route from another.
+        #[arg(long, num_args = 1..)]
+        against: Vec<PathBuf>,
         /// Print the fit as JSON.
         #[arg(long)]
         json: bool,
