@@ -717,4 +717,53 @@ mod tests {
         assert!((measured - 1e-4 / 0.3).abs() < 1e-12, "{measured}");
         assert_eq!(fit.costs().bridge_heading_var_per_m, measured);
     }
+
+    /// Writes a run's log and report under `dir/NAME/seed-SEED`: legs of
+    /// four 0.3 m steps with a turn of `turn` rad on the spot after each,
+    /// egomotion overshooting every turn by `overshoot` rad.
+    fn write_run(dir: &Path, name: &str, seed: u64, turn: f64, overshoot: f64) -> PathBuf {
+        let run = dir.join(name).join(format!("seed-{seed}"));
+        std::fs::create_dir_all(&run).unwrap();
+        let mut text = String::from(HEADER);
+        let (mut truth, mut ego, mut frame) = (Pose2::default(), Pose2::default(), 0);
+        for leg in 0..4 {
+            let steps = [Pose2::new(0.3, 0.0, 0.0); 4];
+            let sign = if leg % 2 == 0 { 1.0 } else { -1.0 };
+            let turns = [(Pose2::new(0.0, 0.0, sign * turn), Pose2::new(0.0, 0.0, sign * (turn + overshoot)))];
+            for (t, e) in steps.iter().map(|s| (*s, *s)).chain(turns.into_iter().filter(|_| turn > 0.0)) {
+                truth = truth.compose(&t);
+                ego = ego.compose(&e);
+                frame += 1;
+                text += &format!(
+                    "0,{},{},{},{},{},{},0,0.1,{frame}\n",
+                    truth.x, truth.y, truth.theta, ego.x, ego.y, ego.theta
+                );
+            }
+        }
+        std::fs::write(run.join("trajectory.csv"), text).unwrap();
+        std::fs::write(run.join("report.json"), format!("{{\"scenario\": \"route\", \"seed\": {seed}}}")).unwrap();
+        run.join("trajectory.csv")
+    }
+
+    #[test]
+    fn against_straight_runs_each_run_is_fitted_as_its_difference_from_its_own() {
+        let dir = tempfile::tempdir().unwrap();
+        let straight: Vec<PathBuf> = (1..=3).map(|seed| write_run(dir.path(), "straight", seed, 0.0, 0.0)).collect();
+        // Turns of 0.2, 0.4 and 0.6 rad, each overshot by a tenth of itself.
+        let turning: Vec<PathBuf> =
+            (1..=3).map(|seed| write_run(dir.path(), "turning", seed, 0.2 * seed as f64, 0.02 * seed as f64)).collect();
+        let fit = fit_costs(&[straight.clone(), turning.clone()].concat(), &straight).unwrap();
+        assert_eq!((fit.logs, fit.paired), (6, 3), "{fit:?}");
+        // The straight runs end exactly where they are: what the turning
+        // runs' errors differ by is the turns', not the steps'.
+        assert_eq!(fit.step_sigma_per_cv, 0.0, "{fit:?}");
+        assert!(fit.heading_var_per_rad + fit.heading_var_per_turn > 0.0, "{fit:?}");
+        // A run without its straight run is refused, named.
+        let e = fit_costs(&turning, &straight[..2]).unwrap_err().to_string();
+        assert!(e.contains("seed-3") && e.contains("`route` and seed 3"), "{e}");
+        // And so is one whose report is gone.
+        std::fs::remove_file(turning[0].with_file_name("report.json")).unwrap();
+        let e = fit_costs(&turning, &straight).unwrap_err().to_string();
+        assert!(e.contains("report.json"), "{e}");
+    }
 }
