@@ -104,7 +104,7 @@ scripts/error-chain.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..
 scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
-    commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484 8c2df86)
+    commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484 8c2df86 195009d)
     scratch=$(mktemp -d)
     trap 'git worktree remove --force "$scratch/tree" 2>/dev/null || true; rm -rf "$scratch"' EXIT
     for k in "${!commits[@]}"; do
