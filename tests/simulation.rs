@@ -308,13 +308,12 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     // landmarks are. The default costs put nothing on a step's view (on
     // these routes none paid), so the camera would never look aside: the
     // step term here is the one fitted to end points as they are.
-    let scenario = edited(
-        "thesis/route-1-2.ron",
-        &[
-            ("technique: None", "technique: Tracking, steer: Camera, costs: (step_sigma_per_cv: 0.614)"),
-            ("camera: (", "camera: (pan_tilt: (), "),
-        ],
+    let steer = format!(
+        "technique: Tracking, steer: Camera, costs: (step_sigma_per_cv: {})",
+        ubf_behaviors::decision::DecisionCosts::levels().step_sigma_per_cv
     );
+    let scenario =
+        edited("thesis/route-1-2.ron", &[("technique: None", &steer), ("camera: (", "camera: (pan_tilt: (), ")]);
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 3, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");

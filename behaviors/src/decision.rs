@@ -133,6 +133,13 @@ impl Default for DecisionCosts {
     }
 }
 
+/// Measured on the same runs by `ubf model fit-costs out/fit-costs-130`
+/// (without `--against`: the end points as they are); the turns' share per
+/// turn comes out zero there too, and the bridge is measured directly.
+const LEVEL_STEP_SIGMA_PER_CV: f64 = 0.614;
+/// As above.
+const LEVEL_HEADING_VAR_PER_RAD: f64 = 2.19e-5;
+
 impl DecisionCosts {
     /// The coefficients fitted to the same runs' end points as they are
     /// (`ubf model fit-costs` without `--against`): across routes, the
@@ -141,7 +148,11 @@ impl DecisionCosts {
     /// for reporting beside the actual error, though not which of two paths
     /// through the same place ends nearer.
     pub fn levels() -> Self {
-        DecisionCosts { step_sigma_per_cv: 0.614, heading_var_per_rad: 2.19e-5, ..DecisionCosts::default() }
+        DecisionCosts {
+            step_sigma_per_cv: LEVEL_STEP_SIGMA_PER_CV,
+            heading_var_per_rad: LEVEL_HEADING_VAR_PER_RAD,
+            ..DecisionCosts::default()
+        }
     }
 }
 
