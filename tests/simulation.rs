@@ -200,6 +200,29 @@ fn a_turn_blocked_a_few_degrees_short_steers_on_instead_of_turning_round() {
 }
 
 #[test]
+fn a_step_a_rotate_then_translate_robot_cannot_take_is_decided_again() {
+    // Found running the thesis's rotate-then-translate profile: 1.8 m from
+    // the goal beside a wall, AvoidCollision's turn away and the step's own
+    // correction back alternated every tick. A robot that turns on the spot
+    // before it translates spent each tick turning, never drove, and the
+    // step (so the run) lasted until the time limit. A step that gets
+    // nowhere now ends, and the next decision starts from where the robot is.
+    let scenario = edited(
+        "thesis/route-2-1.ron",
+        &[
+            ("technique: None", "technique: Scan"),
+            (
+                "egomotion: (estimator: Rigid()),",
+                "egomotion: (estimator: Rigid()), motion: RotateThenTranslate(heading_tolerance_deg: 2.0),",
+            ),
+        ],
+    );
+    let report = run(&scenario, 1, None).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert!(report.sim_time_s < 600.0, "{report:?}");
+}
+
+#[test]
 fn the_tracking_list_predicts_the_landmarks_the_camera_then_sees() {
     // ActionAiding with tracking, driven on its own down route 1->2: at each
     // decision it predicts how many landmarks the chosen heading keeps in

@@ -282,12 +282,15 @@ enum Phase {
     Approach,
 }
 
-/// Watches a turn on the spot for progress. Beside another behaviour that
-/// turns the other way (AvoidCollision facing a wall, say), a command fusion
-/// can cancel the turn and leave the robot sitting still; a turn that gains
-/// less than a degree in `STUCK_S` is stuck.
+/// Watches a phase for progress: the angle still to turn, or the share of
+/// a step still to drive (a step counting as a radian). Beside another
+/// behaviour that turns the other way (AvoidCollision facing a wall, say), a
+/// command fusion can cancel a turn and leave the robot sitting still, and a
+/// robot that turns on the spot before it translates can spend a whole step
+/// turning to and fro between the two; a phase that gains less than a
+/// degree (or a 57th of a step) in `STUCK_S` is stuck.
 #[derive(Clone, Copy, Debug)]
-struct TurnWatch {
+struct ProgressWatch {
     since: f64,
     best: f64,
     /// Going the long way round, after the short way stuck: the direction
@@ -300,9 +303,9 @@ struct TurnWatch {
 /// Seconds without a degree of progress after which a turn is stuck.
 const STUCK_S: f64 = 5.0;
 
-impl TurnWatch {
+impl ProgressWatch {
     fn new() -> Self {
-        TurnWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, long_way: None }
+        ProgressWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, long_way: None }
     }
 
     /// Takes in the angle still to turn at `now`; whether the turn is stuck.
@@ -358,7 +361,7 @@ pub struct ActionAiding {
     positions: Vec<[f64; 3]>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
-    watch: TurnWatch,
+    watch: ProgressWatch,
     /// Landmarks the last evaluated heading was predicted to keep in view,
     /// and how many the camera delivered at the end of the step taken.
     predicted: Option<usize>,
@@ -408,7 +411,7 @@ impl ActionAiding {
             positions: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
-            watch: TurnWatch::new(),
+            watch: ProgressWatch::new(),
             predicted: None,
             seen: None,
             check: PredictionCheck::default(),
@@ -635,7 +638,8 @@ impl ActionAiding {
         }
         echo_points(state, &mut self.echoes);
         let vote = self.vote(state);
-        // Two passes at most: a finished phase hands over within the tick.
+        // Three passes at most: a finished phase hands over within the tick
+        // (a step to the decision, the decision to a turn or a scan).
         for _ in 0..3 {
             match self.phase {
                 Phase::Decide => {
@@ -655,7 +659,7 @@ impl ActionAiding {
                     };
                     if distance <= final_approach {
                         self.phase = Phase::Approach;
-                        self.watch = TurnWatch::new();
+                        self.watch = ProgressWatch::new();
                         continue;
                     }
                     let heading = match technique {
@@ -674,12 +678,12 @@ impl ActionAiding {
                                 centre: to_goal,
                                 from: pose.theta,
                             };
-                            self.watch = TurnWatch::new();
+                            self.watch = ProgressWatch::new();
                             continue;
                         }
                     };
                     self.phase = Phase::Turn { heading };
-                    self.watch = TurnWatch::new();
+                    self.watch = ProgressWatch::new();
                 }
                 Phase::Scan { edges, leg, centre, from } => {
                     let error = angle_difference(edges[leg], pose.theta).abs();
@@ -690,7 +694,7 @@ impl ActionAiding {
                         let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
-                    self.watch = TurnWatch::new();
+                    self.watch = ProgressWatch::new();
                     if leg == 0 {
                         self.phase = Phase::Scan { edges, leg: 1, centre, from };
                     } else {
@@ -710,6 +714,7 @@ impl ActionAiding {
                         if self.watch.stuck(state.time, self.watch.angle_left(error)) {
                             if self.watch.long_way.is_some() || error.abs() < std::f64::consts::FRAC_PI_2 {
                                 self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
+                                self.watch = ProgressWatch::new();
                                 continue;
                             }
                             self.watch.long_way = Some(-error.signum());
@@ -721,9 +726,13 @@ impl ActionAiding {
                         return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
                     }
                     self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
+                    self.watch = ProgressWatch::new();
                 }
                 Phase::Step { heading, from } => {
-                    if pose.distance_to(from.0, from.1) >= self.config.step_m {
+                    let left = 1.0 - pose.distance_to(from.0, from.1) / self.config.step_m;
+                    // A step that gets nowhere is over: decide again from
+                    // where the robot is.
+                    if left <= 0.0 || self.watch.stuck(state.time, left) {
                         self.phase = Phase::Decide;
                         continue;
                     }
