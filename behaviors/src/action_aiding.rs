@@ -851,7 +851,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "costs",
                 "costs",
                 "",
-                "(step_sigma_per_cv: 0.0, heading_var_per_rad: 1.41e-5, heading_var_per_turn: 0.0, \
+                "(step_sigma_per_cv: 0.0, heading_var_per_rad: 1.44e-5, heading_var_per_turn: 0.0, \
                  bridge_heading_var_per_m: 1.15e-5)",
                 "each ≥ 0",
                 "the end-point objective's coefficients, measured: as `ubf model fit-costs --against` fits them from \
