@@ -57,6 +57,13 @@ held_out 7000..7030 1414 1515 1616
 # layouts and dropped: nothing was developed or tried on it.
 held_out 8000..8030 1717 1818 1919
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
+# Tracking's misses on the held-out layouts, measured at the last frame and
+# at the frames before it.
+scripts/last-frame.sh "101 202 303" 1000..1030 > out/last-frame-1000.json
+scripts/last-frame.sh "707 808 909" 3000..3030 > out/last-frame-3000.json
+scripts/last-frame.sh "1111 1212 1313" 6000..6030 > out/last-frame-6000.json
+scripts/last-frame.sh "1414 1515 1616" 7000..7030 > out/last-frame-7000.json
+scripts/last-frame.sh "1717 1818 1919" 8000..8030 > out/last-frame-8000.json
 # Whether the 3D error model predicts egomotion's step errors better: the
 # routes driven straight and with tracking, the step CVs from each model,
 # ranked against the steps' actual errors by `ubf model fit-costs`.
