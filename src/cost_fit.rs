@@ -452,7 +452,8 @@ pub fn fit_costs(paths: &[PathBuf], against: &[PathBuf]) -> Result<CostFit, Cost
     }
     // What stays in the end point, fitted over the runs at once:
     // e² ≈ σ_cv² · Σ (CV·d)² + Σ_turns (per_turn + per_rad · |turn|) · lever²,
-    // or the same of the differences from the straight runs.
+    // or the same of the differences from the straight runs, there with
+    // + bridge · Σ_bridged d · lever².
     let mut rows: Vec<([f64; 4], f64)> = Vec::new();
     let fitted: Vec<&PathBuf> = paths.iter().filter(|p| !against.contains(p)).collect();
     for path in &fitted {

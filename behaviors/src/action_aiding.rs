@@ -300,7 +300,7 @@ struct ProgressWatch {
     long_way: Option<f64>,
 }
 
-/// Seconds without a degree of progress after which a turn is stuck.
+/// Seconds without a degree of progress after which a phase is stuck.
 const STUCK_S: f64 = 5.0;
 
 impl ProgressWatch {
@@ -308,7 +308,9 @@ impl ProgressWatch {
         ProgressWatch { since: f64::NEG_INFINITY, best: f64::INFINITY, long_way: None }
     }
 
-    /// Takes in the angle still to turn at `now`; whether the turn is stuck.
+    /// Takes in the progress still to make at `now` (the angle still to
+    /// turn, or the share of a step still to drive); whether the phase is
+    /// stuck.
     fn stuck(&mut self, now: f64, remaining: f64) -> bool {
         if remaining < self.best - 1f64.to_radians() || !self.since.is_finite() {
             self.best = remaining;
