@@ -23,11 +23,13 @@ Prints JSON: per scenario, the runs, the RMS end-point error, how closely
 the chain's sum matches it, and per class the links per run, the RMS of
 what they add and the RMS end-point error without them.
 """
-import csv
 import json
 import math
 import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import trajectory_log  # noqa: E402  (scripts/trajectory_log.py)
 
 LONG_M = 2.0
 
@@ -39,12 +41,7 @@ def wrap(angle):
 def chain_parts(path):
     """The end-point error (x, y) at the last frame and each link's part of
     it, as (class, (dx, dy)), from one trajectory.csv."""
-    with open(path, newline='') as f:
-        rows = list(csv.DictReader(f))
-    first = {}
-    for row in rows:
-        if row['frame'] and row['ego_x']:
-            first.setdefault(int(row['frame']), row)
+    first = trajectory_log.frames(path)
     if not first:
         return None
 

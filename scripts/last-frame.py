@@ -10,26 +10,23 @@ runs them).
 Prints JSON: {"route": {"layout": {"last": r, "one_before": r,
 "two_before": r}}}, each `r` tracking's mean error over straight's.
 """
-import csv
 import glob
 import json
 import math
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import trajectory_log  # noqa: E402  (scripts/trajectory_log.py)
+
 FRAMES_BACK = {"last": 1, "one_before": 2, "two_before": 3}
 
 
 def frame_errors(path):
-    """The position error at each frame (its first row), in order."""
-    errors, seen = [], set()
-    with open(path, newline='') as f:
-        for row in csv.DictReader(f):
-            if row['frame'] and row['ego_x'] and row['frame'] not in seen:
-                seen.add(row['frame'])
-                errors.append(math.hypot(float(row['ego_x']) - float(row['true_x']),
-                                         float(row['ego_y']) - float(row['true_y'])))
-    return errors
+    """The position error at each frame, in order."""
+    first = trajectory_log.frames(path)
+    return [math.hypot(float(r['ego_x']) - float(r['true_x']), float(r['ego_y']) - float(r['true_y']))
+            for r in (first[k] for k in sorted(first))]
 
 
 def mean_errors(directory):

@@ -24,7 +24,9 @@ SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs
 "$ubf" experiment thesis-endpoint --objective cv --json > out/endpoint-cv.json
 "$ubf" experiment thesis-endpoint --rotate-then-translate --json > out/endpoint-rtt.json
 # The end-point experiment on held-out layouts, with the planar error model
-# and with the 3D one: held_out SEEDS LAYOUT...
+# and with the 3D one, and tracking against straight driving at the last
+# frame and the two before (out/last-frame-FIRSTSEED.json): held_out SEEDS
+# LAYOUT...
 held_out() {
     local seeds=$1 layout
     shift
@@ -37,6 +39,7 @@ held_out() {
                 --json > "out/endpoint-held-$layout-$fusion.json"
         done
     done
+    scripts/last-frame.sh "$*" "$seeds" > "out/last-frame-${seeds%%..*}.json"
 }
 held_out 1000..1030 101 202 303
 # A second held-out set, first run after the change it checks (straight on
@@ -57,13 +60,6 @@ held_out 7000..7030 1414 1515 1616
 # layouts and dropped: nothing was developed or tried on it.
 held_out 8000..8030 1717 1818 1919
 "$ubf" experiment thesis-endpoint --seeds 1000..1030 --layout-seed 101 --objective cv --json > out/endpoint-held-101-cv.json
-# Tracking's misses on the held-out layouts, measured at the last frame and
-# at the frames before it.
-scripts/last-frame.sh "101 202 303" 1000..1030 > out/last-frame-1000.json
-scripts/last-frame.sh "707 808 909" 3000..3030 > out/last-frame-3000.json
-scripts/last-frame.sh "1111 1212 1313" 6000..6030 > out/last-frame-6000.json
-scripts/last-frame.sh "1414 1515 1616" 7000..7030 > out/last-frame-7000.json
-scripts/last-frame.sh "1717 1818 1919" 8000..8030 > out/last-frame-8000.json
 # Whether the 3D error model predicts egomotion's step errors better: the
 # routes driven straight and with tracking, the step CVs from each model,
 # ranked against the steps' actual errors by `ubf model fit-costs`.

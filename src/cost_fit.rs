@@ -400,12 +400,14 @@ impl Samples {
                     let (a, b) = (frames[from], frames[from + 1]);
                     let true_step = b.truth.relative_to(&a.truth);
                     let driven = true_step.x.hypot(true_step.y);
-                    if !b.matched && driven > 0.0 {
-                        run.bridged.push(((b.truth.x, b.truth.y), driven));
-                    }
-                    if !b.matched && drove_straight(&true_step) {
-                        let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
-                        self.bridged.push((driven, error * error));
+                    if !b.matched {
+                        if driven > 0.0 {
+                            run.bridged.push(((b.truth.x, b.truth.y), driven));
+                        }
+                        if drove_straight(&true_step) {
+                            let error = angle_difference(angle_difference(b.ego.theta, a.ego.theta), true_step.theta);
+                            self.bridged.push((driven, error * error));
+                        }
                     }
                     let matched_straight = a.matched && b.matched && drove_straight(&true_step);
                     if let Some(cv) = b.step_cv.filter(|_| matched_straight) {
