@@ -3,15 +3,16 @@
 
 use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Deserialize;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{
-    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Goal, OnBehaviorPanic, Pose2,
-    ProgressCheck, ProgressWatch, Registry, Robot, RobotError, SafetyGuard, SafetyPolicy, State, TracingSink,
-    WallClock,
+    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Ends, Goal, OnBehaviorPanic, Pose2,
+    ProgressCheck, Registry, Robot, RobotError, SafetyGuard, SafetyPolicy, Session, SessionEnd, State, TickRecord,
+    TickSink, TracingSink, TreeLayout, WallClock,
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
@@ -553,35 +554,65 @@ impl Status {
     }
 }
 
-/// The live state in one line: link, pose, speeds, winning behaviour, hold.
-fn status_line<R: Robot>(controller: &Controller<SafetyGuard<R>>) -> String {
-    let state = controller.state();
-    let layout = controller.layout();
-    let winner = layout.winning_leaf(controller.last_record()).map_or("-", |i| layout.nodes[i].path.as_str());
-    let hold = match controller.last_record().hold {
-        Some(ubf_core::Hold::StaleData) => "stale data",
-        Some(ubf_core::Hold::Contact) => "contact",
-        None => "-",
-    };
-    format!(
-        "t {:.1} s | SIP {:.2} s old | pose ({:.2}, {:.2}) m {:.0}° | {:.2} m/s {:.0}°/s | winner {winner} | hold {hold}",
-        state.time,
-        state.sensor_age,
-        state.pose.x,
-        state.pose.y,
-        state.pose.theta.to_degrees(),
-        state.velocity,
-        state.rot_velocity.to_degrees()
-    )
+/// Shows the live state on stderr as the ticks go by: link, pose, speeds,
+/// winning behaviour, hold.
+struct StatusLine {
+    status: Status,
+    layout: TreeLayout,
+    shown: Instant,
 }
 
-/// How a session ended.
-enum SessionEnd {
-    Stopped,
-    GoalReached,
-    NoProgress,
-    LinkLost(String),
-    Failed(DriveError),
+impl StatusLine {
+    fn new(status: Status) -> Self {
+        StatusLine { status, layout: TreeLayout::default(), shown: Instant::now() }
+    }
+
+    fn line(&self, record: &TickRecord) -> String {
+        let state = &record.state;
+        let layout = &self.layout;
+        let winner = layout.winning_leaf(record).map_or("-", |i| layout.nodes[i].path.as_str());
+        let hold = match record.hold {
+            Some(ubf_core::Hold::StaleData) => "stale data",
+            Some(ubf_core::Hold::Contact) => "contact",
+            None => "-",
+        };
+        format!(
+            "t {:.1} s | SIP {:.2} s old | pose ({:.2}, {:.2}) m {:.0}° | {:.2} m/s {:.0}°/s | winner {winner} | hold \
+             {hold}",
+            state.time,
+            state.sensor_age,
+            state.pose.x,
+            state.pose.y,
+            state.pose.theta.to_degrees(),
+            state.velocity,
+            state.rot_velocity.to_degrees()
+        )
+    }
+}
+
+impl TickSink for StatusLine {
+    fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.layout = layout.clone();
+        Ok(())
+    }
+
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        if self.shown.elapsed() >= self.status.every() {
+            self.shown = Instant::now();
+            match self.status {
+                Status::Line => eprint!("\r{}\x1b[K", self.line(record)),
+                Status::Lines | Status::Off => eprintln!("{}", self.line(record)),
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self) -> std::io::Result<()> {
+        if self.status == Status::Line {
+            eprintln!();
+        }
+        Ok(())
+    }
 }
 
 /// Runs the tree against the robot until `stop` is set (or the time limit),
@@ -637,35 +668,43 @@ fn drive_sessions(
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
         controller.add_sink(Box::new(TracingSink));
-        let ended = match attach_logs(&mut controller, config, model, logs) {
-            Ok(()) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                let ends = SessionEnds { until_goal: config.until_goal, progress: config.progress };
-                run_session(&mut controller, stop, &out_of_time, ends, status)
-            }))
-            .unwrap_or_else(|panic| {
-                SessionEnd::Failed(DriveError::Panic(ubf_core::panic_message(panic.as_ref()).to_owned()))
-            }),
-            Err(why) => SessionEnd::Failed(why),
+        if status != Status::Off {
+            controller.add_sink(Box::new(StatusLine::new(status)));
+        }
+        let attached = attach_logs(&mut controller, config, model, logs);
+        let ends = Ends {
+            at_goal: config.until_goal,
+            progress: config.progress,
+            max_ticks: None,
+            max_time_s: config.max_time_s.map(|limit| limit - started.elapsed().as_secs_f64()),
         };
-        pose = controller.state().pose;
+        let mut session = Session::new(controller, ends);
+        let ended = match &attached {
+            Ok(()) => session.run(stop, |_| ControlFlow::Continue(())),
+            Err(_) => SessionEnd::Done,
+        };
         // Whatever happened: stop the robot, close the session and flush
         // the logs.
-        if let Err(e) = controller.shutdown() {
+        let (controller, shutdown) = session.finish();
+        pose = controller.state().pose;
+        if let Err(e) = shutdown {
             tracing::warn!("shutting down: {e}");
         }
         arm_second_interrupt(None);
+        attached?;
         match ended {
-            SessionEnd::Stopped => return Ok(DriveEnd::Stopped),
+            SessionEnd::Interrupted | SessionEnd::TimeLimit | SessionEnd::Done => return Ok(DriveEnd::Stopped),
             SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
             SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
-            SessionEnd::Failed(why) => return Err(why),
-            SessionEnd::LinkLost(why) => {
+            SessionEnd::Panicked(why) => return Err(DriveError::Panic(why)),
+            SessionEnd::Failed(ControllerError::Robot(why)) => {
                 eprintln!("link lost: {why}");
                 if config.on_link_loss == OnLinkLoss::Exit {
                     return Ok(DriveEnd::LinkLost);
                 }
                 std::thread::sleep(Duration::from_secs(1));
             }
+            SessionEnd::Failed(why) => return Err(DriveError::Controller(why)),
         }
     }
 }
@@ -735,51 +774,6 @@ fn open_session_mcap(
             None
         }
     }
-}
-
-/// What besides the operator, the time limit and failures ends a session.
-#[derive(Clone, Copy)]
-struct SessionEnds {
-    until_goal: bool,
-    progress: Option<ProgressCheck>,
-}
-
-/// Ticks until stopped, the link is lost, something fails, or `ends` says.
-/// The safety guard around the robot holds it on stale data and declares a
-/// lost link; the controller's sinks log every tick.
-fn run_session<R: Robot>(
-    controller: &mut Controller<SafetyGuard<R>>,
-    stop: &AtomicBool,
-    out_of_time: &dyn Fn() -> bool,
-    ends: SessionEnds,
-    status: Status,
-) -> SessionEnd {
-    let mut shown = Instant::now();
-    let mut progress = ends.progress.map(ProgressWatch::new);
-    let ended = loop {
-        if stop.load(Ordering::SeqCst) || out_of_time() {
-            break SessionEnd::Stopped;
-        }
-        match controller.tick() {
-            Ok(record) if ends.until_goal && record.state.goal_reached() => break SessionEnd::GoalReached,
-            Ok(record) if progress.as_mut().is_some_and(|p| p.stalled(&record.state)) => break SessionEnd::NoProgress,
-            Ok(_) => {}
-            Err(ControllerError::Robot(RobotError::Disconnected(why))) => break SessionEnd::LinkLost(why),
-            Err(ControllerError::Robot(e)) => break SessionEnd::LinkLost(e.to_string()),
-            Err(e) => break SessionEnd::Failed(DriveError::Controller(e)),
-        }
-        if status != Status::Off && shown.elapsed() >= status.every() {
-            shown = Instant::now();
-            match status {
-                Status::Line => eprint!("\r{}\x1b[K", status_line(controller)),
-                Status::Lines | Status::Off => eprintln!("{}", status_line(controller)),
-            }
-        }
-    };
-    if status == Status::Line {
-        eprintln!();
-    }
-    ended
 }
 
 /// How far, ° (left), and for how long, s, the dry run turns a pan-tilt

@@ -8,10 +8,14 @@
 use crate::scenario::Scenario;
 use serde::Serialize;
 use std::io::Write;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
-use ubf_core::{BuildContext, Controller, Pose2, SimClock, StereoFrame, TickRecord, TickSink};
+use ubf_core::{
+    BuildContext, Controller, Ends, Pose2, Session, SessionEnd, SimClock, StereoFrame, TickRecord, TickSink,
+};
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::kitti::{self, Accuracy};
@@ -85,6 +89,9 @@ pub enum FramesError {
     /// The recorded run failed.
     #[error(transparent)]
     Run(#[from] ubf_core::ControllerError),
+    /// A bug: the recorded run panicked outside the behaviours.
+    #[error("internal error: {0}")]
+    Panic(String),
 }
 
 impl FramesError {
@@ -117,15 +124,22 @@ pub fn record(scenario: &Scenario, seed: u64, dir: &Path, max_frames: usize) -> 
     let progress = crate::sweep::progress_bar(bound as u64, "pairs");
     let pairs = Arc::new(Mutex::new(PairRecorder { writer, frame: 0, progress }));
     controller.add_sink(Box::new(pairs.clone()));
-    let max_ticks = scenario.max_ticks();
-    loop {
-        let record = controller.tick()?;
+    let ends = Ends { at_goal: true, max_ticks: Some(scenario.max_ticks()), ..Ends::default() };
+    let mut session = Session::new(controller, ends);
+    let ended = session.run(&AtomicBool::new(false), |record| {
         let enough = record.state.stereo.number as usize >= max_frames;
-        if record.state.goal_reached() || enough || record.tick + 1 >= max_ticks {
-            break;
+        if enough {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
+    });
+    let (controller, shutdown) = session.finish();
+    match ended {
+        SessionEnd::Failed(e) => return Err(e.into()),
+        SessionEnd::Panicked(why) => return Err(FramesError::Panic(why)),
+        _ => shutdown?,
     }
-    controller.shutdown()?;
     drop(controller);
     let recorder = Arc::into_inner(pairs).expect("the controller, the only other holder, is gone");
     let recorder = recorder.into_inner().unwrap_or_else(PoisonError::into_inner);

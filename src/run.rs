@@ -6,12 +6,14 @@ use crate::plot::{self, PlotError};
 use crate::scenario::Scenario;
 use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Serialize;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{
-    BuildContext, Controller, ControllerError, Pose2, ProgressWatch, SimClock, Stopwatch, TickRecord, TracingSink,
+    BuildContext, Controller, ControllerError, Ends, Pose2, Session, SessionEnd, SimClock, Stopwatch, TickRecord,
+    TracingSink,
 };
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
@@ -164,6 +166,10 @@ pub enum RunError {
     /// The MCAP log could not be written.
     #[error(transparent)]
     Log(#[from] crate::mcap_log::LogError),
+    /// A bug: the run panicked outside the behaviours (the robot was
+    /// stopped and the logs flushed).
+    #[error("internal error: {0}")]
+    Panic(String),
 }
 
 fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -235,42 +241,31 @@ pub fn run_until(
         None => None,
     };
 
-    let max_ticks = scenario.max_ticks();
+    let ends =
+        Ends { at_goal: true, progress: scenario.progress, max_ticks: Some(scenario.max_ticks()), max_time_s: None };
+    let mut session = Session::new(controller, ends);
     let mut end_point = EndPointWitness::default();
-    let mut progress = scenario.progress.map(ProgressWatch::new);
-    let mut failure = None;
-    let mut behavior_failure = None;
-    let end = loop {
-        match controller.tick() {
-            Ok(record) => {
-                end_point.observe(record);
-                if record.state.goal_reached() {
-                    break EndReason::GoalReached;
-                }
-                if progress.as_mut().is_some_and(|p| p.stalled(&record.state)) {
-                    break EndReason::NoProgress;
-                }
-                if record.tick + 1 >= max_ticks {
-                    break EndReason::TimeLimit;
-                }
-                if stop.load(Ordering::Relaxed) {
-                    break EndReason::Interrupted;
-                }
-            }
-            // The run still ends with its report, saying what failed.
-            Err(ControllerError::BehaviorPanicked(panic)) => {
-                behavior_failure = Some(panic.to_string());
-                break EndReason::BehaviorFailed;
-            }
-            Err(e) => {
-                failure = Some(RunError::from(e));
-                break EndReason::TimeLimit;
-            }
-        }
-    };
+    let ended = session.run(stop, |record| {
+        end_point.observe(record);
+        ControlFlow::Continue(())
+    });
     // Shut down and flush even after a failure: nothing is lost.
-    let shutdown = controller.shutdown();
+    let (controller, shutdown) = session.finish();
     let (ticks, sim_time) = (controller.last_record().tick + 1, controller.now());
+    let mut behavior_failure = None;
+    let (end, failure) = match ended {
+        SessionEnd::GoalReached => (EndReason::GoalReached, None),
+        SessionEnd::TimeLimit | SessionEnd::Done => (EndReason::TimeLimit, None),
+        SessionEnd::NoProgress => (EndReason::NoProgress, None),
+        SessionEnd::Interrupted => (EndReason::Interrupted, None),
+        // The run still ends with its report, saying what failed.
+        SessionEnd::Failed(ControllerError::BehaviorPanicked(panic)) => {
+            behavior_failure = Some(panic.to_string());
+            (EndReason::BehaviorFailed, None)
+        }
+        SessionEnd::Failed(e) => (EndReason::TimeLimit, Some(RunError::from(e))),
+        SessionEnd::Panicked(why) => (EndReason::TimeLimit, Some(RunError::Panic(why))),
+    };
     let (robot, _) = controller.into_parts();
     // The controller, and with it its handle on the log, is gone.
     let log = log.and_then(Arc::into_inner).map(|log| log.into_inner().unwrap_or_else(PoisonError::into_inner));
