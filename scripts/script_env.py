@@ -7,6 +7,7 @@ If the modules import, nothing happens. Otherwise the environment is made
 (first use only), the packages installed into it, and the calling script
 re-run inside it with the same arguments.
 """
+import fcntl
 import importlib
 import os
 import subprocess
@@ -26,7 +27,13 @@ def ensure(name, packages, modules):
     python = os.path.join(directory, "bin", "python")
     if os.path.abspath(sys.executable) == os.path.abspath(python):
         sys.exit(f"{', '.join(modules)} not importable in {directory}")
-    if not os.path.exists(python):
-        subprocess.check_call([sys.executable, "-m", "venv", directory])
-        subprocess.check_call([python, "-m", "pip", "install", "--quiet", *packages])
+    # Tests run scripts in parallel: one makes the environment, the others
+    # wait for it; a half-made one (an interrupted install) is made again.
+    with open(directory + ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = os.path.join(directory, ".installed")
+        if not os.path.exists(done):
+            subprocess.check_call([sys.executable, "-m", "venv", "--clear", directory])
+            subprocess.check_call([python, "-m", "pip", "install", "--quiet", *packages])
+            open(done, "w").close()
     os.execv(python, [python] + sys.argv)

@@ -10,9 +10,9 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::config::{positive, RonError};
 use ubf_core::{
-    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Ends, Goal, OnBehaviorPanic, Pose2,
-    ProgressCheck, Registry, Robot, RobotError, SafetyGuard, SafetyPolicy, Session, SessionEnd, State, TickRecord,
-    TickSink, TracingSink, TreeLayout, WallClock,
+    BackgroundSink, BehaviorSpec, BuildContext, Controller, ControllerError, Ends, Goal, Limits, OnBehaviorPanic,
+    Pose2, ProgressCheck, Registry, Robot, RobotError, SafetyGuard, SafetyPolicy, Session, SessionEnd, State,
+    TickRecord, TickSink, TracingSink, TreeLayout, WallClock,
 };
 use ubf_perception::egomotion::{EgomotionConfig, Tracker};
 use ubf_perception::features::FeatureConfig;
@@ -24,6 +24,7 @@ use ubf_robots::camera::CameraRobot;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::model::RobotModel;
 use ubf_robots::ptu::{Ptu, PtuConfig};
+use ubf_robots::ros2::{Ros2Config, Ros2Robot};
 
 /// Which robot model a configuration names.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -140,6 +141,13 @@ pub enum DriveError {
     /// A bug: the session panicked outside the behaviours.
     #[error("internal error: {0}")]
     Panic(String),
+    /// The dry run needs a robot whose motors can stay off while it is
+    /// watched; a ROS 2 robot's driver owns its motors.
+    #[error(
+        "--dry-run watches an ARCOS robot with its motors off; a ROS 2 robot's motors belong to its driver: use \
+         `ros2 topic echo /odom` to watch it"
+    )]
+    NoDryRun,
     /// The dry run's report could not be written.
     #[error("writing: {0}")]
     Output(std::io::Error),
@@ -236,7 +244,8 @@ pub struct DriveCamera {
 pub struct DriveConfig {
     /// A name for logs.
     pub name: String,
-    /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port`.
+    /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port` for an ARCOS
+    /// robot, or `ros2` for a ROS 2 robot (`/cmd_vel` in, `/odom` out).
     pub connection: String,
     /// Serial baud rate (ARCOS starts at 9600).
     #[serde(default = "DriveConfig::default_baud")]
@@ -301,9 +310,16 @@ pub struct DriveConfig {
     /// Unset, only the goal, the time limit or the operator ends a drive.
     #[serde(default)]
     pub progress: Option<ProgressCheck>,
+    /// A ROS 2 robot's topics, namespace, domain and QoS, with
+    /// `connection: "ros2"` (unset: ROS 2's conventions).
+    #[serde(default)]
+    pub ros2: Option<Ros2Config>,
     /// The behaviour tree.
     pub root: BehaviorSpec,
 }
+
+/// The `connection` that names a ROS 2 robot.
+pub const ROS2_CONNECTION: &str = "ros2";
 
 impl DriveConfig {
     fn default_baud() -> u32 {
@@ -330,12 +346,12 @@ impl DriveConfig {
 
     /// `robot` with the opened camera and the egomotion tracker (starting
     /// at `origin`) around it.
-    fn equip(
+    fn equip<R: Robot>(
         &self,
-        robot: ArcosRobot,
+        robot: R,
         camera: Option<OpenCamera>,
         origin: Pose2,
-    ) -> Result<EgomotionRobot<CameraRobot<ArcosRobot>>, CameraError> {
+    ) -> Result<EgomotionRobot<CameraRobot<R>>, CameraError> {
         let (Some(open), Some(camera)) = (camera, &self.camera) else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };
@@ -346,6 +362,14 @@ impl DriveConfig {
         }
         let tracker = self.egomotion.map(|config| Tracker::new(config, camera.stereo, origin, 0));
         Ok(EgomotionRobot::new(robot, tracker))
+    }
+
+    /// The robot's speed limits: the model's, under the file's caps.
+    fn limits(&self, model: &RobotModel) -> Limits {
+        let max_velocity = self.max_velocity.map_or(model.max_velocity, |cap| cap.min(model.max_velocity));
+        let max_rot_deg =
+            self.max_rot_velocity_deg.map_or(model.max_rot_velocity_deg, |cap| cap.min(model.max_rot_velocity_deg));
+        Limits::new(max_velocity, max_rot_deg.to_radians())
     }
 
     /// How to open a session, motors on or not, with the world frame's
@@ -379,6 +403,9 @@ impl DriveConfig {
         let parse = RobotFileError::parse;
         let text = ubf_core::config::utf8_text(read(path)?).map_err(parse(path))?;
         let mut config: DriveConfig = registry.from_ron(&text).map_err(parse(path))?;
+        if config.ros2.is_some() && config.connection != ROS2_CONNECTION {
+            return Err(RobotFileError::Ros2WithoutRos2 { path: path.into() });
+        }
         if config.egomotion.is_some() && config.camera.is_none() {
             return Err(RobotFileError::EgomotionWithoutCamera { path: path.into() });
         }
@@ -428,6 +455,12 @@ pub enum RobotFileError {
         path: PathBuf,
         /// Where and why.
         source: RonError,
+    },
+    /// ROS 2 settings were given for a robot that is not a ROS 2 one.
+    #[error("{}: `ros2: (...)` is for `connection: \"ros2\"`; remove it or change the connection", path.display())]
+    Ros2WithoutRos2 {
+        /// The file.
+        path: PathBuf,
     },
     /// Egomotion was asked for without a camera.
     #[error("{}: egomotion needs a camera: add `camera: (...)`", path.display())]
@@ -641,8 +674,8 @@ fn drive_sessions(
             return Ok(DriveEnd::Stopped);
         }
         let camera = config.open_camera()?;
-        let robot = match connect(config, model, true, pose) {
-            Ok(robot) => robot,
+        let Connected { robot, name, emergency } = match connect_driving(config, model, pose) {
+            Ok(connected) => connected,
             Err(e) => {
                 tracing::warn!("connecting: {e}");
                 if config.on_link_loss == OnLinkLoss::Exit {
@@ -652,8 +685,8 @@ fn drive_sessions(
                 continue;
             }
         };
-        eprintln!("connected to {} ({} {})", robot.identity().name, robot.identity().class, robot.identity().subclass);
-        arm_second_interrupt(robot.emergency_stop().ok());
+        eprintln!("connected to {name}");
+        arm_second_interrupt(emergency);
         // From here the motors are on: every path out goes through shutdown
         // (a robot dropped on the way out shuts itself down).
         let robot = match config.equip(robot, camera, pose) {
@@ -787,6 +820,9 @@ const PAN_CHECK_S: f64 = 3.0;
 /// commanded and measured angles shown. Output that cannot be written (a closed pipe) ends
 /// the run like Ctrl-C: the session is closed either way.
 pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> Result<(), DriveError> {
+    if config.connection == ROS2_CONNECTION {
+        return Err(DriveError::NoDryRun);
+    }
     let camera = config.open_camera()?;
     let robot = connect(config, model, false, Pose2::default())?;
     let mut robot = config.equip(robot, camera, Pose2::default())?;
@@ -798,6 +834,34 @@ pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> R
         Ok(Err(e)) => Err(e.into()),
         Ok(Ok(())) => closed,
     }
+}
+
+/// A robot reached for a session, motors on.
+struct Connected {
+    robot: Box<dyn Robot>,
+    /// Who answered, for the operator.
+    name: String,
+    /// What a second interrupt runs, where the robot has one.
+    emergency: Option<EmergencyStop>,
+}
+
+/// Reaches the robot the configuration names, ready to drive, with its
+/// pose reading `pose`: a ROS 2 robot (`connection: "ros2"`), or an ARCOS
+/// controller with its motors enabled.
+fn connect_driving(config: &DriveConfig, model: &RobotModel, pose: Pose2) -> Result<Connected, DriveError> {
+    if config.connection == ROS2_CONNECTION {
+        let limits = config.limits(model);
+        let ros2 = config.ros2.clone().unwrap_or_default();
+        let robot = Ros2Robot::connect(&ros2, limits, config.period_s, pose)
+            .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })?;
+        let name = format!("a ROS 2 robot in domain {} ({})", robot.domain(), model.name);
+        return Ok(Connected { robot: Box::new(robot), name, emergency: None });
+    }
+    let robot = connect(config, model, true, pose)?;
+    let id = robot.identity();
+    let name = format!("{} ({} {})", id.name, id.class, id.subclass);
+    let emergency = robot.emergency_stop().ok();
+    Ok(Connected { robot: Box::new(robot), name, emergency })
 }
 
 /// Opens the link and completes the handshake, motors on or off, with

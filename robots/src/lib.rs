@@ -16,4 +16,5 @@ pub mod camera;
 pub mod egomotion;
 pub mod model;
 pub mod ptu;
+pub mod ros2;
 pub mod sim;

@@ -1,0 +1,15 @@
+//! Any ROS 2 robot: one that takes `geometry_msgs/msg/Twist` on `/cmd_vel`
+//! and publishes `nav_msgs/msg/Odometry` on `/odom` (and, if it has one,
+//! `sensor_msgs/msg/LaserScan` on `/scan`), reached over DDS with no ROS
+//! installation.
+//!
+//! - [`msg`]: the ROS 2 messages ubf reads and writes;
+//! - [`node`]: a DDS participant with ROS 2's naming and QoS conventions;
+//! - [`robot`]: [`Ros2Robot`], the [`ubf_core::Robot`] it drives.
+
+pub mod msg;
+pub mod node;
+pub mod robot;
+
+pub use node::{domain_from_env, Node, Qos};
+pub use robot::{Ros2Config, Ros2Robot};

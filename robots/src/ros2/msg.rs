@@ -1,0 +1,364 @@
+//! The ROS 2 messages ubf speaks, as serde structs whose field order is the
+//! `.msg` definition's, so that CDR (de)serialises them as ROS 2 does.
+//! Each names its ROS 2 type through [`RosMessage`].
+
+use serde::{Deserialize, Serialize};
+use serde_big_array::BigArray;
+use ubf_core::Pose2;
+
+/// A ROS 2 message type.
+pub trait RosMessage: Serialize + for<'de> Deserialize<'de> + Send + 'static {
+    /// The ROS 2 name, `pkg/msg/Type`.
+    const NAME: &'static str;
+
+    /// The DDS type name, `pkg::msg::dds_::Type_`.
+    fn dds_name() -> String {
+        let (package, name) = Self::NAME.split_once("/msg/").expect("a ROS 2 name is pkg/msg/Type");
+        format!("{package}::msg::dds_::{name}_")
+    }
+}
+
+macro_rules! ros_message {
+    ($type:ty, $name:literal) => {
+        impl RosMessage for $type {
+            const NAME: &'static str = $name;
+        }
+    };
+}
+
+/// `builtin_interfaces/msg/Time`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Time {
+    /// Whole seconds.
+    pub sec: i32,
+    /// Nanoseconds past `sec`.
+    pub nanosec: u32,
+}
+
+impl Time {
+    /// `seconds` (≥ 0) as a ROS time.
+    pub fn from_seconds(seconds: f64) -> Time {
+        let seconds = seconds.max(0.0);
+        let sec = seconds.floor();
+        Time { sec: sec.min(i32::MAX as f64) as i32, nanosec: (((seconds - sec) * 1e9) as u32).min(999_999_999) }
+    }
+
+    /// The time in seconds.
+    pub fn seconds(&self) -> f64 {
+        self.sec as f64 + self.nanosec as f64 * 1e-9
+    }
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// When the data was taken.
+    pub stamp: Time,
+    /// The frame the data is in.
+    pub frame_id: String,
+}
+
+impl Header {
+    /// A header stamped `seconds` in `frame`.
+    pub fn new(seconds: f64, frame: &str) -> Header {
+        Header { stamp: Time::from_seconds(seconds), frame_id: frame.to_owned() }
+    }
+}
+
+/// `geometry_msgs/msg/Vector3`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Vector3 {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Twist`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Twist {
+    /// m/s.
+    pub linear: Vector3,
+    /// rad/s.
+    pub angular: Vector3,
+}
+ros_message!(Twist, "geometry_msgs/msg/Twist");
+
+impl Twist {
+    /// Forward at `velocity` m/s while turning at `turn_rate` rad/s.
+    pub fn planar(velocity: f64, turn_rate: f64) -> Twist {
+        Twist {
+            linear: Vector3 { x: velocity, ..Vector3::default() },
+            angular: Vector3 { z: turn_rate, ..Vector3::default() },
+        }
+    }
+}
+
+/// `geometry_msgs/msg/Point`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Point {
+    /// x, m.
+    pub x: f64,
+    /// y, m.
+    pub y: f64,
+    /// z, m.
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Quaternion`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Quaternion {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+    /// w.
+    pub w: f64,
+}
+
+impl Default for Quaternion {
+    fn default() -> Self {
+        Quaternion::from_yaw(0.0)
+    }
+}
+
+impl Quaternion {
+    /// A rotation of `yaw` rad about z.
+    pub fn from_yaw(yaw: f64) -> Quaternion {
+        Quaternion { x: 0.0, y: 0.0, z: (yaw / 2.0).sin(), w: (yaw / 2.0).cos() }
+    }
+
+    /// The rotation's yaw, rad (its roll and pitch ignored).
+    pub fn yaw(&self) -> f64 {
+        (2.0 * (self.w * self.z + self.x * self.y)).atan2(1.0 - 2.0 * (self.y * self.y + self.z * self.z))
+    }
+}
+
+/// `geometry_msgs/msg/Pose`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// Position.
+    pub position: Point,
+    /// Orientation.
+    pub orientation: Quaternion,
+}
+
+impl Pose {
+    /// A planar pose.
+    pub fn planar(pose: &Pose2) -> Pose {
+        Pose { position: Point { x: pose.x, y: pose.y, z: 0.0 }, orientation: Quaternion::from_yaw(pose.theta) }
+    }
+
+    /// The pose in the plane.
+    pub fn to_pose2(&self) -> Pose2 {
+        Pose2::new(self.position.x, self.position.y, self.orientation.yaw())
+    }
+}
+
+/// `geometry_msgs/msg/PoseWithCovariance`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseWithCovariance {
+    /// The pose.
+    pub pose: Pose,
+    /// Row-major 6 × 6 covariance of x, y, z and the rotations about them.
+    #[serde(with = "BigArray")]
+    pub covariance: [f64; 36],
+}
+
+/// `geometry_msgs/msg/TwistWithCovariance`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TwistWithCovariance {
+    /// The twist.
+    pub twist: Twist,
+    /// Row-major 6 × 6 covariance.
+    #[serde(with = "BigArray")]
+    pub covariance: [f64; 36],
+}
+
+impl Default for PoseWithCovariance {
+    fn default() -> Self {
+        PoseWithCovariance { pose: Pose::default(), covariance: [0.0; 36] }
+    }
+}
+
+impl Default for TwistWithCovariance {
+    fn default() -> Self {
+        TwistWithCovariance { twist: Twist::default(), covariance: [0.0; 36] }
+    }
+}
+
+/// `nav_msgs/msg/Odometry`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Odometry {
+    /// Stamp and the pose's frame (`odom`).
+    pub header: Header,
+    /// The twist's frame (`base_link`).
+    pub child_frame_id: String,
+    /// The pose in `header.frame_id`.
+    pub pose: PoseWithCovariance,
+    /// The velocity in `child_frame_id`.
+    pub twist: TwistWithCovariance,
+}
+ros_message!(Odometry, "nav_msgs/msg/Odometry");
+
+/// `sensor_msgs/msg/LaserScan`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LaserScan {
+    /// Stamp and the scanner's frame.
+    pub header: Header,
+    /// First beam's angle, rad.
+    pub angle_min: f32,
+    /// Last beam's angle, rad.
+    pub angle_max: f32,
+    /// Angle between beams, rad.
+    pub angle_increment: f32,
+    /// Time between beams, s.
+    pub time_increment: f32,
+    /// Time between scans, s.
+    pub scan_time: f32,
+    /// Shortest valid range, m.
+    pub range_min: f32,
+    /// Longest valid range, m.
+    pub range_max: f32,
+    /// One range a beam, m (outside the valid span: no echo).
+    pub ranges: Vec<f32>,
+    /// One intensity a beam, or none.
+    pub intensities: Vec<f32>,
+}
+ros_message!(LaserScan, "sensor_msgs/msg/LaserScan");
+
+/// `geometry_msgs/msg/PoseStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PoseStamped {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The pose.
+    pub pose: Pose,
+}
+ros_message!(PoseStamped, "geometry_msgs/msg/PoseStamped");
+
+/// `geometry_msgs/msg/Transform`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Transform {
+    /// Translation, m.
+    pub translation: Vector3,
+    /// Rotation.
+    pub rotation: Quaternion,
+}
+
+/// `geometry_msgs/msg/TransformStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TransformStamped {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// Child frame.
+    pub child_frame_id: String,
+    /// Child in parent.
+    pub transform: Transform,
+}
+
+/// `tf2_msgs/msg/TFMessage`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TFMessage {
+    /// The transforms.
+    pub transforms: Vec<TransformStamped>,
+}
+ros_message!(TFMessage, "tf2_msgs/msg/TFMessage");
+
+impl TFMessage {
+    /// The planar transform of `child` in `parent` at `seconds`.
+    pub fn planar(seconds: f64, parent: &str, child: &str, pose: &Pose2) -> TFMessage {
+        TFMessage {
+            transforms: vec![TransformStamped {
+                header: Header::new(seconds, parent),
+                child_frame_id: child.to_owned(),
+                transform: Transform {
+                    translation: Vector3 { x: pose.x, y: pose.y, z: 0.0 },
+                    rotation: Quaternion::from_yaw(pose.theta),
+                },
+            }],
+        }
+    }
+}
+
+/// `sensor_msgs/msg/Image`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Image {
+    /// Stamp and the camera's optical frame.
+    pub header: Header,
+    /// Rows.
+    pub height: u32,
+    /// Columns.
+    pub width: u32,
+    /// Pixel encoding (`mono8`).
+    pub encoding: String,
+    /// Whether the data is big-endian.
+    pub is_bigendian: u8,
+    /// Bytes a row.
+    pub step: u32,
+    /// The pixels, row after row.
+    pub data: Vec<u8>,
+}
+ros_message!(Image, "sensor_msgs/msg/Image");
+
+/// `ubf_msgs/msg/NodeVote`: one node of the tree in a tick.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct NodeVote {
+    /// The node's path in the tree.
+    pub path: String,
+    /// Its action's vote.
+    pub vote: f64,
+    /// Its weight in its composite.
+    pub weight: f64,
+    /// Whether its composite took its action.
+    pub won: bool,
+}
+
+/// `ubf_msgs/msg/Tick`: what the tree decided in one tick.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Tick {
+    /// The controller's time.
+    pub stamp: Time,
+    /// The tick's number.
+    pub tick: u64,
+    /// The winning leaf's path, empty if none voted.
+    pub winner: String,
+    /// Commanded forward velocity, m/s (0 for stop).
+    pub linear: f64,
+    /// Commanded turn rate, rad/s (0 for stop or a heading command).
+    pub angular: f64,
+    /// Whether the command was STOP.
+    pub stop: bool,
+    /// Every node of the tree, in pre-order.
+    pub nodes: Vec<NodeVote>,
+}
+ros_message!(Tick, "ubf_msgs/msg/Tick");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dds_names_follow_the_ros2_convention() {
+        assert_eq!(Twist::dds_name(), "geometry_msgs::msg::dds_::Twist_");
+        assert_eq!(Odometry::dds_name(), "nav_msgs::msg::dds_::Odometry_");
+    }
+
+    #[test]
+    fn yaw_survives_a_quaternion() {
+        for yaw in [-3.0, -1.0, 0.0, 0.5, 3.1] {
+            assert!((Quaternion::from_yaw(yaw).yaw() - yaw).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn time_splits_into_seconds_and_nanoseconds() {
+        let t = Time::from_seconds(12.25);
+        assert_eq!((t.sec, t.nanosec), (12, 250_000_000));
+        assert_eq!(Time::from_seconds(-1.0), Time::default());
+    }
+}

@@ -1,0 +1,178 @@
+//! A DDS participant that speaks ROS 2's conventions: topic names
+//! (`/odom` is `rt/odom`), type names (`nav_msgs::msg::dds_::Odometry_`),
+//! key-less topics and the stock QoS profiles; and that can say why a
+//! topic does not match (a wrong type, a QoS the other side cannot serve).
+
+use super::msg::RosMessage;
+use rustdds::no_key::{DataReaderCdr, DataWriterCdr};
+use rustdds::policy::{Durability, History, Reliability};
+use rustdds::{
+    DomainParticipant, DomainParticipantStatusEvent, QosPolicies, QosPolicyBuilder, StatusEvented, TopicKind,
+};
+use serde::Deserialize;
+use ubf_core::RobotError;
+
+/// A topic's quality of service, as ROS 2 names its stock profiles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Qos {
+    /// ROS 2's default: reliable, volatile, keep last 10.
+    #[default]
+    Reliable,
+    /// ROS 2's sensor data profile: best effort, volatile, keep last 5. A
+    /// best-effort reader also hears reliable writers.
+    SensorData,
+}
+
+impl Qos {
+    fn policies(self) -> QosPolicies {
+        let builder = QosPolicyBuilder::new().durability(Durability::Volatile);
+        match self {
+            Qos::Reliable => builder
+                .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) })
+                .history(History::KeepLast { depth: 10 }),
+            Qos::SensorData => builder.reliability(Reliability::BestEffort).history(History::KeepLast { depth: 5 }),
+        }
+        .build()
+    }
+}
+
+/// What discovery saw of another participant's endpoint on a topic.
+#[derive(Clone, Debug)]
+struct Endpoint {
+    writer: bool,
+    topic: String,
+    type_name: String,
+    reliable: bool,
+}
+
+/// A ROS 2 participant in one DDS domain, under one namespace.
+pub struct Node {
+    participant: DomainParticipant,
+    publisher: rustdds::Publisher,
+    subscriber: rustdds::Subscriber,
+    namespace: String,
+    domain: u16,
+    /// Every remote endpoint discovery has reported so far.
+    seen: Vec<Endpoint>,
+}
+
+/// `ROS_DOMAIN_ID`, as ROS 2 reads it: unset or empty is domain 0.
+pub fn domain_from_env() -> Result<u16, RobotError> {
+    match std::env::var("ROS_DOMAIN_ID") {
+        Err(_) => Ok(0),
+        Ok(text) if text.trim().is_empty() => Ok(0),
+        // RTPS's port formula leaves room for domains 0 to 232.
+        Ok(text) => text.trim().parse::<u16>().ok().filter(|d| *d <= 232).ok_or_else(|| {
+            RobotError::Other(format!("ROS_DOMAIN_ID is `{text}`; it must be a whole number from 0 to 232"))
+        }),
+    }
+}
+
+impl Node {
+    /// Joins `domain` with topics under `namespace` (`""` or `/robot1`).
+    pub fn join(domain: u16, namespace: &str) -> Result<Node, RobotError> {
+        let fail =
+            |what: &str, e: &dyn std::fmt::Display| RobotError::Other(format!("ROS 2 domain {domain}: {what}: {e}"));
+        let participant = DomainParticipant::new(domain).map_err(|e| fail("joining", &e))?;
+        let qos = QosPolicyBuilder::new().build();
+        let publisher = participant.create_publisher(&qos).map_err(|e| fail("creating a publisher", &e))?;
+        let subscriber = participant.create_subscriber(&qos).map_err(|e| fail("creating a subscriber", &e))?;
+        let namespace = namespace.trim_matches('/');
+        let namespace = if namespace.is_empty() { String::new() } else { format!("/{namespace}") };
+        Ok(Node { participant, publisher, subscriber, namespace, domain, seen: Vec::new() })
+    }
+
+    /// The domain joined.
+    pub fn domain(&self) -> u16 {
+        self.domain
+    }
+
+    /// `name`'s ROS 2 name: absolute names (`/tf`) stay, relative ones go
+    /// under the namespace.
+    pub fn resolve(&self, name: &str) -> String {
+        if name.starts_with('/') {
+            name.to_owned()
+        } else {
+            format!("{}/{name}", self.namespace)
+        }
+    }
+
+    fn topic<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<rustdds::Topic, RobotError> {
+        let dds_name = format!("rt{}", self.resolve(name));
+        self.participant
+            .create_topic(dds_name, M::dds_name(), &qos.policies(), TopicKind::NoKey)
+            .map_err(|e| RobotError::Other(format!("ROS 2 topic {}: {e}", self.resolve(name))))
+    }
+
+    /// A writer of `M` on topic `name`.
+    pub fn writer<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<DataWriterCdr<M>, RobotError> {
+        let topic = self.topic::<M>(name, qos)?;
+        self.publisher
+            .create_datawriter_no_key_cdr::<M>(&topic, Some(qos.policies()))
+            .map_err(|e| RobotError::Other(format!("publishing {}: {e}", self.resolve(name))))
+    }
+
+    /// A reader of `M` on topic `name`.
+    pub fn reader<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<DataReaderCdr<M>, RobotError> {
+        let topic = self.topic::<M>(name, qos)?;
+        self.subscriber
+            .create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies()))
+            .map_err(|e| RobotError::Other(format!("subscribing {}: {e}", self.resolve(name))))
+    }
+
+    /// Takes in what discovery has reported since the last call.
+    pub fn watch_discovery(&mut self) {
+        let listener = self.participant.status_listener();
+        while let Some(event) = listener.try_recv_status() {
+            let (writer, endpoint) = match event {
+                DomainParticipantStatusEvent::WriterDetected { writer } => (true, writer),
+                DomainParticipantStatusEvent::ReaderDetected { reader } => (false, reader),
+                _ => continue,
+            };
+            let reliable = endpoint.qos.is_reliable();
+            self.seen.push(Endpoint { writer, topic: endpoint.topic_name, type_name: endpoint.type_name, reliable });
+        }
+    }
+
+    /// Why a topic this node reads as `M` with `qos` hears nothing from
+    /// the writers discovery has seen on it, if discovery tells: a writer
+    /// of another type, or a best-effort writer to a reliable reader.
+    pub fn why_unheard<M: RosMessage>(&mut self, name: &str, qos: Qos) -> Option<String> {
+        self.watch_discovery();
+        let (ros_name, dds_topic) = (self.resolve(name), format!("rt{}", self.resolve(name)));
+        let writers = self.seen.iter().filter(|e| e.writer && e.topic == dds_topic);
+        for writer in writers {
+            if writer.type_name != M::dds_name() {
+                return Some(format!(
+                    "{ros_name} is published with type `{}`, but ubf reads it as `{}` ({})",
+                    writer.type_name,
+                    M::dds_name(),
+                    M::NAME
+                ));
+            }
+            if qos == Qos::Reliable && !writer.reliable {
+                return Some(format!(
+                    "{ros_name} is published best effort, and a reliable reader cannot hear a best-effort writer: \
+                     set its QoS to `SensorData` in the robot file's `ros2: (...)`"
+                ));
+            }
+        }
+        None
+    }
+
+    /// Why a topic this node writes as `M` reaches none of the readers
+    /// discovery has seen on it, if discovery tells: a reader of another
+    /// type.
+    pub fn why_unread<M: RosMessage>(&mut self, name: &str) -> Option<String> {
+        self.watch_discovery();
+        let (ros_name, dds_topic) = (self.resolve(name), format!("rt{}", self.resolve(name)));
+        self.seen.iter().filter(|e| !e.writer && e.topic == dds_topic).find(|e| e.type_name != M::dds_name()).map(|e| {
+            format!(
+                "{ros_name} is read with type `{}`, but ubf publishes `{}` ({})",
+                e.type_name,
+                M::dds_name(),
+                M::NAME
+            )
+        })
+    }
+}

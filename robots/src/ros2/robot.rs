@@ -1,0 +1,268 @@
+//! [`Ros2Robot`]: a ROS 2 robot driven through `/cmd_vel`, sensed through
+//! `/odom` and `/scan`.
+
+use super::msg::{LaserScan, Odometry, Twist};
+use super::node::{domain_from_env, Node, Qos};
+use rustdds::no_key::{DataReaderCdr, DataWriterCdr};
+use serde::Deserialize;
+use std::time::{Duration, Instant};
+use ubf_core::{angle_difference, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
+
+/// The `ros2: (...)` settings of a robot file. The defaults are ROS 2's
+/// conventions: topics `cmd_vel`, `odom`, `scan` in the root namespace,
+/// reliable keep-last-10 for commands and odometry, sensor data QoS for
+/// the scan, the domain in `ROS_DOMAIN_ID`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Ros2Config {
+    /// The robot's namespace (`/robot1`), for several robots on one
+    /// network; relative topic names go under it.
+    pub namespace: String,
+    /// The DDS domain (unset: `ROS_DOMAIN_ID`, or 0).
+    pub domain_id: Option<u16>,
+    /// Where velocity commands go.
+    pub cmd_vel: String,
+    /// Where odometry comes from.
+    pub odom: String,
+    /// Where laser scans come from, if the robot publishes them.
+    pub scan: String,
+    /// The odometry reader's QoS (`SensorData` hears best-effort drivers).
+    pub odom_qos: Qos,
+    /// The scan reader's QoS.
+    pub scan_qos: Qos,
+    /// How long to wait for the first odometry message, s.
+    pub connect_timeout_s: f64,
+}
+
+impl Default for Ros2Config {
+    fn default() -> Self {
+        Ros2Config {
+            namespace: String::new(),
+            domain_id: None,
+            cmd_vel: "cmd_vel".into(),
+            odom: "odom".into(),
+            scan: "scan".into(),
+            odom_qos: Qos::Reliable,
+            scan_qos: Qos::SensorData,
+            connect_timeout_s: 5.0,
+        }
+    }
+}
+
+/// Odometry (and a scan) older than this many control periods is a lost
+/// link: the robot is sent a zero twist at once.
+const STALE_PERIODS: f64 = 3.0;
+
+/// A scan older than this, once scans have come, is a lost sensor: the
+/// robot is stopped rather than steered by what the scanner saw last.
+const STALE_SCAN: Duration = Duration::from_secs(1);
+
+/// How long the final zero twist may take to be acknowledged on the way
+/// out.
+const STOP_ACK_WAIT: Duration = Duration::from_millis(500);
+
+/// Turn rate per radian of heading error for heading commands, 1/s: a ROS
+/// 2 base takes rates only.
+const HEADING_GAIN: f64 = 2.0;
+
+/// A ROS 2 robot. Its pose is odometry's, re-based so that the robot
+/// stands at the `origin` given to [`Ros2Robot::connect`]: the frame of a
+/// drive's goal is where the robot stood when the drive began.
+pub struct Ros2Robot {
+    config: Ros2Config,
+    cmd_vel: DataWriterCdr<Twist>,
+    odom: DataReaderCdr<Odometry>,
+    scan: DataReaderCdr<LaserScan>,
+    limits: Limits,
+    stale_after: Duration,
+    /// Odometry's first pose and the world pose it stands for.
+    first_odom: Pose2,
+    origin: Pose2,
+    latest_odom: (Odometry, Instant),
+    latest_scan: Option<(LaserScan, Instant)>,
+    stopped: bool,
+    /// Last, so that it is dropped after its readers and writer.
+    node: Node,
+}
+
+impl Ros2Robot {
+    /// Joins the robot's DDS domain and waits for its first odometry. The
+    /// robot's pose then reads `origin`. A wait that times out says what
+    /// discovery saw: a topic of another type, or a QoS that cannot match.
+    pub fn connect(config: &Ros2Config, limits: Limits, period_s: f64, origin: Pose2) -> Result<Ros2Robot, RobotError> {
+        let domain = match config.domain_id {
+            Some(domain) => domain,
+            None => domain_from_env()?,
+        };
+        let mut node = Node::join(domain, &config.namespace)?;
+        let cmd_vel = node.writer::<Twist>(&config.cmd_vel, Qos::Reliable)?;
+        let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?;
+        let scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?;
+        let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
+        let first = loop {
+            if let Some(odometry) = take_latest(&mut odom)? {
+                break odometry;
+            }
+            if Instant::now() >= deadline {
+                let topic = node.resolve(&config.odom);
+                let why = node
+                    .why_unheard::<Odometry>(&config.odom, config.odom_qos)
+                    .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
+                    .unwrap_or_else(|| {
+                        format!(
+                            "nothing was published on {topic} in domain {domain}: is the robot's driver running, in \
+                             this ROS_DOMAIN_ID, publishing nav_msgs/msg/Odometry?"
+                        )
+                    });
+                return Err(RobotError::Disconnected(format!(
+                    "no odometry on {topic} within {:.1} s: {why}",
+                    config.connect_timeout_s
+                )));
+            }
+            node.watch_discovery();
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        let first_odom = first.pose.pose.to_pose2();
+        Ok(Ros2Robot {
+            node,
+            config: config.clone(),
+            cmd_vel,
+            odom,
+            scan,
+            limits,
+            stale_after: Duration::from_secs_f64(STALE_PERIODS * period_s),
+            first_odom,
+            origin,
+            latest_odom: (first, Instant::now()),
+            latest_scan: None,
+            stopped: false,
+        })
+    }
+
+    /// The DDS domain joined.
+    pub fn domain(&self) -> u16 {
+        self.node.domain()
+    }
+
+    /// The pose odometry gives, in the drive's world frame.
+    fn world_pose(&self, odometry: &Odometry) -> Pose2 {
+        self.origin.compose(&odometry.pose.pose.to_pose2().relative_to(&self.first_odom))
+    }
+
+    fn publish(&mut self, twist: Twist) -> Result<(), RobotError> {
+        self.stopped = twist == Twist::default();
+        self.cmd_vel.write(twist, None).map_err(|e| {
+            RobotError::Disconnected(format!("publishing {}: {e}", self.node.resolve(&self.config.cmd_vel)))
+        })
+    }
+
+    /// Sends a zero twist and says why the link is lost.
+    fn lost(&mut self, why: String) -> RobotError {
+        let _ = self.publish(Twist::default());
+        RobotError::Disconnected(why)
+    }
+}
+
+/// The newest message a reader holds, if any, taking all.
+fn take_latest<M: 'static + serde::de::DeserializeOwned>(
+    reader: &mut DataReaderCdr<M>,
+) -> Result<Option<M>, RobotError> {
+    let mut latest = None;
+    loop {
+        match reader.take_next_sample() {
+            Ok(Some(sample)) => latest = Some(sample.into_value()),
+            Ok(None) => return Ok(latest),
+            Err(e) => return Err(RobotError::Protocol(format!("reading a ROS 2 message: {e}"))),
+        }
+    }
+}
+
+/// A scan's beams as range readings from the robot's centre (the scanner's
+/// offset from `base_link` is not looked up).
+fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
+    ranges.clear();
+    let max_range = f64::from(scan.range_max);
+    for (i, &range) in scan.ranges.iter().enumerate() {
+        let bearing = f64::from(scan.angle_min) + i as f64 * f64::from(scan.angle_increment);
+        let valid = range.is_finite() && range >= scan.range_min && range < scan.range_max;
+        ranges.push(RangeReading {
+            pose_robot_sensor: Pose2::new(0.0, 0.0, bearing),
+            range: valid.then_some(f64::from(range)),
+            max_range,
+        });
+    }
+}
+
+impl Robot for Ros2Robot {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        let now = Instant::now();
+        if let Some(odometry) = take_latest(&mut self.odom)? {
+            self.latest_odom = (odometry, now);
+        }
+        let age = now - self.latest_odom.1;
+        if age > self.stale_after {
+            let topic = self.node.resolve(&self.config.odom);
+            return Err(self.lost(format!("no odometry on {topic} for {:.2} s", age.as_secs_f64())));
+        }
+        if let Some(scan) = take_latest(&mut self.scan)? {
+            self.latest_scan = Some((scan, now));
+        }
+        match &self.latest_scan {
+            Some((_, at)) if now - *at > STALE_SCAN.max(self.stale_after) => {
+                let topic = self.node.resolve(&self.config.scan);
+                return Err(self.lost(format!("no scan on {topic} for {:.2} s", (now - *at).as_secs_f64())));
+            }
+            Some((scan, _)) => ranges_of(scan, &mut state.ranges),
+            None => state.ranges.clear(),
+        }
+        let odometry = &self.latest_odom.0;
+        state.pose = self.world_pose(odometry);
+        state.velocity = odometry.twist.twist.linear.x;
+        state.rot_velocity = odometry.twist.twist.angular.z;
+        state.sensor_age = age.as_secs_f64();
+        state.motors_enabled = true;
+        Ok(())
+    }
+
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        let twist = match *command {
+            Command::Stop => Twist::default(),
+            Command::Drive { velocity, turn: Turn::Rate(rate) } => Twist::planar(velocity, rate),
+            Command::Drive { velocity, turn: Turn::Heading { heading, max_rate } } => {
+                let error = angle_difference(heading, self.world_pose(&self.latest_odom.0).theta);
+                Twist::planar(velocity, (HEADING_GAIN * error).clamp(-max_rate, max_rate))
+            }
+        };
+        self.publish(twist)
+    }
+
+    /// Sends a zero twist and waits (briefly) for the robot's driver to
+    /// acknowledge it: a writer that leaves first may take it along.
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        self.publish(Twist::default())?;
+        match self.cmd_vel.wait_for_acknowledgments(STOP_ACK_WAIT) {
+            Ok(true) => Ok(()),
+            _ => {
+                tracing::warn!(
+                    "the zero twist on {} was not acknowledged within {:.1} s",
+                    self.node.resolve(&self.config.cmd_vel),
+                    STOP_ACK_WAIT.as_secs_f64()
+                );
+                Ok(())
+            }
+        }
+    }
+
+    fn limits(&self) -> Limits {
+        self.limits
+    }
+}
+
+impl Drop for Ros2Robot {
+    /// A robot dropped while moving (a panic on the way out) is stopped.
+    fn drop(&mut self) {
+        if !self.stopped {
+            let _ = self.shutdown();
+        }
+    }
+}

@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""A differential-drive robot as a ROS 2 base driver presents it, played by Cyclone DDS.
+
+The other side of ubf's ROS 2 interop tests: an implementation nobody here
+wrote, speaking what a real robot speaks, without a ROS installation.
+
+It subscribes /cmd_vel (geometry_msgs/msg/Twist, reliable, keep last 10),
+integrates linear.x and angular.z as a unicycle at the odometry rate (a
+command older than 0.5 s counts as zero, as base drivers do), and publishes
+nav_msgs/msg/Odometry on /odom (reliable, keep last 10, frame "odom", child
+"base_link", wall-clock stamps, twist = the command in force). With --scan it
+also publishes sensor_msgs/msg/LaserScan on /scan (sensor data QoS: best
+effort, keep last 5), frame "base_link", 360 beams seeing the wall x = --wall-x
+of the odom frame, or nothing (every beam at range_max).
+
+Prints "robot ready" once its readers and writers exist. On SIGTERM, SIGINT or
+--duration it stops; --record FILE has then got one JSON line per Twist
+received ({"twist": ..., "t": monotonic receive time}, the clock Rust's
+Instant reads; "odom_age", how old the newest odometry published was when the
+command arrived) and a last line {"summary": {"pose": ..., "last_twist": ...}}.
+Run it inside scripts/ros2/netns.sh.
+"""
+import argparse
+import json
+import math
+import os
+import signal
+import sys
+import time
+from dataclasses import asdict
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+import script_env  # noqa: E402
+
+script_env.ensure(".venv-ros2", ["cyclonedds==11.0.1"], ["cyclonedds"])
+
+from cyclonedds.core import ReadCondition, SampleState, ViewState, InstanceState, WaitSet  # noqa: E402
+from cyclonedds.domain import DomainParticipant  # noqa: E402
+from cyclonedds.pub import DataWriter  # noqa: E402
+from cyclonedds.sub import DataReader  # noqa: E402
+from cyclonedds.topic import Topic  # noqa: E402
+
+from ros2_types import (Header, LaserScan, Odometry, Quaternion, Time, Twist,  # noqa: E402
+                        qos, ros_topic)
+
+COMMAND_TIMEOUT = 0.5
+BEAMS = 360
+RANGE_MIN, RANGE_MAX = 0.1, 10.0
+
+
+def stamp():
+    ns = time.time_ns()
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def scan_ranges(x, y, theta, wall_x):
+    """Each beam's range to the line x = wall_x, or range_max where it sees nothing."""
+    ranges = []
+    for i in range(BEAMS):
+        heading = theta - math.pi + i * 2 * math.pi / BEAMS
+        cos = math.cos(heading)
+        distance = (wall_x - x) / cos if wall_x is not None and abs(cos) > 1e-9 else -1.0
+        ranges.append(distance if RANGE_MIN <= distance <= RANGE_MAX else RANGE_MAX)
+    return ranges
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--namespace", default="", help="ROS namespace of the topics, e.g. robot1")
+    parser.add_argument("--rate", type=float, default=20.0, help="odometry rate, Hz")
+    parser.add_argument("--scan", action="store_true", help="also publish /scan")
+    parser.add_argument("--wall-x", type=float, help="x of a wall (odom frame) that the scan sees")
+    parser.add_argument("--stop-odom-after", type=float, metavar="S",
+                        help="stop publishing odometry S seconds after the robot first moved")
+    parser.add_argument("--odom-best-effort", action="store_true",
+                        help="publish /odom best effort, as some drivers do (a reliable reader then hears nothing)")
+    parser.add_argument("--record", metavar="FILE", help="write received Twists and a summary as JSON lines")
+    parser.add_argument("--duration", type=float, metavar="S", help="exit after S seconds")
+    parser.add_argument("--start-x", type=float, default=0.0, help="initial odom x, m")
+    parser.add_argument("--start-y", type=float, default=0.0, help="initial odom y, m")
+    parser.add_argument("--start-theta", type=float, default=0.0, help="initial odom yaw, rad")
+    args = parser.parse_args()
+
+    participant = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    cmd_reader = DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), Twist), qos())
+    odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
+                             qos(sensor_data=args.odom_best_effort))
+    scan_writer = DataWriter(participant, Topic(participant, ros_topic("scan", args.namespace), LaserScan),
+                             qos(sensor_data=True)) if args.scan else None
+    waitset = WaitSet(participant)
+    waitset.attach(ReadCondition(cmd_reader, SampleState.Any | ViewState.Any | InstanceState.Any))
+    record = open(args.record, "w") if args.record else None
+
+    stopping = []
+    for signum in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(signum, lambda *_: stopping.append(True))
+    print("robot ready", flush=True)
+
+    x, y, theta = args.start_x, args.start_y, args.start_theta
+    last_twist, last_twist_at = None, -math.inf
+    started = last_tick = time.monotonic()
+    moved_at = None
+    odom_at = -math.inf
+    period = 1.0 / args.rate
+    next_tick = started + period
+    while not stopping and (args.duration is None or time.monotonic() - started < args.duration):
+        waitset.wait(int(max(0.0, next_tick - time.monotonic()) * 1e9))
+        for twist in (s for s in cmd_reader.take(N=100) if s.sample_info.valid_data):
+            last_twist, last_twist_at = twist, time.monotonic()
+            if record:
+                line = {"twist": asdict(twist), "t": last_twist_at, "odom_age": last_twist_at - odom_at}
+                record.write(json.dumps(line) + "\n")
+        now = time.monotonic()
+        if now < next_tick:
+            continue
+        next_tick += period * max(1, math.ceil((now - next_tick) / period))
+
+        command = last_twist if last_twist is not None and now - last_twist_at <= COMMAND_TIMEOUT else Twist()
+        v, w, dt = command.linear.x, command.angular.z, now - last_tick
+        x += v * math.cos(theta + w * dt / 2) * dt
+        y += v * math.sin(theta + w * dt / 2) * dt
+        theta = math.atan2(math.sin(theta + w * dt), math.cos(theta + w * dt))
+        last_tick = now
+        if moved_at is None and (v or w):
+            moved_at = now
+
+        header = Header(stamp=stamp(), frame_id="odom")
+        if args.stop_odom_after is None or moved_at is None or now - moved_at < args.stop_odom_after:
+            odom = Odometry(header=header, child_frame_id="base_link")
+            odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
+            odom.pose.pose.orientation = Quaternion(z=math.sin(theta / 2), w=math.cos(theta / 2))
+            odom.twist.twist = command
+            odom_writer.write(odom)
+            odom_at = time.monotonic()
+        if scan_writer:
+            scan_writer.write(LaserScan(
+                header=Header(stamp=header.stamp, frame_id="base_link"),
+                angle_min=-math.pi, angle_max=math.pi - 2 * math.pi / BEAMS,
+                angle_increment=2 * math.pi / BEAMS, scan_time=period,
+                range_min=RANGE_MIN, range_max=RANGE_MAX,
+                ranges=scan_ranges(x, y, theta, args.wall_x)))
+
+    if record:
+        summary = {"pose": {"x": x, "y": y, "theta": theta},
+                   "last_twist": asdict(last_twist) if last_twist is not None else None}
+        record.write(json.dumps({"summary": summary}) + "\n")
+        record.close()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,219 @@
+//! `ubf drive` against a ROS 2 robot nobody here wrote: Eclipse Cyclone
+//! DDS (PyPI `cyclonedds`, installed by `scripts/ros2/robot.py` into its
+//! own environment) plays a differential-drive base that takes
+//! `geometry_msgs/msg/Twist` on `/cmd_vel` and publishes
+//! `nav_msgs/msg/Odometry` on `/odom`. Each test runs in a private network
+//! namespace (`scripts/ros2/netns.sh`), so its DDS traffic neither needs
+//! nor disturbs a network, and the tests cannot hear each other.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The robot file of the ROS 2 issue, unchanged but for `extra` settings.
+fn robot_file(dir: &Path, goal_x: f64, extra: &str) -> PathBuf {
+    let path = dir.join("robot.ron");
+    let text = format!(
+        r#"RobotConfig(
+    name: "ros2-robot",
+    connection: "ros2",
+    model: Powerbot,
+    period_s: 0.1,
+    log: "drive-log.csv",
+    on_link_loss: Exit,
+    goal: (x: {goal_x}, y: 0.0, tolerance: 0.2),
+    {extra}
+    root: Composite(arbiter: CommandFusion, children: [(behavior: Stop(), weight: 1.0), (behavior: GoTo(cruise_speed: 0.3))]),
+)"#
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// What a test session left: ubf's exit and stderr, and what the robot
+/// recorded (every twist it received, then its summary).
+struct Session {
+    ubf: Output,
+    twists: Vec<Value>,
+    summary: Value,
+}
+
+/// Runs the Cyclone robot with `robot_args` and `ubf drive FILE --until-goal`
+/// beside it, in a private network namespace; `None` where namespaces are
+/// not available (the test is then skipped, said on stderr). With
+/// `interrupt_after`, ubf gets SIGTERM after that many seconds.
+fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt_after: Option<f64>) -> Option<Session> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    // The robot's Python environment is made (from PyPI) outside the
+    // namespace, which has no network.
+    let setup =
+        Command::new("python3").arg(Path::new(root).join("scripts/ros2/robot.py")).arg("--help").output().unwrap();
+    assert!(setup.status.success(), "installing cyclonedds: {}", String::from_utf8_lossy(&setup.stderr));
+    let record = dir.join("robot.jsonl");
+    let robot_out = dir.join("robot.out");
+    let ubf_err = dir.join("ubf.err");
+    let drive = match interrupt_after {
+        None => "timeout 60 \"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\"; code=$?".to_owned(),
+        Some(s) => format!(
+            "\"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\" & ubf=$!; sleep {s}; kill -TERM $ubf; wait $ubf; code=$?"
+        ),
+    };
+    let script = format!(
+        r#"python3 "$ROOT/scripts/ros2/robot.py" --record "$RECORD" --duration 90 {robot_args} >"$ROBOT_OUT" 2>&1 & robot=$!
+for i in $(seq 600); do grep -q "robot ready" "$ROBOT_OUT" && break; kill -0 $robot 2>/dev/null || break; sleep 0.1; done
+grep -q "robot ready" "$ROBOT_OUT" || {{ cat "$ROBOT_OUT" >&2; exit 3; }}
+cd "$DIR"
+{drive}
+kill -TERM $robot; wait $robot
+exit $code"#
+    );
+    let out = Command::new(Path::new(root).join("scripts/ros2/netns.sh"))
+        .args(["bash", "-c", &script])
+        .env("ROOT", root)
+        .env("UBF", env!("CARGO_BIN_EXE_ubf"))
+        .env("FILE", file)
+        .env("DIR", dir)
+        .env("RECORD", &record)
+        .env("ROBOT_OUT", &robot_out)
+        .env("UBF_ERR", &ubf_err)
+        .env_remove("ROS_DOMAIN_ID")
+        .output()
+        .unwrap();
+    if out.status.code() == Some(77) {
+        eprintln!("skipped: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    assert_ne!(out.status.code(), Some(3), "the Cyclone robot did not start: {}", String::from_utf8_lossy(&out.stderr));
+    let lines: Vec<Value> =
+        std::fs::read_to_string(&record).unwrap().lines().map(|line| serde_json::from_str(line).unwrap()).collect();
+    let (summary, twists) = lines.split_last().expect("the robot wrote its summary");
+    let ubf = Output { status: out.status, stdout: Vec::new(), stderr: std::fs::read(&ubf_err).unwrap() };
+    Some(Session { ubf, twists: twists.to_vec(), summary: summary["summary"].clone() })
+}
+
+fn stderr(session: &Session) -> String {
+    String::from_utf8_lossy(&session.ubf.stderr).into_owned()
+}
+
+fn is_zero(twist: &Value) -> bool {
+    ["linear", "angular"].iter().all(|part| ["x", "y", "z"].iter().all(|axis| twist[part][axis] == 0.0))
+}
+
+/// The robot's pose from its summary: (x, y, θ).
+fn pose(summary: &Value) -> (f64, f64, f64) {
+    let p = &summary["pose"];
+    (p["x"].as_f64().unwrap(), p["y"].as_f64().unwrap(), p["theta"].as_f64().unwrap())
+}
+
+#[test]
+fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    // Odometry that does not start at zero: the goal is in the frame where
+    // the robot stood when the drive began.
+    let (x0, y0, theta0): (f64, f64, f64) = (3.0, -1.0, 0.7);
+    let args = format!("--start-x {x0} --start-y {y0} --start-theta {theta0}");
+    let Some(session) = drive_beside_robot(dir.path(), &args, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    assert!(stderr(&session).contains("at the goal"), "{}", stderr(&session));
+    let (x, y, _) = pose(&session.summary);
+    let goal = (x0 + 2.0 * theta0.cos(), y0 + 2.0 * theta0.sin());
+    let miss = (x - goal.0).hypot(y - goal.1);
+    assert!(miss <= 0.25, "ended ({x:.3}, {y:.3}), {miss:.3} m from the goal {goal:?}");
+    assert!(session.twists.iter().any(|t| t["twist"]["linear"]["x"].as_f64().unwrap() > 0.2), "it drove");
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    // The drive's logs are there.
+    assert!(dir.path().join("drive-log.csv").exists() && dir.path().join("drive-log.mcap").exists());
+}
+
+#[test]
+fn odometry_that_stops_coming_stops_the_robot_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--stop-odom-after 1", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    assert!(stderr(&session).contains("no odometry on /odom"), "{}", stderr(&session));
+    // The first zero twist after the robot moved came within a few
+    // periods of the last odometry (3 periods of 0.1 s, plus a tick).
+    let moved = session.twists.iter().position(|t| !is_zero(&t["twist"])).expect("it drove");
+    let stop = session.twists[moved..].iter().find(|t| is_zero(&t["twist"])).expect("a zero twist");
+    let age = stop["odom_age"].as_f64().unwrap();
+    assert!(age < 0.6, "the zero twist came {age:.3} s after the last odometry");
+    assert!(is_zero(&session.summary["last_twist"]));
+}
+
+#[test]
+fn sigterm_leaves_the_robot_with_a_zero_twist() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "", &file, Some(3.0)) else { return };
+    assert!(session.ubf.status.success(), "{}", stderr(&session));
+    assert!(session.twists.iter().any(|t| !is_zero(&t["twist"])), "it drove before the signal");
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
+fn a_topic_of_another_type_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    // Odometry read from where the robot publishes its laser scans.
+    let file = robot_file(dir.path(), 2.0, r#"ros2: (odom: "scan", connect_timeout_s: 2.0),"#);
+    let Some(session) = drive_beside_robot(dir.path(), "--scan", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let text = stderr(&session);
+    assert!(
+        text.contains("/scan is published with type `sensor_msgs::msg::dds_::LaserScan_`, but ubf reads it as"),
+        "{text}"
+    );
+    assert!(session.twists.iter().all(|t| is_zero(&t["twist"])), "nothing but stops was sent");
+}
+
+#[test]
+fn best_effort_odometry_is_named_and_heard_with_sensor_data_qos() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "ros2: (connect_timeout_s: 2.0),");
+    let Some(session) = drive_beside_robot(dir.path(), "--odom-best-effort", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    assert!(stderr(&session).contains("/odom is published best effort"), "{}", stderr(&session));
+
+    let file = robot_file(dir.path(), 2.0, "ros2: (odom_qos: SensorData),");
+    let Some(session) = drive_beside_robot(dir.path(), "--odom-best-effort", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+}
+
+#[test]
+fn a_namespaced_robot_is_driven_under_its_namespace() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 1.0, r#"ros2: (namespace: "/robot1"),"#);
+    let Some(session) = drive_beside_robot(dir.path(), "--namespace robot1", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let (x, y, _) = pose(&session.summary);
+    assert!((x.hypot(y) - 1.0).abs() <= 0.25, "ended at ({x:.3}, {y:.3})");
+}
+
+#[test]
+fn a_scan_wall_ahead_turns_the_robot_away() {
+    // AvoidCollision sees the scan's wall 1.5 m ahead and the goal beyond
+    // it: the robot must not drive into it.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(
+        &file,
+        r#"RobotConfig(
+    name: "ros2-robot",
+    connection: "ros2",
+    model: Powerbot,
+    max_time_s: 12.0,
+    goal: (x: 4.0, y: 0.0, tolerance: 0.2),
+    root: Composite(arbiter: CommandFusion, children: [
+        (behavior: Stop(), weight: 1.0),
+        (behavior: AvoidCollision(), weight: 3.0),
+        (behavior: GoTo(cruise_speed: 0.3)),
+    ]),
+)"#,
+    )
+    .unwrap();
+    let Some(session) = drive_beside_robot(dir.path(), "--scan --wall-x 1.5", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let (x, _, _) = pose(&session.summary);
+    assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
+}
