@@ -1,6 +1,7 @@
 //! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
 //! speaking its protocol), stopped safely.
 
+use crate::ros2_view::Shown;
 use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Deserialize;
 use std::ops::ControlFlow;
@@ -128,6 +129,9 @@ pub enum DriveError {
         /// What went wrong.
         source: std::io::Error,
     },
+    /// Publishing on ROS 2 could not start.
+    #[error("{0}")]
+    Ros2(String),
     /// A log writer's thread could not be started.
     #[error("starting the log writer: {0}")]
     LogWriter(std::io::Error),
@@ -304,6 +308,11 @@ pub struct DriveConfig {
     /// believes it is at the goal; `ubf drive --until-goal` sets it.
     #[serde(default)]
     pub until_goal: bool,
+    /// Publish the drive on ROS 2 (`/tf`, `/odom`, `/scan`, `/ubf/tick`,
+    /// `/ubf/goal`); `ubf drive --ros2` sets it. A ROS 2 robot always
+    /// publishes the tree's topics, and leaves the robot's to its driver.
+    #[serde(default)]
+    pub publish_ros2: bool,
     /// Give up (robot stopped, session closed, exit code 1) once the robot,
     /// by its own pose, has stayed within `radius_m` of one spot for
     /// `window_s`: pressed against a wall its goal lies behind, say.
@@ -704,7 +713,8 @@ fn drive_sessions(
         if status != Status::Off {
             controller.add_sink(Box::new(StatusLine::new(status)));
         }
-        let attached = attach_logs(&mut controller, config, model, logs);
+        let attached =
+            attach_logs(&mut controller, config, model, logs).and_then(|()| attach_ros2(&mut controller, config));
         let ends = Ends {
             at_goal: config.until_goal,
             progress: config.progress,
@@ -772,6 +782,22 @@ fn attach_logs<R: Robot>(
         }
         Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
     }
+    Ok(())
+}
+
+/// Publishes the session on ROS 2 where asked, and always for a ROS 2
+/// robot: its tree and goal, and for another robot its pose and sensors
+/// too (a ROS 2 robot's driver publishes those).
+fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -> Result<(), DriveError> {
+    let ros2_robot = config.connection == ROS2_CONNECTION;
+    if !(config.publish_ros2 || ros2_robot) {
+        return Ok(());
+    }
+    let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
+    let shown = Shown { robot: !ros2_robot, images: config.log_images };
+    let publisher =
+        crate::run::ros2_publisher(shown, domain, namespace).map_err(|e| DriveError::Ros2(e.to_string()))?;
+    controller.add_sink(Box::new(publisher));
     Ok(())
 }
 

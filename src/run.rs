@@ -3,6 +3,8 @@
 
 use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
 use crate::plot::{self, PlotError};
+use crate::ros2_publish::Ros2Publisher;
+use crate::ros2_view::Shown;
 use crate::scenario::Scenario;
 use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Serialize;
@@ -12,8 +14,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{
-    BuildContext, Controller, ControllerError, Ends, Pose2, Session, SessionEnd, SimClock, Stopwatch, TickRecord,
-    TracingSink,
+    BackgroundSink, BuildContext, Clock, Controller, ControllerError, Ends, PacedClock, Pose2, Session, SessionEnd,
+    SimClock, Stopwatch, TickRecord, TracingSink,
 };
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
@@ -166,11 +168,27 @@ pub enum RunError {
     /// The MCAP log could not be written.
     #[error(transparent)]
     Log(#[from] crate::mcap_log::LogError),
+    /// ROS 2 publishing could not start.
+    #[error("ROS 2: {0}")]
+    Ros2(ubf_core::RobotError),
     /// A bug: the run panicked outside the behaviours (the robot was
     /// stopped and the logs flushed).
     #[error("internal error: {0}")]
     Panic(String),
 }
+
+/// A ROS 2 publisher in `domain` (unset: `ROS_DOMAIN_ID`) under
+/// `namespace`, on a thread of its own: a slow network drops records,
+/// never a tick.
+pub fn ros2_publisher(shown: Shown, domain: Option<u16>, namespace: &str) -> Result<BackgroundSink, RunError> {
+    let domain = domain.map_or_else(ubf_robots::ros2::domain_from_env, Ok).map_err(RunError::Ros2)?;
+    let publisher = Ros2Publisher::new(domain, namespace, shown).map_err(RunError::Ros2)?;
+    BackgroundSink::spawn("ROS 2 publisher", publisher, ROS2_QUEUE)
+        .map_err(|e| RunError::Ros2(ubf_core::RobotError::Io(e)))
+}
+
+/// Ticks the ROS 2 publisher may fall behind by before records are dropped.
+const ROS2_QUEUE: usize = 64;
 
 fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     move |source| RunError::Output { path: path.to_owned(), source }
@@ -182,7 +200,7 @@ fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 /// directory).
 pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunReport, RunError> {
     let outputs = out.map(|dir| Outputs { dir, images: false });
-    run_until(scenario, seed, outputs, &AtomicBool::new(false))
+    run_until(scenario, seed, outputs, None, &AtomicBool::new(false))
 }
 
 /// Where a run's files go, and what its log holds.
@@ -195,12 +213,25 @@ pub struct Outputs<'a> {
     pub images: bool,
 }
 
-/// [`run`] with a choice of outputs, ended early (with its outputs, `end:
-/// interrupted`) once `stop` is set.
+/// A run watched as it goes: paced at real time, and published on ROS 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Live {
+    /// How many times faster than real time the simulation runs.
+    pub speed: f64,
+    /// Whether the run is published on ROS 2 (in `ROS_DOMAIN_ID`): the
+    /// simulated robot's `/tf`, `odom`, `scan` and camera images, and the
+    /// tree's `ubf/tick`.
+    pub ros2: bool,
+}
+
+/// [`run`] with a choice of outputs, paced and published when `live`,
+/// ended early (with its outputs, `end: interrupted`) once `stop` is set.
+/// Pacing changes nothing a run computes: its outputs are the same bytes.
 pub fn run_until(
     scenario: &Scenario,
     seed: u64,
     outputs: Option<Outputs>,
+    live: Option<Live>,
     stop: &AtomicBool,
 ) -> Result<RunReport, RunError> {
     let out = outputs.map(|o| o.dir);
@@ -221,10 +252,17 @@ pub fn run_until(
     let world = WorldMessage::of(sim.world());
     let robot = EgomotionRobot::new(sim, tracker);
     let root = scenario.root.build(&BuildContext::new(seed));
-    let mut controller = Controller::new(robot, root, Box::new(SimClock::new(scenario.period_s)));
+    let clock: Box<dyn Clock> = match live {
+        Some(live) => Box::new(PacedClock::new(scenario.period_s, live.speed)),
+        None => Box::new(SimClock::new(scenario.period_s)),
+    };
+    let mut controller = Controller::new(robot, root, clock);
     controller.set_goal(scenario.goal);
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
+    if live.is_some_and(|l| l.ros2) {
+        controller.add_sink(Box::new(ros2_publisher(Shown { robot: true, images: true }, None, "")?));
+    }
     let log = match outputs {
         Some(Outputs { dir, images }) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;

@@ -30,12 +30,41 @@ fn robot_file(dir: &Path, goal_x: f64, extra: &str) -> PathBuf {
     path
 }
 
-/// What a test session left: ubf's exit and stderr, and what the robot
-/// recorded (every twist it received, then its summary).
+/// What a test session left: ubf's exit and stderr, what the robot
+/// recorded (every twist it received, then its summary), and what the
+/// listener heard, if one listened.
 struct Session {
     ubf: Output,
     twists: Vec<Value>,
     summary: Value,
+    heard: Option<Value>,
+}
+
+/// The robot's Python environment (Cyclone DDS from PyPI) is made outside
+/// the namespace, which has no network.
+fn install_cyclone() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let setup = Command::new("python3").arg(root.join("scripts/ros2/robot.py")).arg("--help").output().unwrap();
+    assert!(setup.status.success(), "installing cyclonedds: {}", String::from_utf8_lossy(&setup.stderr));
+}
+
+/// Runs `script` in a private network namespace with the environment
+/// `vars`; `None` (said on stderr) where namespaces are not available.
+fn in_namespace(script: &str, vars: &[(&str, &std::ffi::OsStr)]) -> Option<Output> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let out = Command::new(Path::new(root).join("scripts/ros2/netns.sh"))
+        .args(["bash", "-c", script])
+        .env("ROOT", root)
+        .env("UBF", env!("CARGO_BIN_EXE_ubf"))
+        .envs(vars.iter().copied())
+        .env_remove("ROS_DOMAIN_ID")
+        .output()
+        .unwrap();
+    if out.status.code() == Some(77) {
+        eprintln!("skipped: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    Some(out)
 }
 
 /// Runs the Cyclone robot with `robot_args` and `ubf drive FILE --until-goal`
@@ -43,12 +72,19 @@ struct Session {
 /// not available (the test is then skipped, said on stderr). With
 /// `interrupt_after`, ubf gets SIGTERM after that many seconds.
 fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt_after: Option<f64>) -> Option<Session> {
-    let root = env!("CARGO_MANIFEST_DIR");
-    // The robot's Python environment is made (from PyPI) outside the
-    // namespace, which has no network.
-    let setup =
-        Command::new("python3").arg(Path::new(root).join("scripts/ros2/robot.py")).arg("--help").output().unwrap();
-    assert!(setup.status.success(), "installing cyclonedds: {}", String::from_utf8_lossy(&setup.stderr));
+    drive_and_listen(dir, robot_args, file, interrupt_after, None)
+}
+
+/// [`drive_beside_robot`] with a Cyclone listener (`listen.py` with the
+/// arguments `listen`) hearing the drive.
+fn drive_and_listen(
+    dir: &Path,
+    robot_args: &str,
+    file: &Path,
+    interrupt_after: Option<f64>,
+    listen: Option<&str>,
+) -> Option<Session> {
+    install_cyclone();
     let record = dir.join("robot.jsonl");
     let robot_out = dir.join("robot.out");
     let ubf_err = dir.join("ubf.err");
@@ -58,37 +94,38 @@ fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt_after
             "\"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\" & ubf=$!; sleep {s}; kill -TERM $ubf; wait $ubf; code=$?"
         ),
     };
+    let heard_path = dir.join("heard.json");
+    let listener = match listen {
+        Some(topics) => format!(r#"python3 "$ROOT/scripts/ros2/listen.py" {topics} >"$HEARD" & listener=$!"#),
+        None => "listener=".to_owned(),
+    };
     let script = format!(
-        r#"python3 "$ROOT/scripts/ros2/robot.py" --record "$RECORD" --duration 90 {robot_args} >"$ROBOT_OUT" 2>&1 & robot=$!
+        r#"{listener}
+python3 "$ROOT/scripts/ros2/robot.py" --record "$RECORD" --duration 90 {robot_args} >"$ROBOT_OUT" 2>&1 & robot=$!
 for i in $(seq 600); do grep -q "robot ready" "$ROBOT_OUT" && break; kill -0 $robot 2>/dev/null || break; sleep 0.1; done
 grep -q "robot ready" "$ROBOT_OUT" || {{ cat "$ROBOT_OUT" >&2; exit 3; }}
 cd "$DIR"
 {drive}
 kill -TERM $robot; wait $robot
+[ -z "$listener" ] || wait $listener
 exit $code"#
     );
-    let out = Command::new(Path::new(root).join("scripts/ros2/netns.sh"))
-        .args(["bash", "-c", &script])
-        .env("ROOT", root)
-        .env("UBF", env!("CARGO_BIN_EXE_ubf"))
-        .env("FILE", file)
-        .env("DIR", dir)
-        .env("RECORD", &record)
-        .env("ROBOT_OUT", &robot_out)
-        .env("UBF_ERR", &ubf_err)
-        .env_remove("ROS_DOMAIN_ID")
-        .output()
-        .unwrap();
-    if out.status.code() == Some(77) {
-        eprintln!("skipped: {}", String::from_utf8_lossy(&out.stderr));
-        return None;
-    }
+    let vars = [
+        ("FILE", file.as_os_str()),
+        ("DIR", dir.as_os_str()),
+        ("RECORD", record.as_os_str()),
+        ("ROBOT_OUT", robot_out.as_os_str()),
+        ("UBF_ERR", ubf_err.as_os_str()),
+        ("HEARD", heard_path.as_os_str()),
+    ];
+    let out = in_namespace(&script, &vars)?;
     assert_ne!(out.status.code(), Some(3), "the Cyclone robot did not start: {}", String::from_utf8_lossy(&out.stderr));
     let lines: Vec<Value> =
         std::fs::read_to_string(&record).unwrap().lines().map(|line| serde_json::from_str(line).unwrap()).collect();
     let (summary, twists) = lines.split_last().expect("the robot wrote its summary");
     let ubf = Output { status: out.status, stdout: Vec::new(), stderr: std::fs::read(&ubf_err).unwrap() };
-    Some(Session { ubf, twists: twists.to_vec(), summary: summary["summary"].clone() })
+    let heard = listen.map(|_| serde_json::from_slice(&std::fs::read(&heard_path).unwrap()).unwrap());
+    Some(Session { ubf, twists: twists.to_vec(), summary: summary["summary"].clone(), heard })
 }
 
 fn stderr(session: &Session) -> String {
@@ -113,7 +150,8 @@ fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
     // the robot stood when the drive began.
     let (x0, y0, theta0): (f64, f64, f64) = (3.0, -1.0, 0.7);
     let args = format!("--start-x {x0} --start-y {y0} --start-theta {theta0}");
-    let Some(session) = drive_beside_robot(dir.path(), &args, &file, None) else { return };
+    let listen = "/ubf/tick=ubf_msgs/msg/Tick /ubf/goal=geometry_msgs/msg/PoseStamped --min 3 --duration 30";
+    let Some(session) = drive_and_listen(dir.path(), &args, &file, None, Some(listen)) else { return };
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
     assert!(stderr(&session).contains("at the goal"), "{}", stderr(&session));
     let (x, y, _) = pose(&session.summary);
@@ -124,6 +162,41 @@ fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
     // The drive's logs are there.
     assert!(dir.path().join("drive-log.csv").exists() && dir.path().join("drive-log.mcap").exists());
+    // And a ROS 2 subscriber heard the tree and the goal (2 m ahead, in
+    // the frame of the drive's start).
+    let heard = session.heard.unwrap();
+    let tick = &heard["/ubf/tick"]["last"];
+    assert!(heard["/ubf/tick"]["count"].as_u64().unwrap() >= 3, "{heard}");
+    let paths: Vec<&str> = tick["nodes"].as_array().unwrap().iter().map(|n| n["path"].as_str().unwrap()).collect();
+    assert_eq!(paths, ["root", "root/Stop", "root/GoTo"], "{tick}");
+    assert_eq!(heard["/ubf/goal"]["last"]["pose"]["position"]["x"], 2.0, "{heard}");
+}
+
+#[test]
+fn a_run_published_on_ros2_is_heard_by_cyclone() {
+    install_cyclone();
+    let script = r#""$UBF" run "$ROOT/scenarios/goto-open-floor.ron" --ros2 --speed 4 >/dev/null & run=$!
+python3 "$ROOT/scripts/ros2/listen.py" /odom=nav_msgs/msg/Odometry /tf=tf2_msgs/msg/TFMessage \
+    /scan=sensor_msgs/msg/LaserScan:best_effort /ubf/tick=ubf_msgs/msg/Tick \
+    /ubf/goal=geometry_msgs/msg/PoseStamped /ubf/pose/true=geometry_msgs/msg/PoseStamped --min 5 --duration 30
+code=$?; wait $run; exit $code"#;
+    let Some(out) = in_namespace(script, &[]) else { return };
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let heard: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let odom = &heard["/odom"]["last"];
+    assert_eq!(
+        (odom["header"]["frame_id"].as_str(), odom["child_frame_id"].as_str()),
+        (Some("odom"), Some("base_link"))
+    );
+    let transform = &heard["/tf"]["last"]["transforms"][0];
+    assert_eq!(transform["child_frame_id"], "base_link");
+    assert_eq!(transform["transform"]["translation"]["x"], odom["pose"]["pose"]["position"]["x"]);
+    // Stamped with the wall clock, as tf2 wants: after 2026.
+    assert!(odom["header"]["stamp"]["sec"].as_i64().unwrap() > 1_767_225_600, "{odom}");
+    assert_eq!(heard["/ubf/goal"]["last"]["pose"]["position"]["x"], 8.0);
+    let scan = &heard["/scan"]["last"];
+    assert_eq!(scan["ranges"].as_array().unwrap().len(), 360);
+    assert!(heard["/ubf/tick"]["last"]["nodes"].as_array().unwrap().len() >= 2);
 }
 
 #[test]

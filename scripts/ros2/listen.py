@@ -15,6 +15,7 @@ Run it inside scripts/ros2/netns.sh.
 """
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -41,6 +42,17 @@ def subscription(spec):
         raise argparse.ArgumentTypeError(f"{spec!r}: want /topic=pkg/msg/Type[:best_effort], "
                                          f"Type one of {', '.join(TYPES)}")
     return topic, type_name, option == "best_effort"
+
+
+def finite(value):
+    """`value` with every infinite or NaN float as the string JSON cannot hold otherwise ("inf", "-inf", "nan")."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [finite(v) for v in value]
+    return value
 
 
 def main():
@@ -73,7 +85,7 @@ def main():
                     report[topic]["count"] += 1
                     report[topic]["last"] = asdict(sample)
 
-    print(json.dumps(report))
+    print(json.dumps(finite(report)))
     sys.exit(0 if all(entry["count"] >= needed for entry in report.values()) else 1)
 
 

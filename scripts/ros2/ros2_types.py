@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from cyclonedds.core import Policy, Qos
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint8, uint32
+from cyclonedds.idl.types import array, float32, float64, int32, sequence, uint8, uint32, uint64
 from cyclonedds.util import duration
 
 
@@ -137,6 +137,26 @@ class Image(IdlStruct, typename=_dds("sensor_msgs/msg/Image")):
     data: sequence[uint8] = field(default_factory=list)
 
 
+@dataclass
+class NodeVote(IdlStruct, typename=_dds("ubf_msgs/msg/NodeVote")):
+    path: str = ""
+    vote: float64 = 0.0
+    weight: float64 = 0.0
+    won: bool = False
+
+
+@dataclass
+class Tick(IdlStruct, typename=_dds("ubf_msgs/msg/Tick")):
+    """ubf's own message (robots/src/ros2/schemas/ubf_msgs__Tick.msg), written here from its .msg."""
+    stamp: Time = field(default_factory=Time)
+    tick: uint64 = 0
+    winner: str = ""
+    linear: float64 = 0.0
+    angular: float64 = 0.0
+    stop: bool = False
+    nodes: sequence[NodeVote] = field(default_factory=list)
+
+
 TYPES = {
     f"{pkg}/msg/{cls.__name__}": cls
     for pkg, classes in {
@@ -147,6 +167,7 @@ TYPES = {
         "nav_msgs": [Odometry],
         "sensor_msgs": [LaserScan, Image],
         "tf2_msgs": [TFMessage],
+        "ubf_msgs": [NodeVote, Tick],
     }.items()
     for cls in classes
 }

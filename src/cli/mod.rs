@@ -22,6 +22,7 @@ use clap::{Parser, Subcommand};
 use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_objective};
 use images::{parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
+use run::parse_speed;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use sweep::{parse_jobs, parse_seeds};
@@ -171,6 +172,14 @@ enum Command {
         /// `--out` and a camera that renders).
         #[arg(long, requires = "out")]
         log_images: bool,
+        /// Publish the run on ROS 2 as it goes (in `ROS_DOMAIN_ID`):
+        /// `/tf`, `/odom`, `/scan`, camera images, `/ubf/tick`, `/ubf/goal`,
+        /// paced at real time, for RViz, Foxglove or `ros2 topic echo`.
+        #[arg(long)]
+        ros2: bool,
+        /// With `--ros2`, run this many times faster than real time.
+        #[arg(long, default_value_t = 1.0, value_parser = parse_speed, requires = "ros2")]
+        speed: f64,
     },
     /// Run every scenario with every seed in parallel and summarise; with
     /// `--shard K/N`, a share of the runs, for `ubf sweep merge` to combine.
@@ -332,6 +341,12 @@ enum Command {
         /// holds the robot there until Ctrl-C.
         #[arg(long)]
         until_goal: bool,
+        /// Publish the drive on ROS 2 (in `ROS_DOMAIN_ID`): `/tf`, `/odom`,
+        /// `/scan`, `/ubf/tick`, `/ubf/goal`. A ROS 2 robot
+        /// (`connection: "ros2"`) always publishes `/ubf/tick` and
+        /// `/ubf/goal`; its own driver publishes the rest.
+        #[arg(long)]
+        ros2: bool,
     },
     /// Emulate a FLIR PTU pan-tilt head on a TCP port or a pseudo-terminal,
     /// for trying a robot file's `pan_tilt` without the head.
@@ -590,8 +605,10 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     let outcome = match cli.command {
-        Command::Run { file, seed, out, json, huge, log_images } => {
-            run::command(&registry, &file, seed, out.as_deref(), json, huge, log_images)
+        Command::Run { file, seed, out, json, huge, log_images, ros2, speed } => {
+            let live = ros2.then_some(crate::run::Live { speed, ros2 });
+            let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images });
+            run::command(&registry, &file, seed, outputs, json, huge, live)
         }
         Command::Replay { file, plot } => run::replay(&file, plot),
         Command::Check { files } => inspect::check(&registry, &files),
@@ -628,8 +645,8 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Model { action } => experiment::model(&registry, action),
         Command::Experiment { which } => experiment::command(&registry, which),
-        Command::Drive { file, dry_run, status, until_goal } => {
-            robot::drive(&registry, &file, dry_run, status, until_goal)
+        Command::Drive { file, dry_run, status, until_goal, ros2 } => {
+            robot::drive(&registry, &file, dry_run, status, until_goal, ros2)
         }
         Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
             let mut config =

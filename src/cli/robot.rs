@@ -12,10 +12,18 @@ use ubf_robots::arcos::link::Link;
 use ubf_robots::ptu::PtuEmulatorConfig;
 
 /// Drives the robot (or only looks at it, `dry_run`) until stopped.
-pub(super) fn drive(registry: &Registry, file: &Path, dry_run: bool, status: bool, until_goal: bool) -> Outcome {
+pub(super) fn drive(
+    registry: &Registry,
+    file: &Path,
+    dry_run: bool,
+    status: bool,
+    until_goal: bool,
+    ros2: bool,
+) -> Outcome {
     use crate::drive::{DriveConfig, DriveEnd};
     let (mut config, model) = DriveConfig::load(registry, file).map_err(CliError::bad_input)?;
     config.until_goal |= until_goal;
+    config.publish_ros2 |= ros2;
     let stop = crate::drive::install_stop_flag();
     if dry_run {
         crate::drive::dry_run(&config, &model, &stop).map_err(CliError::failed)?;

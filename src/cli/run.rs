@@ -1,7 +1,7 @@
 //! `ubf run` and `ubf replay`.
 
 use super::{CliError, Exit, Outcome};
-use crate::run::{run_until, EndReason, Outputs};
+use crate::run::{run_until, EndReason, Live, Outputs};
 use crate::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use ubf_core::Registry;
@@ -12,20 +12,19 @@ pub(super) fn command(
     registry: &Registry,
     file: &Path,
     seed: Option<u64>,
-    out: Option<&Path>,
+    outputs: Option<Outputs>,
     json: bool,
     huge: bool,
-    log_images: bool,
+    live: Option<Live>,
 ) -> Outcome {
     let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
     let scenario = loaded.map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
     let stop = crate::drive::install_stop_flag();
-    let outputs = out.map(|dir| Outputs { dir, images: log_images });
-    let report = run_until(&scenario, seed, outputs, &stop).map_err(|e| CliError::failed_in(file, e))?;
+    let report = run_until(&scenario, seed, outputs, live, &stop).map_err(|e| CliError::failed_in(file, e))?;
     super::show(&report, json)?;
-    if let Some(dir) = out.filter(|_| !json) {
-        println!("outputs         {}/{{report.json, trajectory.csv, run.mcap, plot.png}}", dir.display());
+    if let Some(outputs) = outputs.filter(|_| !json) {
+        println!("outputs         {}/{{report.json, trajectory.csv, run.mcap, plot.png}}", outputs.dir.display());
     }
     Ok(match report.end {
         EndReason::BehaviorFailed => Exit::Failure,
@@ -73,4 +72,12 @@ pub(super) fn replay(file: &Path, plot: Option<PathBuf>) -> Outcome {
     crate::plot::draw_replayed(&replayed, &title, &plot).map_err(CliError::failed)?;
     println!("plot            {}", plot.display());
     Ok(Exit::Success)
+}
+
+/// `--speed`: a finite factor from 0.01 to 1000.
+pub(super) fn parse_speed(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(speed) if (0.01..=1000.0).contains(&speed) => Ok(speed),
+        _ => Err(format!("`{text}` is not a speed from 0.01 to 1000 (times real time)")),
+    }
 }

@@ -44,17 +44,14 @@ impl Clock for SimClock {
 /// tick that overruns does not cause a burst of catch-up ticks.
 #[derive(Clone, Debug)]
 pub struct WallClock {
-    period: Duration,
     start: Instant,
-    next: Instant,
+    pacer: Pacer,
 }
 
 impl WallClock {
     /// A clock ticking every `period` seconds of real time.
     pub fn new(period: f64) -> Self {
-        let start = Instant::now();
-        let period = Duration::from_secs_f64(period.max(0.0));
-        WallClock { period, start, next: start + period }
+        WallClock { start: Instant::now(), pacer: Pacer::new(Duration::from_secs_f64(period.max(0.0))) }
     }
 }
 
@@ -63,9 +60,27 @@ impl Clock for WallClock {
         self.start.elapsed().as_secs_f64()
     }
     fn period(&self) -> f64 {
-        self.period.as_secs_f64()
+        self.pacer.period.as_secs_f64()
     }
     fn wait_for_next_tick(&mut self) {
+        self.pacer.wait();
+    }
+}
+
+/// Sleeps until the next tick of a real-time period is due; after an
+/// overrun the next tick is one period on, not a burst of catch-up ticks.
+#[derive(Clone, Debug)]
+struct Pacer {
+    period: Duration,
+    next: Instant,
+}
+
+impl Pacer {
+    fn new(period: Duration) -> Self {
+        Pacer { period, next: Instant::now() + period }
+    }
+
+    fn wait(&mut self) {
         let now = Instant::now();
         if self.next > now {
             std::thread::sleep(self.next - now);
@@ -73,6 +88,38 @@ impl Clock for WallClock {
         } else {
             self.next = now + self.period;
         }
+    }
+}
+
+/// Simulated time kept in step with the wall clock, `speed` times as
+/// fast: a simulation someone watches live. Its time is the simulated
+/// clock's, so a paced run computes exactly what an unpaced one does; it
+/// only waits. A tick that overruns is not caught up with a burst.
+#[derive(Clone, Debug)]
+pub struct PacedClock {
+    sim: SimClock,
+    pacer: Pacer,
+}
+
+impl PacedClock {
+    /// A clock ticking every `period` simulated seconds, `speed` times
+    /// faster than real time (clamped to 0.01–1000).
+    pub fn new(period: f64, speed: f64) -> Self {
+        let real_period = Duration::from_secs_f64((period / speed.clamp(0.01, 1000.0)).max(0.0));
+        PacedClock { sim: SimClock::new(period), pacer: Pacer::new(real_period) }
+    }
+}
+
+impl Clock for PacedClock {
+    fn now(&self) -> f64 {
+        self.sim.now()
+    }
+    fn period(&self) -> f64 {
+        self.sim.period()
+    }
+    fn wait_for_next_tick(&mut self) {
+        self.sim.wait_for_next_tick();
+        self.pacer.wait();
     }
 }
 
@@ -103,5 +150,14 @@ mod tests {
             clock.wait_for_next_tick();
         }
         assert_eq!(clock.now(), 1000.0 * 0.1);
+    }
+
+    #[test]
+    fn a_paced_clock_keeps_simulated_time() {
+        let mut clock = PacedClock::new(0.1, 1000.0);
+        for _ in 0..10 {
+            clock.wait_for_next_tick();
+        }
+        assert_eq!(clock.now(), 10.0 * 0.1);
     }
 }

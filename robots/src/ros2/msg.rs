@@ -11,6 +11,10 @@ pub trait RosMessage: Serialize + for<'de> Deserialize<'de> + Send + 'static {
     /// The ROS 2 name, `pkg/msg/Type`.
     const NAME: &'static str;
 
+    /// The `ros2msg` schema rosbag2 stores for it: the `.msg` text with
+    /// every nested type's appended (`schemas/`).
+    const SCHEMA: &'static str;
+
     /// The DDS type name, `pkg::msg::dds_::Type_`.
     fn dds_name() -> String {
         let (package, name) = Self::NAME.split_once("/msg/").expect("a ROS 2 name is pkg/msg/Type");
@@ -18,10 +22,21 @@ pub trait RosMessage: Serialize + for<'de> Deserialize<'de> + Send + 'static {
     }
 }
 
+/// `message` as a ROS 2 serialized message: the CDR encapsulation header
+/// (little-endian CDR) and the message, as DDS sends it and rosbag2 stores
+/// it.
+pub fn to_cdr<M: Serialize>(message: &M) -> Vec<u8> {
+    let mut bytes = vec![0x00, 0x01, 0x00, 0x00];
+    rustdds::serialization::to_writer_with_rep_id(&mut bytes, message, rustdds::RepresentationIdentifier::CDR_LE)
+        .expect("a message of plain fields always serialises");
+    bytes
+}
+
 macro_rules! ros_message {
-    ($type:ty, $name:literal) => {
+    ($type:ty, $name:literal, $schema:literal) => {
         impl RosMessage for $type {
             const NAME: &'static str = $name;
+            const SCHEMA: &'static str = include_str!(concat!("schemas/", $schema));
         }
     };
 }
@@ -84,7 +99,7 @@ pub struct Twist {
     /// rad/s.
     pub angular: Vector3,
 }
-ros_message!(Twist, "geometry_msgs/msg/Twist");
+ros_message!(Twist, "geometry_msgs/msg/Twist", "geometry_msgs__Twist.msg");
 
 impl Twist {
     /// Forward at `velocity` m/s while turning at `turn_rate` rad/s.
@@ -203,7 +218,7 @@ pub struct Odometry {
     /// The velocity in `child_frame_id`.
     pub twist: TwistWithCovariance,
 }
-ros_message!(Odometry, "nav_msgs/msg/Odometry");
+ros_message!(Odometry, "nav_msgs/msg/Odometry", "nav_msgs__Odometry.msg");
 
 /// `sensor_msgs/msg/LaserScan`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -229,7 +244,7 @@ pub struct LaserScan {
     /// One intensity a beam, or none.
     pub intensities: Vec<f32>,
 }
-ros_message!(LaserScan, "sensor_msgs/msg/LaserScan");
+ros_message!(LaserScan, "sensor_msgs/msg/LaserScan", "sensor_msgs__LaserScan.msg");
 
 /// `geometry_msgs/msg/PoseStamped`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -239,7 +254,7 @@ pub struct PoseStamped {
     /// The pose.
     pub pose: Pose,
 }
-ros_message!(PoseStamped, "geometry_msgs/msg/PoseStamped");
+ros_message!(PoseStamped, "geometry_msgs/msg/PoseStamped", "geometry_msgs__PoseStamped.msg");
 
 /// `geometry_msgs/msg/Transform`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -267,7 +282,7 @@ pub struct TFMessage {
     /// The transforms.
     pub transforms: Vec<TransformStamped>,
 }
-ros_message!(TFMessage, "tf2_msgs/msg/TFMessage");
+ros_message!(TFMessage, "tf2_msgs/msg/TFMessage", "tf2_msgs__TFMessage.msg");
 
 impl TFMessage {
     /// The planar transform of `child` in `parent` at `seconds`.
@@ -303,7 +318,15 @@ pub struct Image {
     /// The pixels, row after row.
     pub data: Vec<u8>,
 }
-ros_message!(Image, "sensor_msgs/msg/Image");
+ros_message!(Image, "sensor_msgs/msg/Image", "sensor_msgs__Image.msg");
+
+/// `std_msgs/msg/String`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct StringMessage {
+    /// The text.
+    pub data: String,
+}
+ros_message!(StringMessage, "std_msgs/msg/String", "std_msgs__String.msg");
 
 /// `ubf_msgs/msg/NodeVote`: one node of the tree in a tick.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -336,7 +359,7 @@ pub struct Tick {
     /// Every node of the tree, in pre-order.
     pub nodes: Vec<NodeVote>,
 }
-ros_message!(Tick, "ubf_msgs/msg/Tick");
+ros_message!(Tick, "ubf_msgs/msg/Tick", "ubf_msgs__Tick.msg");
 
 #[cfg(test)]
 mod tests {
@@ -346,6 +369,22 @@ mod tests {
     fn dds_names_follow_the_ros2_convention() {
         assert_eq!(Twist::dds_name(), "geometry_msgs::msg::dds_::Twist_");
         assert_eq!(Odometry::dds_name(), "nav_msgs::msg::dds_::Odometry_");
+    }
+
+    #[test]
+    fn cdr_has_the_encapsulation_header_and_aligned_doubles() {
+        let bytes = to_cdr(&Twist::planar(0.5, -1.0));
+        assert_eq!(bytes.len(), 4 + 48);
+        assert_eq!(&bytes[..4], &[0, 1, 0, 0]);
+        assert_eq!(&bytes[4..12], &0.5f64.to_le_bytes());
+        assert_eq!(&bytes[44..52], &(-1.0f64).to_le_bytes());
+    }
+
+    #[test]
+    fn schemas_start_with_the_types_own_fields() {
+        assert!(Twist::SCHEMA.contains("MSG: geometry_msgs/Vector3"));
+        assert!(Tick::SCHEMA.contains("MSG: ubf_msgs/NodeVote"));
+        assert!(Odometry::SCHEMA.contains(&format!("{}\nMSG: std_msgs/Header", "=".repeat(80))));
     }
 
     #[test]

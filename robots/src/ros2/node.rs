@@ -21,6 +21,10 @@ pub enum Qos {
     /// ROS 2's sensor data profile: best effort, volatile, keep last 5. A
     /// best-effort reader also hears reliable writers.
     SensorData,
+    /// A latched topic (a goal, a map): reliable, transient local, keep
+    /// last 1, so that a viewer that joins late still gets the last
+    /// message.
+    Latched,
 }
 
 impl Qos {
@@ -31,6 +35,10 @@ impl Qos {
                 .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) })
                 .history(History::KeepLast { depth: 10 }),
             Qos::SensorData => builder.reliability(Reliability::BestEffort).history(History::KeepLast { depth: 5 }),
+            Qos::Latched => builder
+                .durability(Durability::TransientLocal)
+                .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) })
+                .history(History::KeepLast { depth: 1 }),
         }
         .build()
     }
@@ -43,6 +51,30 @@ struct Endpoint {
     topic: String,
     type_name: String,
     reliable: bool,
+}
+
+/// A writer of one topic.
+pub struct Publisher<M: RosMessage> {
+    writer: DataWriterCdr<M>,
+    name: String,
+}
+
+impl<M: RosMessage> Publisher<M> {
+    /// Publishes `message`.
+    pub fn publish(&self, message: M) -> Result<(), RobotError> {
+        self.writer.write(message, None).map_err(|e| RobotError::Disconnected(format!("publishing {}: {e}", self.name)))
+    }
+
+    /// Waits up to `wait` for every matched reader to acknowledge what was
+    /// published; whether they all did.
+    pub fn acknowledged_within(&self, wait: std::time::Duration) -> bool {
+        matches!(self.writer.wait_for_acknowledgments(wait), Ok(true))
+    }
+
+    /// The topic's ROS 2 name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
 }
 
 /// A ROS 2 participant in one DDS domain, under one namespace.
@@ -105,11 +137,13 @@ impl Node {
     }
 
     /// A writer of `M` on topic `name`.
-    pub fn writer<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<DataWriterCdr<M>, RobotError> {
+    pub fn writer<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<Publisher<M>, RobotError> {
         let topic = self.topic::<M>(name, qos)?;
-        self.publisher
-            .create_datawriter_no_key_cdr::<M>(&topic, Some(qos.policies()))
-            .map_err(|e| RobotError::Other(format!("publishing {}: {e}", self.resolve(name))))
+        let name = self.resolve(name);
+        match self.publisher.create_datawriter_no_key_cdr::<M>(&topic, Some(qos.policies())) {
+            Ok(writer) => Ok(Publisher { writer, name }),
+            Err(e) => Err(RobotError::Other(format!("publishing {name}: {e}"))),
+        }
     }
 
     /// A reader of `M` on topic `name`.

@@ -2,8 +2,8 @@
 //! `/odom` and `/scan`.
 
 use super::msg::{LaserScan, Odometry, Twist};
-use super::node::{domain_from_env, Node, Qos};
-use rustdds::no_key::{DataReaderCdr, DataWriterCdr};
+use super::node::{domain_from_env, Node, Publisher, Qos};
+use rustdds::no_key::DataReaderCdr;
 use serde::Deserialize;
 use std::time::{Duration, Instant};
 use ubf_core::{angle_difference, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
@@ -70,7 +70,7 @@ const HEADING_GAIN: f64 = 2.0;
 /// drive's goal is where the robot stood when the drive began.
 pub struct Ros2Robot {
     config: Ros2Config,
-    cmd_vel: DataWriterCdr<Twist>,
+    cmd_vel: Publisher<Twist>,
     odom: DataReaderCdr<Odometry>,
     scan: DataReaderCdr<LaserScan>,
     limits: Limits,
@@ -151,9 +151,7 @@ impl Ros2Robot {
 
     fn publish(&mut self, twist: Twist) -> Result<(), RobotError> {
         self.stopped = twist == Twist::default();
-        self.cmd_vel.write(twist, None).map_err(|e| {
-            RobotError::Disconnected(format!("publishing {}: {e}", self.node.resolve(&self.config.cmd_vel)))
-        })
+        self.cmd_vel.publish(twist)
     }
 
     /// Sends a zero twist and says why the link is lost.
@@ -240,17 +238,14 @@ impl Robot for Ros2Robot {
     /// acknowledge it: a writer that leaves first may take it along.
     fn shutdown(&mut self) -> Result<(), RobotError> {
         self.publish(Twist::default())?;
-        match self.cmd_vel.wait_for_acknowledgments(STOP_ACK_WAIT) {
-            Ok(true) => Ok(()),
-            _ => {
-                tracing::warn!(
-                    "the zero twist on {} was not acknowledged within {:.1} s",
-                    self.node.resolve(&self.config.cmd_vel),
-                    STOP_ACK_WAIT.as_secs_f64()
-                );
-                Ok(())
-            }
+        if !self.cmd_vel.acknowledged_within(STOP_ACK_WAIT) {
+            tracing::warn!(
+                "the zero twist on {} was not acknowledged within {:.1} s",
+                self.cmd_vel.name(),
+                STOP_ACK_WAIT.as_secs_f64()
+            );
         }
+        Ok(())
     }
 
     fn limits(&self) -> Limits {
