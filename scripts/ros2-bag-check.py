@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Reads a rosbag2-style MCAP log with two ROS 2 readers we did not write.
 
-    python3 scripts/ros2-bag-check.py out/run/bag/run.mcap [--expect-topic /odom ...]
+    python3 scripts/ros2-bag-check.py out/run/run-rosbag2/run-rosbag2_0.mcap [--expect-topic /odom ...]
 
 Installs mcap-ros2-support 0.6.0 and rosbags 0.11.9 into .venv-rosbag on first
 use (scripts/script_env.py), then:

@@ -1,6 +1,7 @@
 //! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
 //! speaking its protocol), stopped safely.
 
+use crate::ros2_log::{LogFormat, Ros2Log};
 use crate::ros2_view::Shown;
 use crate::trajectory::{Columns, TrajectoryWriter};
 use serde::Deserialize;
@@ -262,6 +263,10 @@ pub struct DriveConfig {
     /// Where the tick log goes, relative to the working directory.
     #[serde(default = "DriveConfig::default_log")]
     pub log: PathBuf,
+    /// `Ros2` also logs the session as a rosbag2 directory beside the CSV
+    /// log (`NAME-rosbag2/`), for `ros2 bag` and the rosbags library.
+    #[serde(default)]
+    pub log_format: LogFormat,
     /// Whether the session's MCAP log holds the camera's stereo pairs
     /// (PNG, about 0.2 MB a 640 × 480 pair).
     #[serde(default)]
@@ -782,7 +787,30 @@ fn attach_logs<R: Robot>(
         }
         Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
     }
+    if config.log_format == LogFormat::Ros2 {
+        attach_rosbag(controller, config, &path, logs);
+    }
     Ok(())
+}
+
+/// The session's rosbag2 directory beside its CSV log (`NAME-rosbag2/`),
+/// or a warning if it cannot be made: the CSV log is the one a session
+/// cannot do without.
+fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig, csv: &Path, logs: &mut Vec<PathBuf>) {
+    let stem = csv.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
+    let dir = csv.with_file_name(format!("{stem}-rosbag2"));
+    let epoch_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images }, epoch_s)
+        .map_err(|e| e.to_string())
+        .and_then(|bag| BackgroundSink::spawn("rosbag2 log", bag, LOG_QUEUE).map_err(|e| e.to_string()));
+    match opened {
+        Ok(sink) => {
+            eprintln!("and to {}", dir.display());
+            logs.push(dir);
+            controller.add_sink(Box::new(sink));
+        }
+        Err(e) => tracing::warn!("{e}; this session has no rosbag2 log"),
+    }
 }
 
 /// Publishes the session on ROS 2 where asked, and always for a ROS 2

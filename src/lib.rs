@@ -25,6 +25,7 @@ pub mod experiment;
 pub mod frames;
 pub mod mcap_log;
 pub mod plot;
+pub mod ros2_log;
 pub mod ros2_publish;
 pub mod ros2_view;
 pub mod run;

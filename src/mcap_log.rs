@@ -44,6 +44,13 @@ pub struct LogError {
     message: String,
 }
 
+impl LogError {
+    /// Writing `path` failed, for the reason `message`.
+    pub fn new(path: &Path, message: impl Into<String>) -> LogError {
+        LogError { path: path.to_owned(), message: message.into() }
+    }
+}
+
 /// The world as `/world` carries it: what `ubf replay` needs to redraw the
 /// plot.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

@@ -93,7 +93,7 @@ impl TickSink for Ros2Publisher {
     /// robot: the ROS 2 view is for watching, not for control.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         let mut messages = Vec::new();
-        self.view.messages(record, |topic, message| messages.push((topic, message)));
+        self.view.messages(record, |topic, _, message| messages.push((topic, message)));
         for (topic, message) in messages {
             if let Err(why) = self.publish(topic, message) {
                 if !std::mem::replace(&mut self.warned, true) {

@@ -139,17 +139,18 @@ impl Ros2View {
         self.epoch_s + time
     }
 
-    /// Every message of `record`, with its topic.
-    pub fn messages(&mut self, record: &TickRecord, mut emit: impl FnMut(&'static str, Message)) {
+    /// Every message of `record`, with its topic and its stamp, s.
+    pub fn messages(&mut self, record: &TickRecord, mut emit: impl FnMut(&'static str, f64, Message)) {
         let (state, t) = (&record.state, self.stamp(record.time()));
         if self.shown.robot {
-            emit(topics::TF, Message::Tf(TFMessage::planar(t, "odom", "base_link", &state.pose)));
+            emit(topics::TF, t, Message::Tf(TFMessage::planar(t, "odom", "base_link", &state.pose)));
             emit(
                 topics::ODOM,
+                t,
                 Message::Odometry(Box::new(odometry(t, &state.pose, state.velocity, state.rot_velocity))),
             );
             if !state.ranges.is_empty() {
-                emit(topics::SCAN, Message::Scan(scan(t, record)));
+                emit(topics::SCAN, t, Message::Scan(scan(t, record)));
             }
         }
         // The goal when it changes, and once a second for viewers that
@@ -159,25 +160,25 @@ impl Ros2View {
             self.goal = goal;
             self.goal_at = record.time();
             if let Some([x, y, _]) = goal {
-                emit(topics::GOAL, Message::Pose(pose_stamped(t, &Pose2::new(x, y, 0.0))));
+                emit(topics::GOAL, t, Message::Pose(pose_stamped(t, &Pose2::new(x, y, 0.0))));
             }
         }
         if let Some(truth) = &record.truth {
-            emit(topics::TRUE_POSE, Message::Pose(pose_stamped(t, &truth.pose)));
+            emit(topics::TRUE_POSE, t, Message::Pose(pose_stamped(t, &truth.pose)));
         }
         let frame = &state.stereo;
         if frame.number != self.frame && frame.number != 0 {
             self.frame = frame.number;
+            let stamp = self.stamp(frame.time);
             if let Some(pose) = &state.egomotion.pose {
-                emit(topics::EGOMOTION_POSE, Message::Pose(pose_stamped(self.stamp(frame.time), pose)));
+                emit(topics::EGOMOTION_POSE, stamp, Message::Pose(pose_stamped(stamp, pose)));
             }
             if let Some(images) = frame.images.as_deref().filter(|_| self.shown.images) {
-                let stamp = self.stamp(frame.time);
-                emit(topics::LEFT_IMAGE, Message::Image(image(stamp, "camera_left", images, &images.left)));
-                emit(topics::RIGHT_IMAGE, Message::Image(image(stamp, "camera_right", images, &images.right)));
+                emit(topics::LEFT_IMAGE, stamp, Message::Image(image(stamp, "camera_left", images, &images.left)));
+                emit(topics::RIGHT_IMAGE, stamp, Message::Image(image(stamp, "camera_right", images, &images.right)));
             }
         }
-        emit(topics::TICK, Message::Tick(self.tick(t, record)));
+        emit(topics::TICK, t, Message::Tick(self.tick(t, record)));
     }
 
     fn tick(&self, stamp: f64, record: &TickRecord) -> Tick {

@@ -3,6 +3,7 @@
 
 use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
 use crate::plot::{self, PlotError};
+use crate::ros2_log::Ros2Log;
 use crate::ros2_publish::Ros2Publisher;
 use crate::ros2_view::Shown;
 use crate::scenario::Scenario;
@@ -199,7 +200,7 @@ fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 /// `trajectory.csv`, `run.mcap` and `plot.png` there (creating the
 /// directory).
 pub fn run(scenario: &Scenario, seed: u64, out: Option<&Path>) -> Result<RunReport, RunError> {
-    let outputs = out.map(|dir| Outputs { dir, images: false });
+    let outputs = out.map(|dir| Outputs { dir, images: false, rosbag: false });
     run_until(scenario, seed, outputs, None, &AtomicBool::new(false))
 }
 
@@ -209,8 +210,19 @@ pub struct Outputs<'a> {
     /// The directory for `report.json`, `trajectory.csv`, `run.mcap` and
     /// `plot.png`.
     pub dir: &'a Path,
-    /// Whether `run.mcap` holds the camera's rendered pairs.
+    /// Whether the logs hold the camera's rendered pairs.
     pub images: bool,
+    /// Whether the run is also logged as a rosbag2 directory,
+    /// [`ROSBAG_DIR`] in `dir`, for the ROS 2 tools.
+    pub rosbag: bool,
+}
+
+/// The rosbag2 directory of a run's log, in its output directory.
+pub const ROSBAG_DIR: &str = "run-rosbag2";
+
+/// What a shared sink holds, once its other holders are gone.
+fn unshared<T>(shared: Arc<Mutex<T>>) -> Option<T> {
+    Arc::into_inner(shared).map(|inner| inner.into_inner().unwrap_or_else(PoisonError::into_inner))
 }
 
 /// A run watched as it goes: paced at real time, and published on ROS 2.
@@ -264,7 +276,7 @@ pub fn run_until(
         controller.add_sink(Box::new(ros2_publisher(Shown { robot: true, images: true }, None, "")?));
     }
     let log = match outputs {
-        Some(Outputs { dir, images }) => {
+        Some(Outputs { dir, images, rosbag }) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;
             let path = dir.join("trajectory.csv");
             let camera_pan = scenario.robot.camera.as_ref().is_some_and(|c| c.pan_tilt.is_some());
@@ -274,7 +286,16 @@ pub fn run_until(
             log.log_images(images);
             let log = Arc::new(Mutex::new(log));
             controller.add_sink(Box::new(log.clone()));
-            Some(log)
+            let bag = match rosbag {
+                true => {
+                    let bag = Ros2Log::create(&dir.join(ROSBAG_DIR), Shown { robot: true, images }, 0.0)?;
+                    let bag = Arc::new(Mutex::new(bag));
+                    controller.add_sink(Box::new(bag.clone()));
+                    Some(bag)
+                }
+                false => None,
+            };
+            Some((log, bag))
         }
         None => None,
     };
@@ -305,12 +326,18 @@ pub fn run_until(
         SessionEnd::Panicked(why) => (EndReason::TimeLimit, Some(RunError::Panic(why))),
     };
     let (robot, _) = controller.into_parts();
-    // The controller, and with it its handle on the log, is gone.
-    let log = log.and_then(Arc::into_inner).map(|log| log.into_inner().unwrap_or_else(PoisonError::into_inner));
+    // The controller, and with it its handles on the logs, is gone.
+    let (log, bag) = match log {
+        Some((log, bag)) => (unshared(log), bag.and_then(unshared)),
+        None => (None, None),
+    };
     if let Some(e) = failure.or(shutdown.err().map(RunError::from)) {
         // What was logged stays readable; the failure is what is reported.
         if let Some(log) = log {
             let _ = log.close();
+        }
+        if let Some(bag) = bag {
+            let _ = bag.close();
         }
         return Err(e);
     }
@@ -366,6 +393,9 @@ pub fn run_until(
         let mut logged = serde_json::to_value(&report).expect("a report always serialises");
         if let Some(fields) = logged.as_object_mut() {
             fields.remove("wall_time_s");
+        }
+        if let Some(bag) = bag {
+            bag.close_with_report(report.sim_time_s, &logged)?;
         }
         log.close_with_report(report.sim_time_s, &logged)?;
     }

@@ -163,7 +163,7 @@ fn rendered_pairs_are_logged_as_the_pngs_a_recording_holds() {
     let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let (logged, recorded) = (dir.path().join("run"), dir.path().join("frames"));
-    let outputs = ubf::run::Outputs { dir: &logged, images: true };
+    let outputs = ubf::run::Outputs { dir: &logged, images: true, rosbag: false };
     ubf::run::run_until(&scenario, 1, Some(outputs), None, &std::sync::atomic::AtomicBool::new(false)).unwrap();
     ubf::frames::record(&scenario, 1, &recorded, 1).unwrap();
 

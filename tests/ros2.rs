@@ -256,11 +256,14 @@ fn best_effort_odometry_is_named_and_heard_with_sensor_data_qos() {
 #[test]
 fn a_namespaced_robot_is_driven_under_its_namespace() {
     let dir = tempfile::tempdir().unwrap();
-    let file = robot_file(dir.path(), 1.0, r#"ros2: (namespace: "/robot1"),"#);
+    let file = robot_file(dir.path(), 1.0, r#"ros2: (namespace: "/robot1"), log_format: Ros2,"#);
     let Some(session) = drive_beside_robot(dir.path(), "--namespace robot1", &file, None) else { return };
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
     let (x, y, _) = pose(&session.summary);
     assert!((x.hypot(y) - 1.0).abs() <= 0.25, "ended at ({x:.3}, {y:.3})");
+    // The drive's rosbag2 log reads with the standard readers.
+    let verdict = check_bag(&dir.path().join("drive-log-rosbag2/drive-log-rosbag2_0.mcap"), &["/odom", "/ubf/tick"]);
+    assert_eq!(verdict["ok"], true, "{verdict}");
 }
 
 #[test]
@@ -289,4 +292,48 @@ fn a_scan_wall_ahead_turns_the_robot_away() {
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
     let (x, _, _) = pose(&session.summary);
     assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
+}
+
+/// Runs `scripts/ros2-bag-check.py` (mcap-ros2-support and rosbags, which
+/// nobody here wrote) on a bag's MCAP; its JSON verdict.
+fn check_bag(mcap: &Path, topics: &[&str]) -> Value {
+    let mut command = Command::new("python3");
+    command.arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/ros2-bag-check.py")).arg(mcap);
+    for topic in topics {
+        command.args(["--expect-topic", topic]);
+    }
+    let out = command.output().unwrap();
+    assert!(out.status.success(), "{}\n{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn a_run_logged_for_ros2_decodes_with_the_standard_readers_and_repeats_its_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let ubf = |out: &Path| {
+        let run = Command::new(env!("CARGO_BIN_EXE_ubf"))
+            .args(["run", "scenarios/camera-sweep.ron", "--log-format", "ros2", "--out"])
+            .arg(out)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        out.join("run-rosbag2")
+    };
+    let (a, b) = (ubf(&dir.path().join("a")), ubf(&dir.path().join("b")));
+    for file in ["metadata.yaml", "run-rosbag2_0.mcap"] {
+        assert!(std::fs::read(a.join(file)).unwrap() == std::fs::read(b.join(file)).unwrap(), "{file} differs");
+    }
+    let topics =
+        ["/tf", "/odom", "/scan", "/ubf/tick", "/ubf/goal", "/ubf/pose/true", "/ubf/pose/egomotion", "/ubf/report"];
+    let verdict = check_bag(&a.join("run-rosbag2_0.mcap"), &topics);
+    assert_eq!(verdict["ok"], true, "{verdict}");
+    let report: Value = serde_json::from_slice(&std::fs::read(dir.path().join("a/report.json")).unwrap()).unwrap();
+    let ticks = report["ticks"].as_u64().unwrap();
+    for topic in ["/tf", "/odom", "/ubf/tick"] {
+        let counted = &verdict["topics"][topic];
+        assert_eq!((counted["mcap_ros2"].as_u64(), counted["rosbags"].as_u64()), (Some(ticks), Some(ticks)), "{topic}");
+    }
+    let tick = &verdict["topics"]["/ubf/tick"]["first"];
+    assert_eq!(tick["nodes"][0]["path"], "root", "{tick}");
 }

@@ -18,6 +18,7 @@ mod robot;
 mod run;
 mod sweep;
 
+use crate::ros2_log::LogFormat;
 use clap::{Parser, Subcommand};
 use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_objective};
 use images::{parse_limit, parse_offset};
@@ -172,6 +173,12 @@ enum Command {
         /// `--out` and a camera that renders).
         #[arg(long, requires = "out")]
         log_images: bool,
+        /// `ros2` also writes the log as a rosbag2 directory
+        /// (`run-rosbag2/` in `--out`: CDR messages, standard ROS 2 types),
+        /// for `ros2 bag` and the rosbags library; the JSON `run.mcap`
+        /// stays, for Foxglove, `ubf replay` and the plot.
+        #[arg(long, value_enum, default_value_t = LogFormat::Json, requires = "out")]
+        log_format: LogFormat,
         /// Publish the run on ROS 2 as it goes (in `ROS_DOMAIN_ID`):
         /// `/tf`, `/odom`, `/scan`, camera images, `/ubf/tick`, `/ubf/goal`,
         /// paced at real time, for RViz, Foxglove or `ros2 topic echo`.
@@ -605,9 +612,10 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     let outcome = match cli.command {
-        Command::Run { file, seed, out, json, huge, log_images, ros2, speed } => {
+        Command::Run { file, seed, out, json, huge, log_images, log_format, ros2, speed } => {
             let live = ros2.then_some(crate::run::Live { speed, ros2 });
-            let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images });
+            let rosbag = log_format == LogFormat::Ros2;
+            let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images, rosbag });
             run::command(&registry, &file, seed, outputs, json, huge, live)
         }
         Command::Replay { file, plot } => run::replay(&file, plot),
