@@ -3,12 +3,14 @@
 
     python3 scripts/mcap-check.py out/run/run.mcap
 
-Installs the `mcap` package from PyPI into .venv-mcap on first use
-(scripts/script_env.py), then prints each topic with its schema, encoding
-and message count, the first and last true pose, the camera images if the
-log holds them, and the report's end. It exits non-zero if a message's
-JSON does not parse, if an image is not a PNG, or if a topic the log must
-hold is missing: a check of our writer by a reader we did not write.
+Installs the `mcap` and `jsonschema` packages from PyPI into .venv-mcap on
+first use (scripts/script_env.py), then prints each topic with its schema,
+encoding and message count, the first and last true pose, the camera images
+if the log holds them, and the report's end. It exits non-zero if a
+message's JSON does not parse or does not validate against its channel's
+JSON Schema, if a schema describes no fields, if an image is not a PNG, or
+if a topic the log must hold is missing: a check of our writer by a reader
+and a validator we did not write.
 """
 import base64
 import json
@@ -23,15 +25,26 @@ REQUIRED = ["/pose/true", "/pose/odometry", "/tree", "/world", "/run", "/scene",
 
 
 def main():
-    script_env.ensure(".venv-mcap", ["mcap"], ["mcap"])
+    script_env.ensure(".venv-mcap", ["mcap", "jsonschema"], ["mcap", "jsonschema"])
+    import jsonschema
     from mcap.reader import make_reader
 
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     counts, schemas, first, last, report, images = {}, {}, None, None, None, {}
     with open(sys.argv[1], "rb") as f:
+        validators = {}
         for schema, channel, message in make_reader(f).iter_messages():
             data = json.loads(message.data)
+            if schema.id not in validators:
+                described = json.loads(schema.data)
+                if not described.get("properties"):
+                    sys.exit(f"{channel.topic}: schema {schema.name} describes no fields")
+                validators[schema.id] = jsonschema.Draft202012Validator(described)
+            errors = list(validators[schema.id].iter_errors(data))
+            if errors:
+                sys.exit(f"{channel.topic}: message {counts.get(channel.topic, 0) + 1} does not fit {schema.name}: "
+                         f"{errors[0].message}")
             counts[channel.topic] = counts.get(channel.topic, 0) + 1
             schemas[channel.topic] = (schema.name if schema else "", schema.encoding if schema else "",
                                       channel.message_encoding)

@@ -31,9 +31,12 @@ def ensure(name, packages, modules):
     # wait for it; a half-made one (an interrupted install) is made again.
     with open(directory + ".lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        done = os.path.join(directory, ".installed")
-        if not os.path.exists(done):
+        # The marker names what was installed: a script that asks for more
+        # packages gets an environment made again.
+        done, wanted = os.path.join(directory, ".installed"), "\n".join(packages)
+        if not os.path.exists(done) or open(done).read() != wanted:
             subprocess.check_call([sys.executable, "-m", "venv", "--clear", directory])
             subprocess.check_call([python, "-m", "pip", "install", "--quiet", *packages])
-            open(done, "w").close()
+            with open(done, "w") as marker:
+                marker.write(wanted)
     os.execv(python, [python] + sys.argv)

@@ -28,6 +28,7 @@
 //! - `/report` (`ubf.Report`): the run's report, at the end.
 
 use mcap::records::MessageHeader;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -53,7 +54,7 @@ impl LogError {
 
 /// The world as `/world` carries it: what `ubf replay` needs to redraw the
 /// plot.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct WorldMessage {
     /// Wall segments, `[[x0, y0], [x1, y1]]`, m.
     pub segments: Vec<[[f64; 2]; 2]>,
@@ -97,7 +98,7 @@ impl WorldMessage {
 }
 
 /// What `/run` carries.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct RunMessage {
     /// The scenario's name.
     pub scenario: String,
@@ -112,7 +113,7 @@ pub struct RunMessage {
 }
 
 /// What `/tree` carries each tick.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct TickMessage {
     /// Controller time, s.
     pub time: f64,
@@ -127,7 +128,7 @@ pub struct TickMessage {
 }
 
 /// One node's part in a tick.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct NodeVote {
     /// Its path in the tree.
     pub path: String,
@@ -137,6 +138,33 @@ pub struct NodeVote {
     pub won: bool,
     /// Whether it is a composite.
     pub composite: bool,
+}
+
+/// What `/collision` carries: where the robot touched something.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct CollisionMessage {
+    /// The robot's true x then, m.
+    pub x: f64,
+    /// Its true y, m.
+    pub y: f64,
+}
+
+/// The JSON Schema of `T`, as a JSON log's schema record holds it.
+fn json_schema<T: JsonSchema>() -> Vec<u8> {
+    serde_json::to_vec(&schemars::schema_for!(T)).expect("a schema always serialises")
+}
+
+/// The JSON Schema of `/report`: the report without the wall time, which
+/// the log leaves out so that it is the same for the same seed.
+fn report_schema() -> Vec<u8> {
+    let mut schema = schemars::schema_for!(crate::run::RunReport);
+    if let Some(properties) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) {
+        properties.remove("wall_time_s");
+    }
+    if let Some(required) = schema.get_mut("required").and_then(|r| r.as_array_mut()) {
+        required.retain(|field| field != "wall_time_s");
+    }
+    serde_json::to_vec(&schema).expect("a schema always serialises")
 }
 
 /// A run log being written: a [`TickSink`] that the controller feeds.
@@ -167,7 +195,6 @@ const CHUNK_EVERY_S: f64 = 1.0;
 const POSE_SCHEMA: &str = r#"{"title":"foxglove.PoseInFrame","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"pose":{"type":"object","properties":{"position":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"}}},"orientation":{"type":"object","properties":{"x":{"type":"number"},"y":{"type":"number"},"z":{"type":"number"},"w":{"type":"number"}}}}}}}"#;
 const SCENE_SCHEMA: &str = r#"{"title":"foxglove.SceneUpdate","type":"object","properties":{"deletions":{"type":"array"},"entities":{"type":"array","items":{"type":"object","properties":{"timestamp":{"type":"object"},"frame_id":{"type":"string"},"id":{"type":"string"},"lifetime":{"type":"object"},"frame_locked":{"type":"boolean"},"metadata":{"type":"array"},"arrows":{"type":"array"},"cubes":{"type":"array"},"spheres":{"type":"array"},"cylinders":{"type":"array"},"lines":{"type":"array"},"triangles":{"type":"array"},"texts":{"type":"array"},"models":{"type":"array"}}}}}}"#;
 const IMAGE_SCHEMA: &str = r#"{"title":"foxglove.CompressedImage","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"data":{"type":"string","contentEncoding":"base64"},"format":{"type":"string"}}}"#;
-const OBJECT_SCHEMA: &str = r#"{"type":"object"}"#;
 
 /// Nanoseconds of controller time, as MCAP and Foxglove count.
 fn nanos(time: f64) -> u64 {
@@ -274,14 +301,14 @@ impl McapLog {
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
             channels.insert(topic, id);
         }
-        for (topic, name) in [
-            ("/world", "ubf.World"),
-            ("/run", "ubf.Run"),
-            ("/tree", "ubf.Tick"),
-            ("/collision", "ubf.Collision"),
-            ("/report", "ubf.Report"),
+        for (topic, name, schema) in [
+            ("/world", "ubf.World", json_schema::<WorldMessage>()),
+            ("/run", "ubf.Run", json_schema::<RunMessage>()),
+            ("/tree", "ubf.Tick", json_schema::<TickMessage>()),
+            ("/collision", "ubf.Collision", json_schema::<CollisionMessage>()),
+            ("/report", "ubf.Report", report_schema()),
         ] {
-            let schema = writer.add_schema(name, "jsonschema", OBJECT_SCHEMA.as_bytes()).map_err(|e| fail(&e))?;
+            let schema = writer.add_schema(name, "jsonschema", &schema).map_err(|e| fail(&e))?;
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
             channels.insert(topic, id);
         }
@@ -372,7 +399,7 @@ impl McapLog {
         self.write("/tree", time, &tick)?;
         if let Some(truth) = record.truth.filter(|t| t.collisions > self.collisions) {
             self.collisions = truth.collisions;
-            self.write("/collision", time, &json!({"x": truth.pose.x, "y": truth.pose.y}))?;
+            self.write("/collision", time, &CollisionMessage { x: truth.pose.x, y: truth.pose.y })?;
         }
         if time - self.flushed_at >= CHUNK_EVERY_S {
             self.writer.flush().map_err(|e| self.fail(&e))?;

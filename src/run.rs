@@ -23,7 +23,7 @@ use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
 
 /// Why a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum EndReason {
     /// The robot believed it was at the goal.
@@ -41,7 +41,7 @@ pub enum EndReason {
 }
 
 /// What a run did: `report.json`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct RunReport {
     /// The scenario's name.
     pub scenario: String,
@@ -63,8 +63,10 @@ pub struct RunReport {
     /// message.
     pub failure: Option<String>,
     /// Where the robot really ended.
+    #[schemars(with = "PoseSchema")]
     pub final_true_pose: Pose2,
     /// Where the robot believed it ended.
+    #[schemars(with = "PoseSchema")]
     pub final_estimated_pose: Pose2,
     /// Distance between the two, m.
     pub estimate_error_m: f64,
@@ -104,6 +106,18 @@ pub struct RunReport {
     /// Real seconds the run took: the only field that differs between two
     /// runs of the same scenario and seed.
     pub wall_time_s: f64,
+}
+
+/// A pose's JSON form, for the report's schema.
+#[derive(schemars::JsonSchema)]
+#[allow(dead_code)]
+struct PoseSchema {
+    /// m.
+    x: f64,
+    /// m.
+    y: f64,
+    /// Heading, rad, counter-clockwise from x.
+    theta: f64,
 }
 
 /// The summary `ubf run` prints.

@@ -191,3 +191,28 @@ fn rendered_pairs_are_logged_as_the_pngs_a_recording_holds() {
     let log = read(&std::fs::read(plain.join("run.mcap")).unwrap(), enumset::EnumSet::empty());
     assert!(!log.topics.contains_key("/camera/left"));
 }
+
+#[test]
+fn the_python_reader_reads_every_message_and_each_fits_its_json_schema() {
+    // scripts/mcap-check.py: the MCAP project's Python reader and the
+    // `jsonschema` validator, neither written here. Without AvoidCollision
+    // the robot drives into the box, so `/collision` is logged too.
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("scenarios/corridor-box.ron")).unwrap();
+    let text =
+        text.replace("(behavior: AvoidCollision(), weight: 2.0),", "").replace("max_time_s: 120.0", "max_time_s: 30.0");
+    let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
+    run(&scenario, 2, Some(dir.path())).unwrap();
+    let check = std::process::Command::new("python3")
+        .arg(root.join("scripts/mcap-check.py"))
+        .arg(dir.path().join("run.mcap"))
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&check.stdout);
+    assert!(check.status.success(), "{said}{}", String::from_utf8_lossy(&check.stderr));
+    let topics = ["| /tree | ubf.Tick |", "| /world | ubf.World |", "| /run | ubf.Run |", "| /report | ubf.Report |"];
+    for topic in topics.iter().chain(&["| /collision | ubf.Collision |"]) {
+        assert!(said.contains(topic), "{said}");
+    }
+}

@@ -78,7 +78,7 @@ fn runs_and_recordings_write_the_recorded_bytes() {
             (what.to_owned(), print.to_owned())
         })
         .collect();
-    let differing: Vec<&String> =
+    let differing: std::collections::BTreeSet<&String> =
         recorded.keys().chain(now.keys()).filter(|k| recorded.get(*k) != now.get(*k)).collect();
     assert!(differing.is_empty(), "outputs differ from the recorded ones: {differing:?}");
 }
