@@ -122,6 +122,10 @@ impl Ros2Robot {
             node.watch_discovery();
             std::thread::sleep(Duration::from_millis(10));
         };
+        // A scan nobody can hear is said, not left to look like open space.
+        if let Some(why) = node.why_unheard::<LaserScan>(&config.scan, config.scan_qos) {
+            tracing::warn!("{why}; AvoidCollision sees no scan");
+        }
         let first_odom = first.pose.pose.to_pose2();
         Ok(Ros2Robot {
             node,
