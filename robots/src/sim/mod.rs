@@ -11,6 +11,7 @@
 mod body;
 mod camera;
 pub mod geometry;
+mod hash;
 mod pan_tilt;
 pub mod render;
 mod sonar;

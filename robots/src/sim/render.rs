@@ -11,7 +11,7 @@
 //! noise comes from a hash of the seed, the frame and the pixel, so the
 //! same seed gives the same images.
 
-use super::camera::splitmix as mix;
+use super::hash::splitmix as mix;
 use super::geometry::Segment;
 use super::world::{Anchor, Side, World};
 use image::GrayImage;
