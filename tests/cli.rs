@@ -41,9 +41,9 @@ fn check(body: &str) -> (i32, String) {
 
 #[test]
 fn every_shipped_scenario_checks() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files: Vec<String> = Vec::new();
-    for dir in [root.clone(), root.join("thesis")] {
+    for dir in [root.join("scenarios"), root.join("lab/scenarios/thesis")] {
         files.extend(
             std::fs::read_dir(dir)
                 .unwrap()
@@ -549,7 +549,7 @@ fn identity_camera_info(focal: f64, shift: f64) -> String {
 fn a_raw_recording_with_camera_info_files_is_rectified_on_replay() {
     let dir = tempfile::tempdir().unwrap();
     let frames = dir.path().join("frames");
-    let scenario = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
+    let scenario = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("lab/scenarios/thesis/route-1-2.ron");
     let recorded = ubf(&["frames", scenario.to_str().unwrap(), "--out", frames.to_str().unwrap(), "--max-frames", "6"]);
     assert!(recorded.status.success(), "{}", text(&recorded.stderr));
     let replay = |dir: &std::path::Path| {

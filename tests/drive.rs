@@ -409,7 +409,7 @@ fn the_goal_keeps_its_place_across_a_reconnect() {
     assert!(log.with_extension("2.csv").exists());
     // Each session's MCAP log beside its CSV one, readable and whole.
     for mcap in [log.with_extension("mcap"), log.with_extension("2.mcap")] {
-        let replayed = ubf::mcap_log::read(&mcap).unwrap();
+        let replayed = ubf::replay::read(&mcap).unwrap();
         assert!(replayed.cut_short.is_none() && replayed.timeline.time.len() > 5, "{}", mcap.display());
         assert!(replayed.run.unwrap().scenario.starts_with("drive"));
     }

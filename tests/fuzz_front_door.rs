@@ -16,7 +16,7 @@ use ubf::scenario::Scenario;
 fn shipped() -> Vec<(String, String)> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    for dir in ["scenarios", "scenarios/thesis", "robots/config"] {
+    for dir in ["scenarios", "lab/scenarios/thesis", "robots/config"] {
         for entry in std::fs::read_dir(root.join(dir)).unwrap() {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "ron") {

@@ -9,7 +9,7 @@ use ubf::run::run;
 use ubf::scenario::Scenario;
 
 fn scenario() -> Scenario {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/route-1-2.ron");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("lab/scenarios/thesis/route-1-2.ron");
     let text = std::fs::read_to_string(path).unwrap().replace("technique: None", "technique: Tracking");
     Scenario::from_ron(&ubf::registry(), &text).unwrap()
 }
@@ -150,7 +150,7 @@ fn a_damaged_log_is_refused_or_read_as_far_as_it_goes_never_a_crash() {
         }
         std::fs::write(&damaged, &b).unwrap();
         // Ok (perhaps cut short) or an error naming the file: both fine.
-        if let Err(e) = ubf::mcap_log::read(&damaged) {
+        if let Err(e) = ubf::replay::read(&damaged) {
             assert!(e.to_string().contains("damaged.mcap"), "{e}");
         }
     }

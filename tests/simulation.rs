@@ -5,14 +5,15 @@ use std::path::Path;
 use ubf::run::{run, EndReason};
 use ubf::scenario::Scenario;
 
-fn load(name: &str) -> Scenario {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(name);
+/// The scenario file at `path` from the repository's root.
+fn load(path: &str) -> Scenario {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
     Scenario::load(&ubf::registry(), &path).unwrap()
 }
 
-/// The scenario file `name` with each `(from, to)` edit made to its text.
-fn edited(name: &str, edits: &[(&str, &str)]) -> Scenario {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(name);
+/// The scenario file at `path` with each `(from, to)` edit made to its text.
+fn edited(path: &str, edits: &[(&str, &str)]) -> Scenario {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
     let text = edits.iter().fold(std::fs::read_to_string(path).unwrap(), |text, (from, to)| text.replace(from, to));
     Scenario::from_ron(&ubf::registry(), &text).unwrap()
 }
@@ -27,7 +28,7 @@ fn trajectory_column(dir: &Path, name: &str) -> Vec<f64> {
 
 #[test]
 fn goes_round_a_box_to_the_goal_without_touching_anything_in_30_seeds() {
-    let scenario = load("corridor-box.ron");
+    let scenario = load("scenarios/corridor-box.ron");
     let mut times = Vec::new();
     for seed in 0..30 {
         let report = run(&scenario, seed, None).unwrap();
@@ -66,7 +67,7 @@ fn outputs(scenario: &Scenario, seed: u64, dir: &Path) -> (String, String, Vec<u
 
 #[test]
 fn same_scenario_and_seed_give_byte_identical_outputs() {
-    let scenario = load("corridor-box.ron");
+    let scenario = load("scenarios/corridor-box.ron");
     let dir = tempfile::tempdir().unwrap();
     let a = outputs(&scenario, 7, &dir.path().join("a"));
     let b = outputs(&scenario, 7, &dir.path().join("b"));
@@ -79,7 +80,7 @@ fn same_scenario_and_seed_give_byte_identical_outputs() {
 
 #[test]
 fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
-    let scenario = load("corridor-box.ron");
+    let scenario = load("scenarios/corridor-box.ron");
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 1, Some(dir.path())).unwrap();
 
@@ -126,7 +127,7 @@ fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
 fn camera_egomotion_and_action_aiding_runs_repeat_exactly() {
     // The thesis's corridor with every random source on: the layout, pixel
     // noise, RANSAC and the zig-zag's turning points.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/table4.ron");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("lab/scenarios/thesis/table4.ron");
     let text = std::fs::read_to_string(path).unwrap().replace("technique: None", "technique: ZigZag");
     let scenario = Scenario::from_ron(&ubf::registry(), &text).unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -141,7 +142,7 @@ fn camera_egomotion_and_action_aiding_runs_repeat_exactly() {
 
 #[test]
 fn every_aiding_technique_reaches_the_goal_and_does_what_it_says() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thesis/table4.ron");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("lab/scenarios/thesis/table4.ron");
     let base = std::fs::read_to_string(path).unwrap();
     let mut reports = std::collections::BTreeMap::new();
     // The thesis's objective (the step CV, turns free), which these checks
@@ -173,7 +174,7 @@ fn aiding_beside_avoidance_never_sits_out_the_time_limit() {
     // CommandFusion, and the robot sat until the time limit. A stuck turn
     // now goes the long way round, then steers while driving.
     let scenario = edited(
-        "thesis/route-2-1.ron",
+        "lab/scenarios/thesis/route-2-1.ron",
         &[("technique: None", "technique: Tracking, objective: Cv"), ("seed: 21)", "seed: 101)")],
     );
     for seed in [1021, 1022] {
@@ -191,8 +192,10 @@ fn a_turn_blocked_a_few_degrees_short_steers_on_instead_of_turning_round() {
     // full revolution, failing frames all the way), stuck again facing the
     // wall, and the robot repeated this until the time limit. A turn stuck
     // less than a quarter turn short now steers while driving.
-    let scenario =
-        edited("thesis/route-2-1.ron", &[("technique: None", "technique: Scan"), ("seed: 21)", "seed: 909)")]);
+    let scenario = edited(
+        "lab/scenarios/thesis/route-2-1.ron",
+        &[("technique: None", "technique: Scan"), ("seed: 21)", "seed: 909)")],
+    );
     let report = run(&scenario, 3025, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert!(report.sim_time_s < 600.0, "{report:?}");
@@ -208,7 +211,7 @@ fn a_step_a_rotate_then_translate_robot_cannot_take_is_decided_again() {
     // step (so the run) lasted until the time limit. A step that gets
     // nowhere now ends, and the next decision starts from where the robot is.
     let scenario = edited(
-        "thesis/route-2-1.ron",
+        "lab/scenarios/thesis/route-2-1.ron",
         &[
             ("technique: None", "technique: Scan"),
             (
@@ -235,7 +238,7 @@ fn the_tracking_list_predicts_the_landmarks_the_camera_then_sees() {
     use ubf_perception::egomotion::Tracker;
     use ubf_robots::egomotion::EgomotionRobot;
     use ubf_robots::sim::SimRobot;
-    let scenario = load("thesis/route-1-2.ron");
+    let scenario = load("lab/scenarios/thesis/route-1-2.ron");
     let (mut predicted, mut seen, mut steps) = (0.0, 0.0, 0);
     for seed in 0..3 {
         let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
@@ -302,7 +305,7 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
     // The robot drives 20 m straight while its camera sweeps ±60°: each
     // frame's landmarks are lifted by the angle the unit's encoders read,
     // so the egomotion heading stays on the true one.
-    let scenario = load("camera-sweep.ron");
+    let scenario = load("scenarios/camera-sweep.ron");
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 1, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
@@ -335,8 +338,10 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
         "technique: Tracking, steer: Camera, costs: (step_sigma_per_cv: {})",
         ubf_behaviors::decision::DecisionCosts::levels().step_sigma_per_cv
     );
-    let scenario =
-        edited("thesis/route-1-2.ron", &[("technique: None", &steer), ("camera: (", "camera: (pan_tilt: (), ")]);
+    let scenario = edited(
+        "lab/scenarios/thesis/route-1-2.ron",
+        &[("technique: None", &steer), ("camera: (", "camera: (pan_tilt: (), ")],
+    );
     let dir = tempfile::tempdir().unwrap();
     let report = run(&scenario, 3, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
@@ -359,7 +364,8 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     // odometry puts the goal towards the wall, and every turn towards it
     // sweeps the robot's corner into the wall until the time limit.
     // Steering by egomotion (with odometry's sideways motion), it does not.
-    let by_odometry = edited("thesis/route-2-1.ron", &[VEER, LAYOUT_2121, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
+    let by_odometry =
+        edited("lab/scenarios/thesis/route-2-1.ron", &[VEER, LAYOUT_2121, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
     let report = run(&by_odometry, 104, None).unwrap();
     assert_eq!(report.end, EndReason::TimeLimit, "{report:?}");
     assert!(report.collisions > 100, "{report:?}");
@@ -367,7 +373,7 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
         "egomotion: (estimator: Rigid())",
         "egomotion: (estimator: Rigid(), odometry_fusion: Sideways, navigate: true)",
     );
-    let by_egomotion = edited("thesis/route-2-1.ron", &[VEER, LAYOUT_2121, navigating]);
+    let by_egomotion = edited("lab/scenarios/thesis/route-2-1.ron", &[VEER, LAYOUT_2121, navigating]);
     let report = run(&by_egomotion, 104, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
@@ -380,10 +386,10 @@ fn a_robot_that_gets_nowhere_gives_up_instead_of_bumping_a_wall_to_the_time_limi
     // run on the robot's own pose, long before the time limit.
     let edits =
         [VEER, LAYOUT_2121, ("max_time_s: 2500.0,", "max_time_s: 2500.0, progress: (radius_m: 0.5, window_s: 30.0),")];
-    let report = run(&edited("thesis/route-2-1.ron", &edits), 104, None).unwrap();
+    let report = run(&edited("lab/scenarios/thesis/route-2-1.ron", &edits), 104, None).unwrap();
     assert_eq!(report.end, EndReason::NoProgress, "{report:?}");
     assert!(report.sim_time_s < 300.0, "{report:?}");
     // Where the robot gets somewhere, the check never fires.
-    let report = run(&edited("thesis/route-2-1.ron", &edits[1..]), 104, None).unwrap();
+    let report = run(&edited("lab/scenarios/thesis/route-2-1.ron", &edits[1..]), 104, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
 }

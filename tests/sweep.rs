@@ -167,7 +167,7 @@ fn report_without_wall_time(path: &Path) -> serde_json::Value {
 fn layout_seeds_redraw_the_landmarks_as_the_scenario_file_would() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("layouts");
-    let route = "scenarios/thesis/route-1-2.ron";
+    let route = "lab/scenarios/thesis/route-1-2.ron";
     let sweep = ubf(&["sweep", route, "--seeds", "0", "--layout-seeds", "2121,2222", "--out", out.to_str().unwrap()]);
     assert!(sweep.status.success(), "{}", String::from_utf8_lossy(&sweep.stderr));
     // The same run with the layout's seed written into the file.
@@ -187,8 +187,8 @@ fn layout_seeds_redraw_the_landmarks_as_the_scenario_file_would() {
 fn layout_seeds_are_refused_where_nothing_can_be_redrawn() {
     let cases = [
         ("scenarios/goto-open-floor.ron", "5", "scenarios/goto-open-floor.ron: --layout-seeds redraws"),
-        ("scenarios/thesis/route-1-2.ron", "5,3..7", "layout seed 5 is listed twice"),
-        ("scenarios/thesis/route-1-2.ron", "5,x", "`x` is not a seed"),
+        ("lab/scenarios/thesis/route-1-2.ron", "5,3..7", "layout seed 5 is listed twice"),
+        ("lab/scenarios/thesis/route-1-2.ron", "5,x", "`x` is not a seed"),
     ];
     for (file, layouts, message) in cases {
         let out = ubf(&["sweep", file, "--seeds", "0", "--layout-seeds", layouts, "--out", "unused"]);

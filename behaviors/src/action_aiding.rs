@@ -857,7 +857,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                  bridge_heading_var_per_m: 1.15e-5)",
                 "each ≥ 0",
                 "the end-point objective's coefficients, measured: as `ubf model fit-costs --against` fits them from \
-                 run logs, each run against a straight run of the same route and seed (`scripts/fit-costs.sh`; on the \
+                 run logs, each run against a straight run of the same route and seed (`lab/scripts/fit-costs.sh`; on the \
                  thesis routes the steps' CVs did not tell which path ends nearer, so the step term is 0 and the \
                  robot turns only where the goal bearing would leave egomotion too few landmarks); a turn within `heading_tolerance_deg` is steered while driving and costs no \
                  turn; `bridge_heading_var_per_m` is the heading variance a metre on the odometry bridge adds",

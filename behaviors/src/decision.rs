@@ -107,7 +107,7 @@ impl DecisionCosts {
     }
 }
 
-/// Measured by `SEEDS=100..130 scripts/fit-costs.sh` (`ubf model
+/// Measured by `SEEDS=100..130 lab/scripts/fit-costs.sh` (`ubf model
 /// fit-costs --against` the straight runs, on 360 runs of the thesis routes
 /// with tracking, the scan and the zig-zag; see `docs/results.md`): what a
 /// path's views change in its end point against driving straight. None: the

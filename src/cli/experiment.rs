@@ -2,11 +2,11 @@
 //! landmark error model.
 
 use super::{CameraArgs, CliError, Exit, ExperimentCommand, ModelCommand, Outcome};
-use crate::experiment::{thesis_endpoint, thesis_table2, thesis_table4, EndpointOptions};
 use crate::scenario::Scenario;
 use std::path::PathBuf;
 use ubf_behaviors::DecisionObjective;
 use ubf_core::Registry;
+use ubf_lab::experiment::{thesis_endpoint, thesis_table2, thesis_table4, EndpointOptions};
 use ubf_perception::egomotion::OdometryFusion;
 use ubf_perception::error_model::ErrorModelKind;
 
@@ -24,7 +24,7 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
                 bar.set_position(done as u64);
             };
             let jobs = jobs.unwrap_or_else(super::cores);
-            let map = crate::environment_map::where_aiding_pays(
+            let map = ubf_lab::environment_map::where_aiding_pays(
                 registry,
                 seeds,
                 held_out_seeds,
@@ -35,7 +35,7 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
             bar.finish_and_clear();
             let map = map.map_err(CliError::failed)?;
             if let Some(path) = &plot {
-                match crate::plot::draw_environment_map(&map, path) {
+                match ubf_lab::figures::draw_environment_map(&map, path) {
                     Ok(()) => eprintln!("wrote {}", path.display()),
                     Err(e) => eprintln!("error: {e}"),
                 }
@@ -155,7 +155,7 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
             } else {
                 ("Geometric error model (eq. 16-23)", &|x, y| geometric.cv(x, y))
             };
-            crate::plot::draw_error_model(title, cv, &camera, depths[1], &out).map_err(CliError::failed)?;
+            ubf_lab::figures::draw_error_model(title, cv, &camera, depths[1], &out).map_err(CliError::failed)?;
             println!("wrote {}", out.display());
         }
     }
@@ -163,11 +163,11 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
 }
 
 fn fit_costs(logs: &[PathBuf], check: bool, against: &[PathBuf], json: bool) -> Outcome {
-    use crate::cost_fit::{find_logs, fit_costs};
+    use ubf_lab::cost_fit::{find_logs, fit_costs};
     let paths = find_logs(logs).map_err(CliError::bad_input)?;
     let against = find_logs(against).map_err(CliError::bad_input)?;
     if check {
-        let forms = crate::cost_forms::check_forms(&paths).map_err(CliError::bad_input)?;
+        let forms = ubf_lab::cost_forms::check_forms(&paths).map_err(CliError::bad_input)?;
         super::show(&forms, json)?;
     } else {
         let fit = fit_costs(&paths, &against).map_err(CliError::bad_input)?;

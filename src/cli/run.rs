@@ -35,7 +35,7 @@ pub(super) fn command(
 
 /// Prints a run's summary from its log and draws its plot again.
 pub(super) fn replay(file: &Path, plot: Option<PathBuf>) -> Outcome {
-    let replayed = crate::mcap_log::read(file).map_err(CliError::bad_input)?;
+    let replayed = crate::replay::read(file).map_err(CliError::bad_input)?;
     let Some(run) = &replayed.run else {
         let why = replayed.cut_short.as_ref().map_or(String::new(), |e| format!(" ({e})"));
         return Err(CliError::bad_input(format!(

@@ -4,8 +4,8 @@
 //! growing depth error of real stereo comes out of the triangulation.
 
 use super::geometry::Segment;
-use super::pan_tilt::PanTiltConfig;
 use super::hash::splitmix;
+use super::pan_tilt::PanTiltConfig;
 use super::render::{RenderConfig, Renderer};
 use super::world::{World, WorldLandmark};
 use rand::Rng;

@@ -11,8 +11,8 @@
 //! noise comes from a hash of the seed, the frame and the pixel, so the
 //! same seed gives the same images.
 
-use super::hash::splitmix as mix;
 use super::geometry::Segment;
+use super::hash::splitmix as mix;
 use super::world::{Anchor, Side, World};
 use image::GrayImage;
 use serde::Deserialize;

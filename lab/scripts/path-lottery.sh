@@ -13,18 +13,18 @@
 # axis) over the centre line, and tracking on the centre line over straight
 # driving on it, the same layouts and seeds.
 #
-#   scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
+#   lab/scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
 set -euo pipefail
-cd "$(dirname "$0")/.."
-. scripts/layouts-and-seeds.sh
-. scripts/route-line.sh
+cd "$(dirname "$0")/../.."
+. lab/scripts/layouts-and-seeds.sh
+. lab/scripts/route-line.sh
 # NAME:FROM:TO:HEADING: the three parallel lines, then the same lateral
 # offsets crossed diagonally, 1.69° off the axis, both ways.
 for line in -0.6:-0.6:-0.6:0 0.0:0.0:0.0:0 0.6:0.6:0.6:0 diagonal-up:-0.6:0.6:1.69 diagonal-down:0.6:-0.6:-1.69; do
     IFS=: read -r name from to heading <<< "$line"
     route_line "$from" "$to" "$heading" > "$work/$name.ron"
 done
-sed -e "s/technique: None/technique: Tracking/" scenarios/thesis/route-1-2.ron > "$work/tracking.ron"
+sed -e "s/technique: None/technique: Tracking/" lab/scenarios/thesis/route-1-2.ron > "$work/tracking.ron"
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
 python3 - "$work/runs" <<'EOF'
 import glob, json, math, os, sys

@@ -2,10 +2,10 @@
 """Tracking's mean end-point error over straight driving's, per route and
 layout, measured at the last frame and at the one and two frames before
 it, from a sweep of `ROUTE~None` and `ROUTE~Tracking` scenarios over
-layouts (`NAME@LAYOUT/seed-N/trajectory.csv`, as `scripts/last-frame.sh`
+layouts (`NAME@LAYOUT/seed-N/trajectory.csv`, as `lab/scripts/last-frame.sh`
 runs them).
 
-    scripts/last-frame.py /tmp/runs
+    lab/scripts/last-frame.py /tmp/runs
 
 Prints JSON: {"route": {"layout": {"last": r, "one_before": r,
 "two_before": r}}}, each `r` tracking's mean error over straight's.
@@ -17,7 +17,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import trajectory_log  # noqa: E402  (scripts/trajectory_log.py)
+import trajectory_log  # noqa: E402  (lab/scripts/trajectory_log.py)
 
 FRAMES_BACK = {"last": 1, "one_before": 2, "two_before": 3}
 

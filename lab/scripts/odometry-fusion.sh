@@ -12,10 +12,10 @@
 # route, odometry and fusion, each technique's mean end-point error with a
 # 95 % interval, its failures per run and the runs that hit the time limit.
 #
-#   scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
+#   lab/scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
 set -euo pipefail
-cd "$(dirname "$0")/.."
-. scripts/layouts-and-seeds.sh
+cd "$(dirname "$0")/../.."
+. lab/scripts/layouts-and-seeds.sh
 for route in route-1-2 route-2-1 feature-poor; do
     for odometry in exact scale veer; do
         case $odometry in
@@ -30,7 +30,7 @@ for route in route-1-2 route-2-1 feature-poor; do
                 sed -e "s/slip_deg_per_sqrt_m: 0.2/$errors/" \
                     -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), $settings)/" \
                     -e "s/technique: None/technique: $technique/" \
-                    "scenarios/thesis/$route.ron" > "$work/$route~$odometry~$fusion~$technique.ron"
+                    "lab/scenarios/thesis/$route.ron" > "$work/$route~$odometry~$fusion~$technique.ron"
             done
         done
     done

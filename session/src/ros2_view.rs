@@ -1,7 +1,6 @@
 //! A tick as the ROS 2 messages ubf publishes and logs: one view shared by
-//! the live publisher ([`crate::ros2_publish`]) and the rosbag2 log
-//! ([`crate::ros2_log`]), so that what RViz shows live and what `ros2 bag
-//! play` replays are the same messages.
+//! the live publisher and the rosbag2 log, so that what RViz shows live and
+//! what `ros2 bag play` replays are the same messages.
 //!
 //! Frames follow REP 105: ubf's world frame is `odom`, the robot is
 //! `base_link`.

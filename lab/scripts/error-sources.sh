@@ -9,10 +9,10 @@
 # per-seed differences (aided − straight) in end-point error with a 95 %
 # interval, and the failures per run of each.
 #
-#   scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
-#   scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
+#   lab/scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
+#   lab/scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 aid=$1 layouts=$2 seeds=$3 routes=${4:-route-1-2 route-2-1 feature-poor}
 case $aid in
     camera) tree='technique: Tracking, steer: Camera' unit='pan_tilt: (), ' variants='exact-encoders' ;;
@@ -36,9 +36,9 @@ for route in $routes; do
         esac
         edits=(-E -e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: $slip/"
             -e "s/pixel_noise_px: 0.047, outlier_share: 0.08/pixel_noise_px: $pixels, outlier_share: $outliers/")
-        sed "${edits[@]}" "scenarios/thesis/$route.ron" > "$work/$route~$variant~straight.ron"
+        sed "${edits[@]}" "lab/scenarios/thesis/$route.ron" > "$work/$route~$variant~straight.ron"
         sed "${edits[@]}" -e "s/technique: None/$aided_tree/" \
-            -e "s/camera: \(/camera: ($aided_unit/" "scenarios/thesis/$route.ron" > "$work/$route~$variant~aided.ron"
+            -e "s/camera: \(/camera: ($aided_unit/" "lab/scenarios/thesis/$route.ron" > "$work/$route~$variant~aided.ron"
     done
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2

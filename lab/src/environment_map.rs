@@ -14,9 +14,6 @@
 //! flatter it.
 
 use crate::experiment::{load_route, variant, Aid, ExperimentError};
-use crate::run::{run, RunReport};
-use crate::scenario::Scenario;
-use crate::sweep::run_parallel;
 use serde::Serialize;
 use std::ops::Range;
 use ubf_behaviors::{DecisionObjective, Technique};
@@ -24,6 +21,9 @@ use ubf_core::Registry;
 use ubf_perception::egomotion::{EstimatorKind, RigidConfig};
 use ubf_perception::error_model::ErrorModelKind;
 use ubf_robots::sim::{FeaturelessConfig, Side};
+use ubf_session::run::{run, RunReport};
+use ubf_session::scenario::Scenario;
+use ubf_session::sweep::run_parallel;
 
 /// One environment: the factor varied and its level.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -261,7 +261,7 @@ pub fn where_aiding_pays(
             let (aided_m, a_sd) = mean_sd(&errs[n..]);
             let ratio = aided_m / straight;
             let log_se = ((a_sd / aided_m).powi(2) / n as f64 + (s_sd / straight).powi(2) / n as f64).sqrt();
-            let z = crate::sweep::t95(n.saturating_sub(1));
+            let z = ubf_session::sweep::t95(n.saturating_sub(1));
             cells.push(EnvironmentCell {
                 factor,
                 level: text.clone(),

@@ -8,10 +8,10 @@
 # weighs. (`ubf model fit-costs DIR` without `--against` fits the end points
 # as they are: the coefficients of the predicted σ runs report.)
 #
-#   scripts/fit-costs.sh                 # seeds 100..110, logs in out/fit-costs
-#   SEEDS=200..230 OUT=/tmp/logs scripts/fit-costs.sh
+#   lab/scripts/fit-costs.sh                 # seeds 100..110, logs in out/fit-costs
+#   SEEDS=200..230 OUT=/tmp/logs lab/scripts/fit-costs.sh
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 seeds=${SEEDS:-100..110}
 out=${OUT:-out/fit-costs}
 cargo build --release --quiet
@@ -21,9 +21,9 @@ trap 'rm -rf "$scenarios"' EXIT
 for route in route-1-2 route-2-1 feature-poor; do
     for technique in None Tracking Scan ZigZag; do
         sed "s/technique: None/technique: $technique, objective: Cv/" \
-            "scenarios/thesis/$route.ron" > "$scenarios/$route-$technique.ron"
+            "lab/scenarios/thesis/$route.ron" > "$scenarios/$route-$technique.ron"
     done
-    sed "s/technique: None/technique: Tracking/" "scenarios/thesis/$route.ron" > "$scenarios/$route-Tracking-EndPoint.ron"
+    sed "s/technique: None/technique: Tracking/" "lab/scenarios/thesis/$route.ron" > "$scenarios/$route-Tracking-EndPoint.ron"
 done
 rm -rf "$out"
 "$ubf" sweep "$scenarios"/*.ron --seeds "$seeds" --out "$out" --trajectories >&2

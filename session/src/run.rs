@@ -3,165 +3,24 @@
 
 use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
 use crate::plot::{self, PlotError};
+pub use crate::report::{EndReason, RunReport};
 use crate::ros2_log::Ros2Log;
-use crate::ros2_publish::Ros2Publisher;
+use crate::ros2_publish::background_publisher;
 use crate::ros2_view::Shown;
 use crate::scenario::Scenario;
 use crate::trajectory::{Columns, TrajectoryWriter};
-use serde::Serialize;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{
-    BackgroundSink, BuildContext, Clock, Controller, ControllerError, Ends, PacedClock, Pose2, Session, SessionEnd,
-    SimClock, Stopwatch, TickRecord, TracingSink,
+    BuildContext, Clock, Controller, ControllerError, Ends, PacedClock, Pose2, Session, SessionEnd, SimClock,
+    Stopwatch, TickRecord, TracingSink,
 };
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
-
-/// Why a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum EndReason {
-    /// The robot believed it was at the goal.
-    GoalReached,
-    /// `max_time_s` ran out first.
-    TimeLimit,
-    /// A behaviour panicked (the report's `failure` names it); the robot
-    /// was stopped.
-    BehaviorFailed,
-    /// Ctrl-C or SIGTERM stopped the run; the report covers what ran.
-    Interrupted,
-    /// The robot stayed within the scenario's `progress` radius for its
-    /// window: it was getting nowhere, and the run gave up.
-    NoProgress,
-}
-
-/// What a run did: `report.json`.
-#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
-pub struct RunReport {
-    /// The scenario's name.
-    pub scenario: String,
-    /// The seed the run used.
-    pub seed: u64,
-    /// Control ticks run.
-    pub ticks: u64,
-    /// Simulated seconds.
-    pub sim_time_s: f64,
-    /// True path length driven, m.
-    pub distance_m: f64,
-    /// Whether the robot's true position ended within the goal's tolerance.
-    pub reached_goal: bool,
-    /// Times the robot came into contact with a wall, a box or a person.
-    pub collisions: u32,
-    /// Why the run ended.
-    pub end: EndReason,
-    /// What failed, when a behaviour did: its path in the tree and its
-    /// message.
-    pub failure: Option<String>,
-    /// Where the robot really ended.
-    #[schemars(with = "PoseSchema")]
-    pub final_true_pose: Pose2,
-    /// Where the robot believed it ended.
-    #[schemars(with = "PoseSchema")]
-    pub final_estimated_pose: Pose2,
-    /// Distance between the two, m.
-    pub estimate_error_m: f64,
-    /// Egomotion's sum of step CVs (thesis eq. 7), when the robot runs it.
-    pub journey_cv: Option<f64>,
-    /// Egomotion steps (frame pairs) estimated.
-    pub egomotion_steps: Option<u32>,
-    /// Egomotion steps that failed for want of usable landmarks.
-    pub egomotion_failures: Option<u32>,
-    /// The end-point σ the decision's error model predicts for the path
-    /// driven (from odometry and the step CVs, with the coefficients fitted
-    /// to end points as they are, [`DecisionCosts::levels`]), m: compare
-    /// with `endpoint_error_m`.
-    pub predicted_endpoint_sigma_m: Option<f64>,
-    /// The position σ of the last pose by egomotion's own covariance (the
-    /// estimator's inverse information, chained through the keyframes),
-    /// m: a second prediction to compare with `endpoint_error_m`.
-    pub egomotion_sigma_m: Option<f64>,
-    /// Egomotion outages: stretches of frames no keyframe matched, bridged
-    /// by odometry.
-    pub outages: Option<u32>,
-    /// Seconds spent in outages.
-    pub outage_s: Option<f64>,
-    /// Metres driven across outages.
-    pub outage_m: Option<f64>,
-    /// |true stop − egomotion stop|, m (thesis §4.4.3), both taken at the
-    /// last stereo frame: the estimate is only as new as the frame.
-    pub endpoint_error_m: Option<f64>,
-    /// The end-point error as a share of the distance driven, %.
-    pub endpoint_error_pct: Option<f64>,
-    /// How much longer the path was than the straight line from start to
-    /// goal, %.
-    pub path_overhead_pct: Option<f64>,
-    /// How much longer the run took than driving that straight line at top
-    /// speed, %.
-    pub time_overhead_pct: Option<f64>,
-    /// Real seconds the run took: the only field that differs between two
-    /// runs of the same scenario and seed.
-    pub wall_time_s: f64,
-}
-
-/// A pose's JSON form, for the report's schema.
-#[derive(schemars::JsonSchema)]
-#[allow(dead_code)]
-struct PoseSchema {
-    /// m.
-    x: f64,
-    /// m.
-    y: f64,
-    /// Heading, rad, counter-clockwise from x.
-    theta: f64,
-}
-
-/// The summary `ubf run` prints.
-impl std::fmt::Display for RunReport {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let ending = match self.end {
-            EndReason::GoalReached => "robot believes it reached the goal",
-            EndReason::TimeLimit => "time limit",
-            EndReason::BehaviorFailed => "a behaviour failed; the robot was stopped",
-            EndReason::Interrupted => "interrupted",
-            EndReason::NoProgress => "no progress: the robot stayed on one spot, and the run gave up",
-        };
-        let pose = |p: &Pose2| format!("({:.3}, {:.3}) m, {:.1}°", p.x, p.y, p.theta.to_degrees());
-        writeln!(f, "scenario        {} (seed {})", self.scenario, self.seed)?;
-        writeln!(f, "ended           {ending} after {:.1} s simulated, {} ticks", self.sim_time_s, self.ticks)?;
-        if let Some(failure) = &self.failure {
-            writeln!(f, "failure         {failure}")?;
-        }
-        writeln!(f, "goal reached    {}", if self.reached_goal { "yes" } else { "no" })?;
-        writeln!(f, "distance        {:.2} m", self.distance_m)?;
-        writeln!(f, "collisions      {}", self.collisions)?;
-        writeln!(f, "true pose       {}", pose(&self.final_true_pose))?;
-        writeln!(f, "estimated pose  {}", pose(&self.final_estimated_pose))?;
-        if let (Some(error), Some(steps), Some(failures)) =
-            (self.endpoint_error_m, self.egomotion_steps, self.egomotion_failures)
-        {
-            writeln!(f, "egomotion       end-point error {error:.2} m; {steps} steps, {failures} failed")?;
-            if let Some(sigma) = self.predicted_endpoint_sigma_m {
-                writeln!(f, "predicted       end-point σ {sigma:.2} m (the decision's error model)")?;
-            }
-            if let Some(sigma) = self.egomotion_sigma_m {
-                writeln!(f, "                σ {sigma:.2} m (egomotion's own covariance)")?;
-            }
-            writeln!(
-                f,
-                "outages         {} ({:.1} s, {:.2} m driven on odometry)",
-                self.outages.unwrap_or(0),
-                self.outage_s.unwrap_or(0.0),
-                self.outage_m.unwrap_or(0.0)
-            )?;
-        }
-        writeln!(f, "wall time       {:.3} s", self.wall_time_s)
-    }
-}
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -191,19 +50,6 @@ pub enum RunError {
     #[error("internal error: {0}")]
     Panic(String),
 }
-
-/// A ROS 2 publisher in `domain` (unset: `ROS_DOMAIN_ID`) under
-/// `namespace`, on a thread of its own: a slow network drops records,
-/// never a tick.
-pub fn ros2_publisher(shown: Shown, domain: Option<u16>, namespace: &str) -> Result<BackgroundSink, RunError> {
-    let domain = domain.map_or_else(ubf_robots::ros2::domain_from_env, Ok).map_err(RunError::Ros2)?;
-    let publisher = Ros2Publisher::new(domain, namespace, shown).map_err(RunError::Ros2)?;
-    BackgroundSink::spawn("ROS 2 publisher", publisher, ROS2_QUEUE)
-        .map_err(|e| RunError::Ros2(ubf_core::RobotError::Io(e)))
-}
-
-/// Ticks the ROS 2 publisher may fall behind by before records are dropped.
-const ROS2_QUEUE: usize = 64;
 
 fn output_error(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     move |source| RunError::Output { path: path.to_owned(), source }
@@ -287,7 +133,8 @@ pub fn run_until(
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
     if live.is_some_and(|l| l.ros2) {
-        controller.add_sink(Box::new(ros2_publisher(Shown { robot: true, images: true }, None, "")?));
+        let publisher = background_publisher(Shown { robot: true, images: true }, None, "").map_err(RunError::Ros2)?;
+        controller.add_sink(Box::new(publisher));
     }
     let log = match outputs {
         Some(Outputs { dir, images, rosbag }) => {
@@ -417,7 +264,7 @@ pub fn run_until(
         write_report(&report, &dir.join("report.json"))?;
         // The plot is drawn from the log, as `ubf replay` draws it: one
         // source for both.
-        let replayed = crate::mcap_log::read(&dir.join("run.mcap"))?;
+        let replayed = crate::replay::read(&dir.join("run.mcap"))?;
         plot::draw_replayed(&replayed, &format!("{} (seed {seed})", scenario.name), &dir.join("plot.png"))?;
     }
     Ok(report)

@@ -6,7 +6,7 @@
 
 use crate::ros2_view::{topics, Message, Ros2View, Shown};
 use std::collections::BTreeMap;
-use ubf_core::{RobotError, TickRecord, TickSink, TreeLayout};
+use ubf_core::{BackgroundSink, RobotError, TickRecord, TickSink, TreeLayout};
 use ubf_robots::ros2::msg::{Image, LaserScan, Odometry, PoseStamped, TFMessage, Tick};
 use ubf_robots::ros2::{Node, Publisher, Qos};
 
@@ -104,3 +104,15 @@ impl TickSink for Ros2Publisher {
         Ok(())
     }
 }
+
+/// A ROS 2 publisher in `domain` (unset: `ROS_DOMAIN_ID`) under
+/// `namespace`, on a thread of its own: a slow network drops records,
+/// never a tick.
+pub fn background_publisher(shown: Shown, domain: Option<u16>, namespace: &str) -> Result<BackgroundSink, RobotError> {
+    let domain = domain.map_or_else(ubf_robots::ros2::domain_from_env, Ok)?;
+    let publisher = Ros2Publisher::new(domain, namespace, shown)?;
+    BackgroundSink::spawn("ROS 2 publisher", publisher, QUEUE).map_err(RobotError::Io)
+}
+
+/// Ticks the ROS 2 publisher may fall behind by before records are dropped.
+const QUEUE: usize = 64;

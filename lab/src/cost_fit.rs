@@ -15,7 +15,7 @@
 //! with `CV` each matched straight frame's fused step CV, `d` the metres it
 //! drove, a turn a stretch of frames whose heading changes by more than
 //! half a degree each, and `lever` the distance from the turn to the end.
-//! (`ubf model fit-costs --check`, [`crate::cost_forms`], compares this
+//! (`ubf model fit-costs --check`, in `cost_forms`, compares this
 //! form, on seeds kept apart, with others and with fitting at every tenth
 //! frame instead of the end: none predicts the end points better.) The
 //! heading error across each turn and the single steps' translation error

@@ -823,8 +823,8 @@ fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -
     }
     let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
     let shown = Shown { robot: !ros2_robot, images: config.log_images };
-    let publisher =
-        crate::run::ros2_publisher(shown, domain, namespace).map_err(|e| DriveError::Ros2(e.to_string()))?;
+    let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace)
+        .map_err(|e| DriveError::Ros2(e.to_string()))?;
     controller.add_sink(Box::new(publisher));
     Ok(())
 }

@@ -1,14 +1,11 @@
 //! The thesis's experiments, reproduced on the simulator:
 //! `ubf experiment thesis-table4` and `ubf experiment thesis-endpoint`.
 //!
-//! Each experiment starts from a scenario file in `scenarios/thesis/`
+//! Each experiment starts from a scenario file in `lab/scenarios/thesis/`
 //! (compiled in, so the command works from any directory) and swaps in the
 //! technique and the estimator under test; nothing else changes between the
 //! runs being compared.
 
-use crate::run::{run, EndReason, RunReport};
-use crate::scenario::Scenario;
-use crate::sweep::{run_parallel, stats, FieldStats};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -17,6 +14,9 @@ use ubf_core::{BehaviorSpec, Registry};
 use ubf_perception::egomotion::{EstimatorKind, OdometryFusion, RigidConfig, Simple2dConfig};
 use ubf_perception::error_model::ErrorModelKind;
 use ubf_robots::sim::{MotionProfile, PanTiltConfig};
+use ubf_session::run::{run, EndReason, RunReport};
+use ubf_session::scenario::Scenario;
+use ubf_session::sweep::{run_parallel, stats, FieldStats};
 
 /// The techniques, in the thesis's order.
 pub const TECHNIQUES: [Technique; 4] = [Technique::None, Technique::ZigZag, Technique::Scan, Technique::Tracking];
@@ -664,7 +664,7 @@ mod tests {
 
     #[test]
     fn the_experiment_scenarios_load_and_keep_their_offsets() {
-        let registry = crate::registry();
+        let registry = ubf_session::registry();
         load(&registry, "table4", TABLE4).unwrap();
         for (_, name, text, offset) in ROUTES {
             assert_eq!(load(&registry, name, text).unwrap().name, name);

@@ -157,7 +157,7 @@ fn json_schema<T: JsonSchema>() -> Vec<u8> {
 /// The JSON Schema of `/report`: the report without the wall time, which
 /// the log leaves out so that it is the same for the same seed.
 fn report_schema() -> Vec<u8> {
-    let mut schema = schemars::schema_for!(crate::run::RunReport);
+    let mut schema = schemars::schema_for!(crate::report::RunReport);
     if let Some(properties) = schema.get_mut("properties").and_then(|p| p.as_object_mut()) {
         properties.remove("wall_time_s");
     }
@@ -184,10 +184,6 @@ pub struct McapLog {
     /// Whether stereo pairs are logged.
     images: bool,
 }
-
-/// The longest record (a chunk, compressed or not) [`read`] accepts: far
-/// beyond what the log writes (chunks of under a megabyte).
-const MOST_RECORD_BYTES: usize = 256 << 20;
 
 /// Seconds of controller time between closed chunks.
 const CHUNK_EVERY_S: f64 = 1.0;
@@ -497,107 +493,4 @@ impl TickSink for McapLog {
     fn finish(&mut self) -> std::io::Result<()> {
         self.writer.flush().map_err(|e| std::io::Error::other(self.fail(&e)))
     }
-}
-
-/// A run read back from its log.
-#[derive(Clone, Debug, Default)]
-pub struct ReplayedRun {
-    /// What `/run` said, if the log got that far.
-    pub run: Option<RunMessage>,
-    /// The world.
-    pub world: WorldMessage,
-    /// The true path, the odometric one, and the egomotion one.
-    pub true_path: Vec<(f64, f64)>,
-    /// The robot's own (odometric) path.
-    pub odometry_path: Vec<(f64, f64)>,
-    /// Where the winning behaviour changed, and the new winner's name.
-    pub decisions: Vec<crate::plot::Decision>,
-    /// Where the robot touched something.
-    pub collisions: Vec<(f64, f64)>,
-    /// Speed, turn rate and votes over time.
-    pub timeline: crate::plot::Timeline,
-    /// The report, if the run finished.
-    pub report: Option<serde_json::Value>,
-    /// Why reading stopped early: a log cut short by a killed process.
-    pub cut_short: Option<String>,
-}
-
-/// Reads the log at `path` back: everything up to its end, or, for a log
-/// a killed process left, up to its last whole chunk.
-pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
-    let fail = |message: String| LogError { path: path.to_owned(), message };
-    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-    // A record's length comes from the file: one corrupted length must be
-    // an error, not an attempt to allocate exabytes.
-    let options = mcap::sans_io::LinearReaderOptions::default()
-        .with_skip_end_magic(true)
-        .with_record_length_limit(MOST_RECORD_BYTES);
-    let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
-    let mut remaining: &[u8] = &bytes;
-    let stream = std::iter::from_fn(|| loop {
-        match reader.next_event()? {
-            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
-                let n = need.min(remaining.len());
-                reader.insert(n).copy_from_slice(&remaining[..n]);
-                reader.notify_read(n);
-                remaining = &remaining[n..];
-            }
-            Ok(mcap::sans_io::MessageReadEvent::Message(message)) => return Some(Ok(message)),
-            Err(e) => return Some(Err(e)),
-        }
-    });
-    let mut out = ReplayedRun::default();
-    let mut leaves: Vec<usize> = Vec::new();
-    let mut last_winner: Option<String> = None;
-    for message in stream {
-        let message = match message {
-            Ok(m) => m,
-            Err(e) => {
-                out.cut_short = Some(e.to_string());
-                break;
-            }
-        };
-        let topic = message.channel.topic.as_str();
-        let parse = |what: &str| -> Result<serde_json::Value, LogError> {
-            serde_json::from_slice(&message.data).map_err(|e| fail(format!("{topic} ({what}): {e}")))
-        };
-        let position = |v: &serde_json::Value| {
-            let p = &v["pose"]["position"];
-            (p["x"].as_f64().unwrap_or(f64::NAN), p["y"].as_f64().unwrap_or(f64::NAN))
-        };
-        match topic {
-            "/run" => out.run = Some(serde_json::from_slice(&message.data).map_err(|e| fail(format!("/run: {e}")))?),
-            "/world" => out.world = serde_json::from_slice(&message.data).map_err(|e| fail(format!("/world: {e}")))?,
-            "/pose/true" => out.true_path.push(position(&parse("pose")?)),
-            "/pose/odometry" => out.odometry_path.push(position(&parse("pose")?)),
-            "/report" => out.report = Some(parse("report")?),
-            "/collision" => {
-                let at = parse("collision")?;
-                out.collisions.push((at["x"].as_f64().unwrap_or(f64::NAN), at["y"].as_f64().unwrap_or(f64::NAN)));
-            }
-            "/tree" => {
-                let tick: TickMessage =
-                    serde_json::from_slice(&message.data).map_err(|e| fail(format!("/tree: {e}")))?;
-                if out.timeline.votes.is_empty() {
-                    leaves = (0..tick.nodes.len()).filter(|&i| i > 0 && !tick.nodes[i].composite).collect();
-                    out.timeline.votes = leaves.iter().map(|&i| (tick.nodes[i].path.clone(), Vec::new())).collect();
-                }
-                out.timeline.time.push(tick.time);
-                out.timeline.speed.push(tick.velocity);
-                out.timeline.turn_deg.push(tick.rot_velocity.map_or(f64::NAN, f64::to_degrees));
-                for ((_, votes), &i) in out.timeline.votes.iter_mut().zip(&leaves) {
-                    votes.push(tick.nodes.get(i).map_or(f64::NAN, |n| n.vote));
-                }
-                if tick.winner != last_winner && last_winner.is_some() {
-                    if let (Some(winner), Some(&at)) = (&tick.winner, out.true_path.last()) {
-                        let name = winner.rsplit('/').next().unwrap_or(winner).to_owned();
-                        out.decisions.push(crate::plot::Decision { at, winner: name });
-                    }
-                }
-                last_winner = tick.winner;
-            }
-            _ => {}
-        }
-    }
-    Ok(out)
 }

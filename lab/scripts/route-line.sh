@@ -5,5 +5,5 @@
 route_line() {
     sed -E -e "s/start: \(x: 1.0, y: 0.0\)/start: (x: 1.0, y: $1, heading_deg: $3)/" \
         -e "s/goal: \(x: 41.7, y: 0.0,/goal: (x: 41.7, y: $2,/" \
-        scenarios/thesis/route-1-2.ron
+        lab/scenarios/thesis/route-1-2.ron
 }

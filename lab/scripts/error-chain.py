@@ -17,7 +17,7 @@ sideways motion poorly) and `bridge` (odometry). Runs are grouped by
 scenario name (a sweep's `NAME@LAYOUT` directories under one NAME).
 
     ubf sweep route.ron --seeds 100..110 --trajectories --out /tmp/runs
-    scripts/error-chain.py /tmp/runs
+    lab/scripts/error-chain.py /tmp/runs
 
 Prints JSON: per scenario, the runs, the RMS end-point error, how closely
 the chain's sum matches it, and per class the links per run, the RMS of
@@ -29,7 +29,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import trajectory_log  # noqa: E402  (scripts/trajectory_log.py)
+import trajectory_log  # noqa: E402  (lab/scripts/trajectory_log.py)
 
 LONG_M = 2.0
 

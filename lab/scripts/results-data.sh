@@ -1,21 +1,21 @@
 #!/usr/bin/env bash
 # Runs every command docs/results.md reports, leaving their output in out/
-# for scripts/results-page.py. About 30 minutes on two cores.
+# for lab/scripts/results-page.py. About 30 minutes on two cores.
 #
-#   scripts/results-data.sh && python3 scripts/results-page.py
+#   lab/scripts/results-data.sh && python3 lab/scripts/results-page.py
 #
 # With ABLATION=1 it also builds the commits the "What each fix did" table
 # compares, in a scratch worktree, and runs the end-point experiment there.
 set -euo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/../.."
 mkdir -p out
 cargo build --release --quiet
 ubf=target/release/ubf
 "$ubf" model fit > out/fit.txt
 "$ubf" behaviors --describe ActionAiding > out/action-aiding.md
 "$ubf" experiment thesis-table2 --json > out/table2.json
-OUT=out/fit-costs scripts/fit-costs.sh --json > out/fit-costs.json
-SEEDS=100..130 OUT=out/fit-costs-130 scripts/fit-costs.sh --json > out/fit-costs-130.json
+OUT=out/fit-costs lab/scripts/fit-costs.sh --json > out/fit-costs.json
+SEEDS=100..130 OUT=out/fit-costs-130 lab/scripts/fit-costs.sh --json > out/fit-costs-130.json
 "$ubf" model fit-costs out/fit-costs --json > out/fit-costs-levels.json
 "$ubf" model fit-costs out/fit-costs-130 --json > out/fit-costs-levels-130.json
 "$ubf" model fit-costs out/fit-costs-130 --check > out/fit-costs-check.txt
@@ -39,7 +39,7 @@ held_out() {
                 --json > "out/endpoint-held-$layout-$fusion.json"
         done
     done
-    scripts/last-frame.sh "$*" "$seeds" > "out/last-frame-${seeds%%..*}.json"
+    lab/scripts/last-frame.sh "$*" "$seeds" > "out/last-frame-${seeds%%..*}.json"
 }
 held_out 1000..1030 101 202 303
 # A second held-out set, first run after the change it checks (straight on
@@ -69,7 +69,7 @@ for model in Geometric Geometric3d; do
         for technique in None Tracking; do
             sed -e "s/technique: None/technique: $technique/" \
                 -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), model: $model)/" \
-                "scenarios/thesis/$route.ron" > "$variants/$route-$technique.ron"
+                "lab/scenarios/thesis/$route.ron" > "$variants/$route-$technique.ron"
         done
     done
     "$ubf" sweep "$variants"/*.ron --seeds 100..120 --out "out/steps-$model" --trajectories --overwrite >&2
@@ -87,7 +87,7 @@ for technique in None ZigZag Scan Tracking; do
             egomotion='egomotion: (estimator: Rigid(), keyframes: 1, keyframe_spacing_m: 0.01, keyframe_spacing_deg: 0.01),'
         sed -e "s/technique: None/technique: $technique, objective: Cv/" \
             -e "s/        egomotion: (estimator: Rigid()),/        $egomotion/" \
-            scenarios/thesis/route-1-2.ron > "$variants/$technique-$bank.ron"
+            lab/scenarios/thesis/route-1-2.ron > "$variants/$technique-$bank.ron"
     done
 done
 "$ubf" sweep "$variants"/*.ron --seeds 0..30 --out out/keyframes --overwrite >&2
@@ -95,16 +95,16 @@ cp out/keyframes/summary.json out/keyframes.json
 rm -rf "$variants"
 # Where camera steering's error comes from (development layouts), and
 # tracking's on the two held-out layouts where it misses most on route 1->2.
-scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
-scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
+lab/scripts/error-sources.sh camera "404 505 606" 2000..2030 > out/camera-sources.json
+lab/scripts/error-sources.sh tracking "1212 1313" 6000..6030 route-1-2 > out/tracking-sources.json
 # How much the end point depends on the line driven: ten training layouts,
 # kept apart from every held-out table, on the cost fit's seeds.
-scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
+lab/scripts/path-lottery.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/path-lottery.json
 # Which links of egomotion's chain carry that error, on the same lines.
-scripts/error-chain.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/error-chain.json
+lab/scripts/error-chain.sh "2121 2222 2323 2424 2525 2626 2727 2828 2929 3030" 100..130 > out/error-chain.json
 # What odometry fusion buys, and what it costs when the wheels err more
 # than odometry's noise model says (training layouts).
-scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
+lab/scripts/odometry-fusion.sh "2121 2222 2323" 100..120 > out/odometry-fusion.json
 if [ "${ABLATION:-0}" = 1 ]; then
     # The code before the keyframe bank, then after each fix in turn.
     commits=(a7c19a4 383fdec 9bf8784 f752499 9a0a8ec 281d3ac 7b52484 8c2df86 195009d)

@@ -1,0 +1,43 @@
+//! # ubf-session: a behaviour tree driving a robot, and what it leaves
+//!
+//! One session loop ([`ubf_core::Session`]) serves every use; this crate
+//! gives it its robots' files and its sinks:
+//!
+//! - [`scenario`]: the scenario file format and its loader, whose errors
+//!   name the file, line and column; [`run`]: a scenario run headless on
+//!   the simulator, and its [`report`];
+//! - [`sweep`]: many runs in parallel, summarised;
+//! - [`frames`]: rendered stereo pairs recorded, and recordings replayed
+//!   through the feature pipeline;
+//! - [`drive`]: a robot file driving a real robot (ARCOS or ROS 2);
+//! - the sinks: [`trajectory`] (CSV), [`mcap_log`] (JSON MCAP for
+//!   Foxglove, read back by [`replay`]), [`ros2_log`] (rosbag2),
+//!   [`ros2_publish`] (live ROS 2, through [`ros2_view`]); [`plot`] draws a
+//!   run;
+//! - [`tree`]: a tree as a picture.
+
+#![warn(missing_docs)]
+
+pub mod drive;
+pub mod frames;
+pub mod mcap_log;
+pub mod plot;
+pub mod replay;
+pub mod report;
+pub mod ros2_log;
+pub mod ros2_publish;
+pub mod ros2_view;
+pub mod run;
+pub mod scenario;
+pub mod sweep;
+pub mod trajectory;
+pub mod tree;
+
+pub use ubf_core::Registry;
+
+/// A registry holding `Composite` and every stock behaviour.
+pub fn registry() -> Registry {
+    let mut registry = Registry::new();
+    ubf_behaviors::register(&mut registry);
+    registry
+}
