@@ -1,0 +1,408 @@
+//! `ubf drive ROBOT.ron`: the behaviour tree on a real robot (or anything
+//! speaking its protocol), stopped safely.
+//!
+//! - [`robot_file`]: the robot file and its loader;
+//! - the sessions (here): connect, drive, reconnect, log, stop;
+//! - `camera`: the camera opened and the robot equipped with it;
+//! - `status`: the live state on stderr; `dry_run`: a look with the
+//!   motors off.
+
+mod camera;
+mod dry_run;
+pub mod robot_file;
+mod status;
+
+pub use camera::CameraError;
+pub use dry_run::dry_run;
+pub use robot_file::{
+    CameraSourceChoice, DriveCamera, DriveConfig, ModelChoice, OnLinkLoss, RectifyFiles, RectifyFilesError,
+    RobotFileError, ROS2_CONNECTION,
+};
+pub use status::Status;
+
+use crate::ros2_log::{LogFormat, Ros2Log};
+use crate::ros2_view::Shown;
+use crate::trajectory::{Columns, TrajectoryWriter};
+use status::StatusLine;
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use ubf_core::{
+    BackgroundSink, BuildContext, Controller, ControllerError, Ends, Pose2, Robot, RobotError, SafetyGuard, Session,
+    SessionEnd, TracingSink, WallClock,
+};
+use ubf_robots::arcos::client::{ArcosRobot, EmergencyStop};
+use ubf_robots::arcos::link;
+use ubf_robots::model::RobotModel;
+use ubf_robots::ros2::Ros2Robot;
+
+/// Why `ubf drive` (or its dry run) ended in failure. A robot that was
+/// reached has been stopped and its session closed before this is
+/// reported.
+#[derive(Debug, thiserror::Error)]
+pub enum DriveError {
+    /// The camera could not be used (checked before the motors go on).
+    #[error("camera: {0}")]
+    Camera(#[from] CameraError),
+    /// The robot could not be reached or did not complete the handshake.
+    #[error("{connection}: {source}")]
+    Connect {
+        /// The serial device or address tried.
+        connection: String,
+        /// What went wrong.
+        source: RobotError,
+    },
+    /// The session's log could not be created.
+    #[error("{}: {source}", path.display())]
+    Log {
+        /// The log asked for.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// Publishing on ROS 2 could not start.
+    #[error("{0}")]
+    Ros2(String),
+    /// A log writer's thread could not be started.
+    #[error("starting the log writer: {0}")]
+    LogWriter(std::io::Error),
+    /// The robot failed while driving (the dry run: while watching).
+    #[error(transparent)]
+    Robot(#[from] RobotError),
+    /// The tree failed: a behaviour panicked with `on_behavior_panic: Stop`,
+    /// or a sink failed.
+    #[error(transparent)]
+    Controller(ControllerError),
+    /// A bug: the session panicked outside the behaviours.
+    #[error("internal error: {0}")]
+    Panic(String),
+    /// The dry run needs a robot whose motors can stay off while it is
+    /// watched; a ROS 2 robot's driver owns its motors.
+    #[error(
+        "--dry-run watches an ARCOS robot with its motors off; a ROS 2 robot's motors belong to its driver: use \
+         `ros2 topic echo /odom` to watch it"
+    )]
+    NoDryRun,
+    /// The dry run's report could not be written.
+    #[error("writing: {0}")]
+    Output(std::io::Error),
+}
+
+/// What a second Ctrl-C or SIGTERM runs before the process exits: the
+/// robot's emergency stop, while a session is open.
+static ON_SECOND_INTERRUPT: Mutex<Option<EmergencyStop>> = Mutex::new(None);
+
+/// Set by Ctrl-C or SIGTERM. A second one does not wait for the orderly
+/// stop: it sends STOP, ENABLE 0 and CLOSE on the open session, if any, and
+/// exits with status 130.
+pub fn install_stop_flag() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    // A second handler cannot be installed; then only the time limit stops.
+    let _ = ctrlc::set_handler(move || {
+        if !flag.swap(true, Ordering::SeqCst) {
+            return;
+        }
+        if let Ok(guard) = ON_SECOND_INTERRUPT.try_lock() {
+            if let Some(emergency) = guard.as_ref() {
+                let _ = emergency.stop_now();
+            }
+        }
+        eprintln!("interrupted twice: robot sent STOP, ENABLE 0, CLOSE; exiting now");
+        std::process::exit(130);
+    });
+    stop
+}
+
+/// Registers (or clears) what a second interrupt stops.
+fn arm_second_interrupt(emergency: Option<EmergencyStop>) {
+    *ON_SECOND_INTERRUPT.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = emergency;
+}
+
+/// How a drive ended.
+#[derive(Debug, PartialEq, Eq)]
+pub enum DriveEnd {
+    /// Ctrl-C, SIGTERM or the time limit.
+    Stopped,
+    /// At the goal, with `until_goal`.
+    GoalReached,
+    /// The link was lost and the configuration says exit.
+    LinkLost,
+    /// The robot got nowhere for the `progress` check's window.
+    NoProgress,
+}
+
+/// What a drive leaves: how it ended and the logs it wrote, one per
+/// session, in order.
+#[derive(Debug)]
+pub struct DriveOutcome {
+    /// How it ended, or why it failed.
+    pub end: Result<DriveEnd, DriveError>,
+    /// The sessions' logs.
+    pub logs: Vec<PathBuf>,
+}
+
+/// The first of `base`, `stem.2.ext`, `stem.3.ext`, … that does not exist,
+/// created: a new session (or a new drive) never overwrites a log.
+fn create_fresh_log(base: &Path) -> std::io::Result<(std::fs::File, PathBuf)> {
+    let stem = base.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
+    let ext = base.extension().map_or_else(|| "csv".into(), |s| s.to_string_lossy().into_owned());
+    for n in 1..10_000u32 {
+        let path = if n == 1 { base.to_owned() } else { base.with_file_name(format!("{stem}.{n}.{ext}")) };
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(file) => return Ok((file, path)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    Err(std::io::Error::other(format!("{}: 10 000 logs already; move some away", base.display())))
+}
+
+/// Records a log writer may fall behind by before records are dropped: 25 s
+/// of ticks at 10 Hz.
+const LOG_QUEUE: usize = 256;
+
+/// Runs the tree against the robot until `stop` is set (or the time limit),
+/// reconnecting after a lost link if configured, with the world frame (and
+/// so the goal) carried over from the last pose. Every tick goes to the
+/// session's log; on the way out the robot gets STOP, ENABLE 0 and CLOSE and
+/// the log is flushed, whatever ended the session (a panic included).
+pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool, status: Status) -> DriveOutcome {
+    let mut logs = Vec::new();
+    let end = drive_sessions(config, model, stop, status, &mut logs);
+    DriveOutcome { end, logs }
+}
+
+fn drive_sessions(
+    config: &DriveConfig,
+    model: &RobotModel,
+    stop: &AtomicBool,
+    status: Status,
+    logs: &mut Vec<PathBuf>,
+) -> Result<DriveEnd, DriveError> {
+    let started = Instant::now();
+    let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
+    let mut pose = Pose2::default();
+    loop {
+        if stop.load(Ordering::SeqCst) || out_of_time() {
+            return Ok(DriveEnd::Stopped);
+        }
+        let camera = config.open_camera()?;
+        let Connected { robot, name, emergency } = match connect_driving(config, model, pose) {
+            Ok(connected) => connected,
+            Err(e) => {
+                tracing::warn!("connecting: {e}");
+                if config.on_link_loss == OnLinkLoss::Exit {
+                    return Err(e);
+                }
+                std::thread::sleep(Duration::from_secs(1));
+                continue;
+            }
+        };
+        eprintln!("connected to {name}");
+        arm_second_interrupt(emergency);
+        // From here the motors are on: every path out goes through shutdown
+        // (a robot dropped on the way out shuts itself down).
+        let robot = match config.equip(robot, camera, pose) {
+            Ok(robot) => SafetyGuard::new(robot, config.safety),
+            Err(e) => {
+                arm_second_interrupt(None);
+                return Err(e.into());
+            }
+        };
+        let root = config.root.build(&BuildContext::new(0));
+        let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
+        controller.set_goal(config.goal);
+        controller.set_on_behavior_panic(config.on_behavior_panic);
+        controller.add_sink(Box::new(TracingSink));
+        if status != Status::Off {
+            controller.add_sink(Box::new(StatusLine::new(status)));
+        }
+        let attached =
+            attach_logs(&mut controller, config, model, logs).and_then(|()| attach_ros2(&mut controller, config));
+        let ends = Ends {
+            at_goal: config.until_goal,
+            progress: config.progress,
+            max_ticks: None,
+            max_time_s: config.max_time_s.map(|limit| limit - started.elapsed().as_secs_f64()),
+        };
+        let mut session = Session::new(controller, ends);
+        let ended = match &attached {
+            Ok(()) => session.run(stop, |_| ControlFlow::Continue(())),
+            Err(_) => SessionEnd::Done,
+        };
+        // Whatever happened: stop the robot, close the session and flush
+        // the logs.
+        let (controller, shutdown) = session.finish();
+        pose = controller.state().pose;
+        if let Err(e) = shutdown {
+            tracing::warn!("shutting down: {e}");
+        }
+        arm_second_interrupt(None);
+        attached?;
+        match ended {
+            SessionEnd::Interrupted | SessionEnd::TimeLimit | SessionEnd::Done => return Ok(DriveEnd::Stopped),
+            SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
+            SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
+            SessionEnd::Panicked(why) => return Err(DriveError::Panic(why)),
+            SessionEnd::Failed(ControllerError::Robot(why)) => {
+                eprintln!("link lost: {why}");
+                if config.on_link_loss == OnLinkLoss::Exit {
+                    return Ok(DriveEnd::LinkLost);
+                }
+                std::thread::sleep(Duration::from_secs(1));
+            }
+            SessionEnd::Failed(why) => return Err(DriveError::Controller(why)),
+        }
+    }
+}
+
+/// Attaches the session's logs, each written on a thread of its own (a
+/// slow disk must not delay a tick, and a failed log must not stop the
+/// robot), and adds their paths to `logs`. The CSV log is the one a session
+/// cannot do without; the MCAP log beside it is left out, with a warning, if
+/// it cannot be made.
+fn attach_logs<R: Robot>(
+    controller: &mut Controller<R>,
+    config: &DriveConfig,
+    model: &RobotModel,
+    logs: &mut Vec<PathBuf>,
+) -> Result<(), DriveError> {
+    let (file, path) =
+        create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
+    eprintln!("logging to {}", path.display());
+    logs.push(path.clone());
+    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan: false });
+    let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
+    controller.add_sink(Box::new(sink));
+    let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {
+        return Ok(());
+    };
+    mcap.log_images(config.log_images);
+    match BackgroundSink::spawn("MCAP log", mcap, LOG_QUEUE) {
+        Ok(sink) => {
+            eprintln!("and to {}", mcap_path.display());
+            logs.push(mcap_path);
+            controller.add_sink(Box::new(sink));
+        }
+        Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
+    }
+    if config.log_format == LogFormat::Ros2 {
+        attach_rosbag(controller, config, &path, logs);
+    }
+    Ok(())
+}
+
+/// The session's rosbag2 directory beside its CSV log (`NAME-rosbag2/`),
+/// or a warning if it cannot be made: the CSV log is the one a session
+/// cannot do without.
+fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig, csv: &Path, logs: &mut Vec<PathBuf>) {
+    let stem = csv.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
+    let dir = csv.with_file_name(format!("{stem}-rosbag2"));
+    let epoch_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images }, epoch_s)
+        .map_err(|e| e.to_string())
+        .and_then(|bag| BackgroundSink::spawn("rosbag2 log", bag, LOG_QUEUE).map_err(|e| e.to_string()));
+    match opened {
+        Ok(sink) => {
+            eprintln!("and to {}", dir.display());
+            logs.push(dir);
+            controller.add_sink(Box::new(sink));
+        }
+        Err(e) => tracing::warn!("{e}; this session has no rosbag2 log"),
+    }
+}
+
+/// Publishes the session on ROS 2 where asked, and always for a ROS 2
+/// robot: its tree and goal, and for another robot its pose and sensors
+/// too (a ROS 2 robot's driver publishes those).
+fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -> Result<(), DriveError> {
+    let ros2_robot = config.connection == ROS2_CONNECTION;
+    if !(config.publish_ros2 || ros2_robot) {
+        return Ok(());
+    }
+    let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
+    let shown = Shown { robot: !ros2_robot, images: config.log_images };
+    let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace)
+        .map_err(|e| DriveError::Ros2(e.to_string()))?;
+    controller.add_sink(Box::new(publisher));
+    Ok(())
+}
+
+/// The session's MCAP log beside its CSV one (same name, `.mcap`), or
+/// `None` with a warning if it cannot be made: the CSV log is the one a
+/// session cannot do without.
+fn open_session_mcap(
+    csv: &Path,
+    model: &RobotModel,
+    pose: Pose2,
+    goal: Option<ubf_core::Goal>,
+) -> Option<(crate::mcap_log::McapLog, PathBuf)> {
+    let path = csv.with_extension("mcap");
+    if path.exists() {
+        tracing::warn!("{} exists; this session has only its CSV log", path.display());
+        return None;
+    }
+    let run = crate::mcap_log::RunMessage {
+        scenario: format!("drive ({})", model.name),
+        seed: 0,
+        start: [pose.x, pose.y, pose.theta],
+        outline: model.footprint.corners().map(|(x, y)| {
+            let (wx, wy) = pose.transform_point(x, y);
+            [wx, wy]
+        }),
+        goal: goal.map(|g| [g.x, g.y, g.tolerance]),
+    };
+    let opened = crate::mcap_log::McapLog::create(&path, &run, &crate::mcap_log::WorldMessage::default());
+    match opened {
+        Ok(log) => Some((log, path)),
+        Err(e) => {
+            tracing::warn!("{e}; this session has only its CSV log");
+            None
+        }
+    }
+}
+
+/// A robot reached for a session, motors on.
+struct Connected {
+    robot: Box<dyn Robot>,
+    /// Who answered, for the operator.
+    name: String,
+    /// What a second interrupt runs, where the robot has one.
+    emergency: Option<EmergencyStop>,
+}
+
+/// Reaches the robot the configuration names, ready to drive, with its
+/// pose reading `pose`: a ROS 2 robot (`connection: "ros2"`), or an ARCOS
+/// controller with its motors enabled.
+fn connect_driving(config: &DriveConfig, model: &RobotModel, pose: Pose2) -> Result<Connected, DriveError> {
+    if config.connection == ROS2_CONNECTION {
+        let limits = config.limits(model);
+        let ros2 = config.ros2.clone().unwrap_or_default();
+        let robot = Ros2Robot::connect(&ros2, limits, config.period_s, pose)
+            .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })?;
+        let name = format!("a ROS 2 robot in domain {} ({})", robot.domain(), model.name);
+        return Ok(Connected { robot: Box::new(robot), name, emergency: None });
+    }
+    let robot = connect(config, model, true, pose)?;
+    let id = robot.identity();
+    let name = format!("{} ({} {})", id.name, id.class, id.subclass);
+    let emergency = robot.emergency_stop().ok();
+    Ok(Connected { robot: Box::new(robot), name, emergency })
+}
+
+/// Opens the link and completes the handshake, motors on or off, with
+/// odometry starting at `pose`.
+pub(super) fn connect(
+    config: &DriveConfig,
+    model: &RobotModel,
+    motors: bool,
+    pose: Pose2,
+) -> Result<ArcosRobot, DriveError> {
+    link::open(&config.connection, config.baud)
+        .map_err(RobotError::from)
+        .and_then(|link| ArcosRobot::connect(link, model.clone(), &config.connect_options(motors, pose)))
+        .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })
+}

@@ -1,0 +1,353 @@
+//! The robot file, `RobotConfig(...)`: its schema, its defaults and its
+//! loader, whose errors name the file, line and column.
+
+use crate::ros2_log::LogFormat;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use ubf_core::config::{positive, RonError};
+use ubf_core::{
+    BehaviorSpec, BuildContext, Goal, Limits, OnBehaviorPanic, Pose2, ProgressCheck, Registry, SafetyPolicy,
+};
+use ubf_perception::egomotion::{EgomotionConfig, Tracker};
+use ubf_perception::features::FeatureConfig;
+use ubf_perception::StereoCamera;
+use ubf_robots::arcos::client::{Accelerations, ConnectOptions};
+use ubf_robots::model::RobotModel;
+use ubf_robots::ptu::PtuConfig;
+use ubf_robots::ros2::Ros2Config;
+
+/// Which robot model a configuration names.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub enum ModelChoice {
+    /// The MobileRobots Powerbot.
+    Powerbot,
+    /// The Pioneer 3-DX.
+    P3dx,
+    /// A model file (`robots/models/*.ron` shows the format), relative to the
+    /// configuration file.
+    File(String),
+}
+
+/// What to do when the robot stops answering.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum OnLinkLoss {
+    /// Stop commanding and try to connect again, until stopped.
+    #[default]
+    Reconnect,
+    /// Stop and exit with an error.
+    Exit,
+}
+
+/// Where a robot's stereo pairs come from.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub enum CameraSourceChoice {
+    /// A directory of recorded pairs (`frames.csv`, as `ubf frames` writes),
+    /// relative to the configuration file, replayed at its own pace: for
+    /// trying the whole chain before the cameras are fitted.
+    Directory(String),
+    /// Two Video4Linux cameras giving rectified images (builds with the
+    /// `v4l` feature only).
+    V4l {
+        /// The left camera's device, e.g. `/dev/video0`.
+        left: String,
+        /// The right camera's device.
+        right: String,
+    },
+}
+
+/// A calibrated, unrectified pair's calibration files, relative to the
+/// configuration file: either the two cameras' ROS `camera_info` files
+/// (`left`, `right`), or OpenCV's `stereoCalibrate` result (`stereo`).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectifyFiles {
+    /// The left camera's `camera_info`.
+    #[serde(default)]
+    pub left: Option<String>,
+    /// The right camera's `camera_info`.
+    #[serde(default)]
+    pub right: Option<String>,
+    /// `K1`, `D1`, `K2`, `D2`, `R`, `T` as OpenCV's `FileStorage` writes
+    /// them; the rectification is computed as OpenCV's `stereoRectify`
+    /// does.
+    #[serde(default)]
+    pub stereo: Option<String>,
+}
+
+impl RectifyFiles {
+    pub(super) fn load(&self) -> Result<ubf_perception::rectify::Rectifier, RectifyFilesError> {
+        match (&self.left, &self.right, &self.stereo) {
+            (Some(left), Some(right), None) => {
+                Ok(ubf_perception::rectify::load_pair(Path::new(left), Path::new(right))?)
+            }
+            (None, None, Some(stereo)) => Ok(ubf_perception::rectify::load_stereo(Path::new(stereo))?),
+            _ => Err(RectifyFilesError::Choice),
+        }
+    }
+}
+
+/// Why a robot file's rectification files could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum RectifyFilesError {
+    /// Neither or both kinds of calibration were given.
+    #[error(
+        "give either `left` and `right` (camera_info files) or `stereo` (an OpenCV stereo calibration), not both \
+         or neither"
+    )]
+    Choice,
+    /// The files were given but are not a usable calibration.
+    #[error(transparent)]
+    Calibration(#[from] ubf_perception::rectify::CalibrationError),
+}
+
+/// The robot's stereo camera.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveCamera {
+    /// Where pairs come from.
+    pub source: CameraSourceChoice,
+    /// The pair's calibration: focal length, image size (the principal
+    /// point is its centre), baseline and mounting.
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
+    pub stereo: StereoCamera,
+    /// The feature pipeline's settings.
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
+    pub features: FeatureConfig,
+    /// The pair is calibrated but not rectified: rectify each pair by these
+    /// `camera_info` files, whose projections then give the calibration
+    /// (`stereo` keeps only its `mount`).
+    #[serde(default)]
+    pub rectify: Option<RectifyFiles>,
+    /// The pan-tilt head the pair rides on (a FLIR PTU), for trees that
+    /// steer the camera (`ActionAiding(steer: Camera)`).
+    #[serde(default)]
+    pub pan_tilt: Option<PtuConfig>,
+}
+
+/// A robot configuration file: `RobotConfig(...)`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "RobotConfig")]
+pub struct DriveConfig {
+    /// A name for logs.
+    pub name: String,
+    /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port` for an ARCOS
+    /// robot, or `ros2` for a ROS 2 robot (`/cmd_vel` in, `/odom` out).
+    pub connection: String,
+    /// Serial baud rate (ARCOS starts at 9600).
+    #[serde(default = "DriveConfig::default_baud")]
+    pub baud: u32,
+    /// The robot model.
+    pub model: ModelChoice,
+    /// Seconds between control ticks (ARCOS sends a SIP every 0.1 s).
+    #[serde(default = "DriveConfig::default_period", deserialize_with = "positive")]
+    pub period_s: f64,
+    /// Where the tick log goes, relative to the working directory.
+    #[serde(default = "DriveConfig::default_log")]
+    pub log: PathBuf,
+    /// `Ros2` also logs the session as a rosbag2 directory beside the CSV
+    /// log (`NAME-rosbag2/`), for `ros2 bag` and the rosbags library.
+    #[serde(default)]
+    pub log_format: LogFormat,
+    /// Whether the session's MCAP log holds the camera's stereo pairs
+    /// (PNG, about 0.2 MB a 640 × 480 pair).
+    #[serde(default)]
+    pub log_images: bool,
+    /// What to do when the robot stops answering.
+    #[serde(default)]
+    pub on_link_loss: OnLinkLoss,
+    /// A goal in odometry coordinates, for trees that use one.
+    #[serde(default)]
+    pub goal: Option<Goal>,
+    /// A stereo camera, for trees that use landmarks (action aiding).
+    #[serde(default)]
+    pub camera: Option<DriveCamera>,
+    /// Visual egomotion on the camera's frames.
+    #[serde(default)]
+    pub egomotion: Option<EgomotionConfig>,
+    /// Accelerations to set on the controller (unset: its own).
+    #[serde(default)]
+    pub accelerations: Option<Accelerations>,
+    /// A cap on translational speed, m/s, below the model's (sent as SETV
+    /// on connect and applied to every command).
+    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    pub max_velocity: Option<f64>,
+    /// A cap on rotational speed, °/s, below the model's (sent as SETRV).
+    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    pub max_rot_velocity_deg: Option<f64>,
+    /// When to hold the robot still whatever the tree wants: stale data,
+    /// a lost link, a stall or a bumper.
+    #[serde(default)]
+    pub safety: SafetyPolicy,
+    /// What a panicking behaviour does: `Stop` ends the drive (the robot
+    /// is stopped and the session closed), `SkipBehavior` carries on
+    /// without it.
+    #[serde(default)]
+    pub on_behavior_panic: OnBehaviorPanic,
+    /// Longest wait on the way out for the robot to report standstill after
+    /// STOP, before its motors are switched off, s.
+    #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "positive")]
+    pub stop_wait_s: f64,
+    /// Stop by itself after this long, s (unset: run until stopped).
+    #[serde(default)]
+    pub max_time_s: Option<f64>,
+    /// End the drive (robot stopped, session closed) once the robot
+    /// believes it is at the goal; `ubf drive --until-goal` sets it.
+    #[serde(default)]
+    pub until_goal: bool,
+    /// Publish the drive on ROS 2 (`/tf`, `/odom`, `/scan`, `/ubf/tick`,
+    /// `/ubf/goal`); `ubf drive --ros2` sets it. A ROS 2 robot always
+    /// publishes the tree's topics, and leaves the robot's to its driver.
+    #[serde(default)]
+    pub publish_ros2: bool,
+    /// Give up (robot stopped, session closed, exit code 1) once the robot,
+    /// by its own pose, has stayed within `radius_m` of one spot for
+    /// `window_s`: pressed against a wall its goal lies behind, say.
+    /// Unset, only the goal, the time limit or the operator ends a drive.
+    #[serde(default)]
+    pub progress: Option<ProgressCheck>,
+    /// A ROS 2 robot's topics, namespace, domain and QoS, with
+    /// `connection: "ros2"` (unset: ROS 2's conventions).
+    #[serde(default)]
+    pub ros2: Option<Ros2Config>,
+    /// The behaviour tree.
+    pub root: BehaviorSpec,
+}
+
+/// The `connection` that names a ROS 2 robot.
+pub const ROS2_CONNECTION: &str = "ros2";
+
+impl DriveConfig {
+    fn default_baud() -> u32 {
+        9600
+    }
+    fn default_period() -> f64 {
+        0.1
+    }
+    fn default_log() -> PathBuf {
+        PathBuf::from("drive-log.csv")
+    }
+    fn default_stop_wait() -> f64 {
+        1.0
+    }
+
+    /// The robot's speed limits: the model's, under the file's caps.
+    pub(super) fn limits(&self, model: &RobotModel) -> Limits {
+        let max_velocity = self.max_velocity.map_or(model.max_velocity, |cap| cap.min(model.max_velocity));
+        let max_rot_deg =
+            self.max_rot_velocity_deg.map_or(model.max_rot_velocity_deg, |cap| cap.min(model.max_rot_velocity_deg));
+        Limits::new(max_velocity, max_rot_deg.to_radians())
+    }
+
+    /// How to open a session, motors on or not, with the world frame's
+    /// origin at `origin`.
+    pub(super) fn connect_options(&self, enable_motors: bool, origin: Pose2) -> ConnectOptions {
+        ConnectOptions {
+            enable_motors,
+            max_velocity: self.max_velocity,
+            max_rot_velocity_deg: self.max_rot_velocity_deg,
+            accelerations: self.accelerations,
+            origin,
+            standstill_wait: Duration::from_secs_f64(self.stop_wait_s.min(10.0)),
+        }
+    }
+
+    /// Builds what can be built without the robot (the tree, the egomotion
+    /// tables for the camera) before connecting, so that nothing after
+    /// ENABLE is built for the first time.
+    pub fn validate(&self) {
+        if let (Some(config), Some(camera)) = (self.egomotion, &self.camera) {
+            let _ = Tracker::new(config, camera.stereo, Pose2::default(), 0);
+        }
+        let _ = self.root.build(&BuildContext::new(0));
+    }
+
+    /// Reads a configuration file. Paths in it (a model file, a camera's
+    /// image directory) become relative to the file's directory.
+    pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), RobotFileError> {
+        let read =
+            |path: &Path| std::fs::read(path).map_err(|source| RobotFileError::Read { path: path.into(), source });
+        let parse = RobotFileError::parse;
+        let text = ubf_core::config::utf8_text(read(path)?).map_err(parse(path))?;
+        let mut config: DriveConfig = registry.from_ron(&text).map_err(parse(path))?;
+        if config.ros2.is_some() && config.connection != ROS2_CONNECTION {
+            return Err(RobotFileError::Ros2WithoutRos2 { path: path.into() });
+        }
+        if config.egomotion.is_some() && config.camera.is_none() {
+            return Err(RobotFileError::EgomotionWithoutCamera { path: path.into() });
+        }
+        let beside = |file: &str| path.parent().unwrap_or(Path::new(".")).join(file).to_string_lossy().into_owned();
+        if let Some(camera) = &mut config.camera {
+            if let CameraSourceChoice::Directory(dir) = &mut camera.source {
+                *dir = beside(dir);
+            }
+            if let Some(files) = &mut camera.rectify {
+                for file in [&mut files.left, &mut files.right, &mut files.stereo].into_iter().flatten() {
+                    *file = beside(file);
+                }
+                let rectified = files.load().map_err(|source| RobotFileError::Rectify { path: path.into(), source })?;
+                camera.stereo = StereoCamera { mount: camera.stereo.mount, ..rectified.camera() };
+            }
+        }
+        let model = match &config.model {
+            ModelChoice::Powerbot => RobotModel::powerbot(),
+            ModelChoice::P3dx => RobotModel::p3dx(),
+            ModelChoice::File(file) => {
+                let model_path = path.parent().unwrap_or(Path::new(".")).join(file);
+                let text = ubf_core::config::utf8_text(read(&model_path)?).map_err(parse(&model_path))?;
+                RobotModel::from_ron(&text).map_err(parse(&model_path))?
+            }
+        };
+        config.validate();
+        Ok((config, model))
+    }
+}
+
+/// Why a robot file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotFileError {
+    /// The file, or the model file it names, could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file, or its model file, is not what it should be; the error
+    /// says where (line, column, field).
+    #[error("{}:{source}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// Where and why.
+        source: RonError,
+    },
+    /// ROS 2 settings were given for a robot that is not a ROS 2 one.
+    #[error("{}: `ros2: (...)` is for `connection: \"ros2\"`; remove it or change the connection", path.display())]
+    Ros2WithoutRos2 {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Egomotion was asked for without a camera.
+    #[error("{}: egomotion needs a camera: add `camera: (...)`", path.display())]
+    EgomotionWithoutCamera {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The rectification files it names could not be used.
+    #[error("{}: camera.rectify: {source}", path.display())]
+    Rectify {
+        /// The robot file.
+        path: PathBuf,
+        /// What was wrong with them.
+        source: RectifyFilesError,
+    },
+}
+
+impl RobotFileError {
+    /// A parse error in `path`.
+    fn parse(path: &Path) -> impl FnOnce(RonError) -> RobotFileError + '_ {
+        move |source| RobotFileError::Parse { path: path.into(), source }
+    }
+}
