@@ -4,6 +4,7 @@
 use std::path::Path;
 use ubf::run::{run, EndReason};
 use ubf::scenario::Scenario;
+use ubf_core::Wraps;
 
 /// The scenario file at `path` from the repository's root.
 fn load(path: &str) -> Scenario {

@@ -225,7 +225,7 @@ pub struct EndpointCell {
     pub runs_with_failures: usize,
     /// Runs whose true stop was outside the goal's tolerance (the robot
     /// navigates on odometry, so it may believe it arrived when it has not).
-    pub runs_not_finished: usize,
+    pub runs_outside_goal_tolerance: usize,
     /// Runs that ended on the time limit instead of at the goal.
     pub runs_time_limit: usize,
     /// The end-point σ the decision's model predicted, per run, m.
@@ -280,7 +280,7 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
         endpoint_error_pct: field(&|r| r.endpoint_error_pct),
         egomotion_failures: field(&|r| r.egomotion_failures.map(f64::from)),
         runs_with_failures: reports.iter().filter(|r| r.egomotion_failures.unwrap_or(0) > 0).count(),
-        runs_not_finished: reports.iter().filter(|r| !r.reached_goal).count(),
+        runs_outside_goal_tolerance: reports.iter().filter(|r| !r.reached_goal).count(),
         runs_time_limit: reports.iter().filter(|r| r.end == EndReason::TimeLimit).count(),
         predicted_sigma_m: field(&|r| r.predicted_endpoint_sigma_m),
         actual_over_predicted: {

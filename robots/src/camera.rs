@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::{Aim, Command, LandmarkObservation, Limits, PanTilt, Robot, RobotError, State, StereoImages};
+use ubf_core::{Aim, LandmarkObservation, PanTilt, Robot, RobotError, RobotWrapper, State, StereoImages, Wraps};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::source::CameraSource;
 use ubf_perception::StereoCamera;
@@ -109,23 +109,23 @@ impl<R: Robot> CameraRobot<R> {
         self
     }
 
-    /// The wrapped robot.
-    pub fn inner(&self) -> &R {
-        &self.inner
-    }
-
-    /// The wrapped robot, to talk to it directly.
-    pub fn inner_mut(&mut self) -> &mut R {
-        &mut self.inner
-    }
-
     /// Frames delivered so far.
     pub fn frames(&self) -> u64 {
         self.frames
     }
 }
 
-impl<R: Robot> Robot for CameraRobot<R> {
+impl<R: Robot> Wraps for CameraRobot<R> {
+    type Inner = R;
+    fn inner(&self) -> &R {
+        &self.inner
+    }
+    fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+}
+
+impl<R: Robot> RobotWrapper for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some((unit, _)) = &mut self.pan_tilt {
@@ -150,10 +150,6 @@ impl<R: Robot> Robot for CameraRobot<R> {
         }
     }
 
-    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
-        self.inner.act(command)
-    }
-
     fn shutdown(&mut self) -> Result<(), RobotError> {
         // A unit's driver halts the head as it goes.
         self.pan_tilt = None;
@@ -166,20 +162,10 @@ impl<R: Robot> Robot for CameraRobot<R> {
         self.inner.shutdown()
     }
 
-    fn limits(&self) -> Limits {
-        self.inner.limits()
-    }
-    fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
-        self.inner.ground_truth()
-    }
     fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
         match &mut self.pan_tilt {
             Some((unit, tilt)) => unit.command(Aim { pan, tilt: *tilt }),
             None => self.inner.aim_camera(pan),
         }
-    }
-
-    fn hold(&self) -> Option<ubf_core::Hold> {
-        self.inner.hold()
     }
 }

@@ -1,7 +1,7 @@
 //! Egomotion on any robot: a wrapper that feeds the robot's stereo frames to
 //! an estimator and puts the result in the state.
 
-use ubf_core::{Command, Limits, Robot, RobotError, State};
+use ubf_core::{Command, Robot, RobotError, RobotWrapper, State, Wraps};
 use ubf_perception::egomotion::Tracker;
 
 /// Wraps a robot and, when given a tracker, runs egomotion on its stereo
@@ -19,23 +19,23 @@ impl<R: Robot> EgomotionRobot<R> {
         EgomotionRobot { inner, tracker }
     }
 
-    /// The wrapped robot.
-    pub fn inner(&self) -> &R {
-        &self.inner
-    }
-
-    /// The wrapped robot, to talk to it directly.
-    pub fn inner_mut(&mut self) -> &mut R {
-        &mut self.inner
-    }
-
     /// The estimator, if any.
     pub fn tracker(&self) -> Option<&Tracker> {
         self.tracker.as_ref()
     }
 }
 
-impl<R: Robot> Robot for EgomotionRobot<R> {
+impl<R: Robot> Wraps for EgomotionRobot<R> {
+    type Inner = R;
+    fn inner(&self) -> &R {
+        &self.inner
+    }
+    fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+}
+
+impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some(tracker) = &mut self.tracker {
@@ -53,23 +53,5 @@ impl<R: Robot> Robot for EgomotionRobot<R> {
             tracker.commanded(command);
         }
         self.inner.act(command)
-    }
-
-    fn shutdown(&mut self) -> Result<(), RobotError> {
-        self.inner.shutdown()
-    }
-
-    fn limits(&self) -> Limits {
-        self.inner.limits()
-    }
-    fn ground_truth(&self) -> Option<ubf_core::GroundTruth> {
-        self.inner.ground_truth()
-    }
-    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
-        self.inner.aim_camera(pan)
-    }
-
-    fn hold(&self) -> Option<ubf_core::Hold> {
-        self.inner.hold()
     }
 }

@@ -16,7 +16,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{
     BuildContext, Clock, Controller, ControllerError, Ends, PacedClock, Pose2, Session, SessionEnd, SimClock,
-    Stopwatch, TickRecord, TracingSink,
+    Stopwatch, TickRecord, TracingSink, Wraps,
 };
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;

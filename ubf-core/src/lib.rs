@@ -92,7 +92,7 @@ pub use pan_tilt::{Aim, PanTilt};
 pub use progress::{ProgressCheck, ProgressWatch};
 pub use record::{NodeInfo, NodeOutcome, TickRecord, TreeLayout};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
-pub use robot::{GroundTruth, NullRobot, Robot, RobotError, VelocityLimiter};
+pub use robot::{GroundTruth, NullRobot, Robot, RobotError, RobotWrapper, VelocityLimiter, Wraps};
 pub use safety::{Hold, SafetyGuard, SafetyPolicy};
 pub use session::{Ends, Session, SessionEnd};
 pub use sink::{BackgroundSink, TickSink, TracingSink};

@@ -73,29 +73,90 @@ pub struct GroundTruth {
     pub collisions: u32,
 }
 
-impl<R: Robot + ?Sized> Robot for Box<R> {
+/// A robot around another robot: [`Wraps::inner`] reaches the robot
+/// inside (a wrapper's own methods are the [`RobotWrapper`]'s).
+pub trait Wraps {
+    /// The robot inside.
+    type Inner: Robot + ?Sized;
+    /// The robot inside.
+    fn inner(&self) -> &Self::Inner;
+    /// The robot inside, to talk to it directly.
+    fn inner_mut(&mut self) -> &mut Self::Inner;
+}
+
+/// A wrapper that changes some of what the robot inside does: each method
+/// goes to the inner robot unless the wrapper writes its own, so a wrapper
+/// writes only what it changes (a velocity limiter, `act` and `limits`).
+/// Every `RobotWrapper` is a [`Robot`]. Import this trait where a wrapper is
+/// written, and [`Robot`] where one is used: with both in scope, a method
+/// call such as `guard.sense(..)` is ambiguous.
+pub trait RobotWrapper: Wraps + Send {
+    /// See [`Robot::sense`].
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
-        (**self).sense(state)
+        self.inner_mut().sense(state)
     }
+    /// See [`Robot::act`].
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {
-        (**self).act(command)
+        self.inner_mut().act(command)
     }
+    /// See [`Robot::shutdown`].
     fn shutdown(&mut self) -> Result<(), RobotError> {
-        (**self).shutdown()
+        self.inner_mut().shutdown()
     }
+    /// See [`Robot::limits`].
     fn limits(&self) -> Limits {
-        (**self).limits()
+        self.inner().limits()
     }
+    /// See [`Robot::ground_truth`].
     fn ground_truth(&self) -> Option<GroundTruth> {
-        (**self).ground_truth()
+        self.inner().ground_truth()
     }
+    /// See [`Robot::aim_camera`].
     fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
-        (**self).aim_camera(pan)
+        self.inner_mut().aim_camera(pan)
     }
+    /// See [`Robot::hold`].
     fn hold(&self) -> Option<Hold> {
-        (**self).hold()
+        self.inner().hold()
     }
 }
+
+impl<W: RobotWrapper> Robot for W {
+    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
+        RobotWrapper::sense(self, state)
+    }
+    fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        RobotWrapper::act(self, command)
+    }
+    fn shutdown(&mut self) -> Result<(), RobotError> {
+        RobotWrapper::shutdown(self)
+    }
+    fn limits(&self) -> Limits {
+        RobotWrapper::limits(self)
+    }
+    fn ground_truth(&self) -> Option<GroundTruth> {
+        RobotWrapper::ground_truth(self)
+    }
+    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
+        RobotWrapper::aim_camera(self, pan)
+    }
+    fn hold(&self) -> Option<Hold> {
+        RobotWrapper::hold(self)
+    }
+}
+
+/// A boxed robot (`Box<dyn Robot>`) is the robot in the box.
+impl<R: Robot + ?Sized> Wraps for Box<R> {
+    type Inner = R;
+    fn inner(&self) -> &R {
+        self
+    }
+    fn inner_mut(&mut self) -> &mut R {
+        self
+    }
+}
+
+impl<R: Robot + ?Sized> RobotWrapper for Box<R> {}
 
 /// A robot that stands still where it is put and remembers the last command:
 /// for tests, benchmarks and examples.
@@ -156,17 +217,19 @@ impl<R: Robot> VelocityLimiter<R> {
             Limits::new(own.max_velocity.min(limits.max_velocity), own.max_rot_velocity.min(limits.max_rot_velocity));
         VelocityLimiter { inner, limits }
     }
+}
 
-    /// The wrapped robot.
-    pub fn inner(&self) -> &R {
+impl<R: Robot> Wraps for VelocityLimiter<R> {
+    type Inner = R;
+    fn inner(&self) -> &R {
         &self.inner
+    }
+    fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
     }
 }
 
-impl<R: Robot> Robot for VelocityLimiter<R> {
-    fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
-        self.inner.sense(state)
-    }
+impl<R: Robot> RobotWrapper for VelocityLimiter<R> {
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {
         let limited = match *command {
             Command::Stop => Command::Stop,
@@ -184,19 +247,62 @@ impl<R: Robot> Robot for VelocityLimiter<R> {
         };
         self.inner.act(&limited)
     }
-    fn shutdown(&mut self) -> Result<(), RobotError> {
-        self.inner.shutdown()
-    }
     fn limits(&self) -> Limits {
         self.limits
     }
-    fn ground_truth(&self) -> Option<GroundTruth> {
-        self.inner.ground_truth()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{NullRobot, Robot, RobotError, RobotWrapper, VelocityLimiter, Wraps};
+    use crate::{Command, Limits, State, Turn};
+
+    /// A wrapper that writes only `act`: it counts the commands.
+    struct Counting {
+        inner: NullRobot,
+        acts: u32,
     }
-    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
-        self.inner.aim_camera(pan)
+
+    impl Wraps for Counting {
+        type Inner = NullRobot;
+        fn inner(&self) -> &NullRobot {
+            &self.inner
+        }
+        fn inner_mut(&mut self) -> &mut NullRobot {
+            &mut self.inner
+        }
     }
-    fn hold(&self) -> Option<Hold> {
-        self.inner.hold()
+
+    impl RobotWrapper for Counting {
+        fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+            self.acts += 1;
+            self.inner.act(command)
+        }
+    }
+
+    #[test]
+    fn a_wrapper_forwards_what_it_does_not_write() {
+        let mut robot = Counting { inner: NullRobot::default(), acts: 0 };
+        robot.inner.reported.pose.x = 2.5;
+        let mut state = State::default();
+        Robot::sense(&mut robot, &mut state).unwrap();
+        assert_eq!(state.pose.x, 2.5);
+        Robot::act(&mut robot, &Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }).unwrap();
+        assert_eq!(robot.acts, 1);
+        assert_eq!(Robot::limits(&robot), NullRobot::default().limits);
+        Robot::shutdown(&mut robot).unwrap();
+        assert!(robot.inner().shut_down);
+    }
+
+    #[test]
+    fn a_velocity_limiter_clamps_and_a_boxed_robot_is_its_robot() {
+        let mut limiter = VelocityLimiter::new(NullRobot::default(), Limits::new(0.2, 0.5));
+        Robot::act(&mut limiter, &Command::Drive { velocity: 0.9, turn: Turn::Rate(-2.0) }).unwrap();
+        assert_eq!(limiter.inner().last_command, Command::Drive { velocity: 0.2, turn: Turn::Rate(-0.5) });
+        // (Called through `Robot`: with `RobotWrapper` in scope too, a
+        // method call on a wrapper is ambiguous.)
+        let mut boxed: Box<dyn Robot> = Box::new(limiter);
+        assert_eq!(Robot::limits(&boxed), Limits::new(0.2, 0.5));
+        Robot::shutdown(&mut boxed).unwrap();
     }
 }

@@ -6,7 +6,7 @@
 //! `sensor_age`), not by the wall, so the same policy runs, and is tested,
 //! on the simulator's clock and on a real robot's.
 
-use crate::{Command, Limits, Robot, RobotError, State};
+use crate::{Command, Robot, RobotError, RobotWrapper, State, Wraps};
 use serde::Deserialize;
 
 /// When to hold the robot still, whatever the behaviours want.
@@ -66,16 +66,6 @@ impl<R: Robot> SafetyGuard<R> {
         SafetyGuard { inner, policy, started: None, hold: None, contact: None }
     }
 
-    /// The wrapped robot.
-    pub fn inner(&self) -> &R {
-        &self.inner
-    }
-
-    /// The wrapped robot, mutably.
-    pub fn inner_mut(&mut self) -> &mut R {
-        &mut self.inner
-    }
-
     /// Updates the contact latch from this tick's state.
     fn latch_contact(&mut self, state: &State) {
         let touching = state.stalled || state.bumpers.any();
@@ -98,7 +88,17 @@ impl<R: Robot> SafetyGuard<R> {
     }
 }
 
-impl<R: Robot> Robot for SafetyGuard<R> {
+impl<R: Robot> Wraps for SafetyGuard<R> {
+    type Inner = R;
+    fn inner(&self) -> &R {
+        &self.inner
+    }
+    fn inner_mut(&mut self) -> &mut R {
+        &mut self.inner
+    }
+}
+
+impl<R: Robot> RobotWrapper for SafetyGuard<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let started = *self.started.get_or_insert(state.time);
         self.inner.sense(state)?;
@@ -129,31 +129,18 @@ impl<R: Robot> Robot for SafetyGuard<R> {
         }
     }
 
-    fn shutdown(&mut self) -> Result<(), RobotError> {
-        self.inner.shutdown()
-    }
-
-    fn limits(&self) -> Limits {
-        self.inner.limits()
-    }
-
     /// Why motion is held, as of the latest tick.
     fn hold(&self) -> Option<Hold> {
         self.hold
-    }
-
-    fn ground_truth(&self) -> Option<crate::GroundTruth> {
-        self.inner.ground_truth()
-    }
-    fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
-        self.inner.aim_camera(pan)
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::{NullRobot, Turn};
+    // Not `super::*`: with `RobotWrapper` in scope as well as `Robot`, a
+    // guard's `sense` would be ambiguous.
+    use super::{Hold, SafetyGuard, SafetyPolicy};
+    use crate::{Command, NullRobot, Robot, RobotError, State, Turn, Wraps};
 
     const GO: Command = Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) };
 

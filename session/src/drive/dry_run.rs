@@ -4,7 +4,7 @@ use super::robot_file::{DriveConfig, ROS2_CONNECTION};
 use super::{connect, DriveError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use ubf_core::{Pose2, Robot, RobotError, State};
+use ubf_core::{Pose2, Robot, RobotError, State, Wraps};
 use ubf_robots::arcos::client::ArcosRobot;
 use ubf_robots::camera::CameraRobot;
 use ubf_robots::egomotion::EgomotionRobot;
