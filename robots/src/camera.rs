@@ -13,9 +13,10 @@ use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::source::CameraSource;
 use ubf_perception::StereoCamera;
 
-/// A processed pair: when it was taken (seconds since the camera started),
-/// what was found in it, and the pair itself.
-type Frame = (f64, Vec<LandmarkObservation>, Arc<StereoImages>);
+/// A processed pair: when it was taken, what was found in it, and the pair
+/// itself. The instant becomes a time on the controller's clock when the
+/// frame reaches a tick ([`CameraRobot`]'s `sense`).
+type Frame = (Instant, Vec<LandmarkObservation>, Arc<StereoImages>);
 
 /// The camera's thread and what comes out of it.
 struct CameraThread {
@@ -81,7 +82,7 @@ impl<R: Robot> CameraRobot<R> {
                             );
                         }
                     }
-                    let taken = started.elapsed().as_secs_f64();
+                    let taken = Instant::now();
                     let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
                     let frame = found.map(|landmarks| (taken, landmarks, Arc::new(pair.into_images())));
                     match sender.try_send(frame) {
@@ -134,10 +135,12 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
-                Ok(Ok((time, landmarks, images))) => {
+                Ok(Ok((taken, landmarks, images))) => {
                     self.frames += 1;
                     state.stereo.number = self.frames;
-                    state.stereo.time = time;
+                    // On the controller's clock: the tick's time less how
+                    // long ago the pair was taken.
+                    state.stereo.time = state.time - taken.elapsed().as_secs_f64();
                     state.stereo.landmarks = landmarks;
                     let mount = state.camera_aim.map_or(camera.mount, |aim| camera.mount.aimed(aim.pan, aim.tilt));
                     state.stereo.calibration = Some(StereoCamera { mount, ..*camera });

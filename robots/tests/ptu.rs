@@ -146,23 +146,48 @@ fn nothing_answering_is_a_clear_error() {
     assert!(error.contains("/dev/no-such-ptu"), "{error}");
 }
 
+/// Two blank pairs, half a second apart, in `dir`, and the camera they
+/// suit.
+fn blank_pairs(dir: &std::path::Path) -> (Box<ImageDirectory>, StereoCamera) {
+    let camera = StereoCamera { width_px: 64, height_px: 48, focal_px: 50.0, ..StereoCamera::default() };
+    for side in ["left", "right"] {
+        std::fs::create_dir(dir.join(side)).unwrap();
+        for k in 0..2 {
+            image::GrayImage::new(64, 48).save(dir.join(format!("{side}/{k}.png"))).unwrap();
+        }
+    }
+    std::fs::write(
+        dir.join("frames.csv"),
+        "time_s,left,right\n0.0,left/0.png,right/0.png\n0.5,left/1.png,right/1.png\n",
+    )
+    .unwrap();
+    (Box::new(ImageDirectory::open(dir).unwrap()), camera)
+}
+
+#[test]
+fn camera_frames_are_stamped_with_the_controllers_clock() {
+    // The controller's clock reads 1000 s; the camera's thread started a
+    // moment ago. A frame's time is on the controller's clock, so that the
+    // tick and the frame can be compared.
+    let dir = tempfile::tempdir().unwrap();
+    let (source, camera) = blank_pairs(dir.path());
+    let mut robot = CameraRobot::new(NullRobot::default(), source, camera, FeatureConfig::default(), true).unwrap();
+    let mut state = State { time: 1000.0, ..State::default() };
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while state.stereo.number < 1 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        robot.sense(&mut state).unwrap();
+    }
+    assert_eq!(state.stereo.number, 1);
+    assert!((999.0..=1000.0).contains(&state.stereo.time), "frame at {} s", state.stereo.time);
+    robot.shutdown().unwrap();
+}
+
 #[test]
 fn a_camera_on_the_head_is_aimed_by_the_tree_and_its_frames_carry_the_angles_read() {
     // Two blank pairs stand in for the cameras; the head is the emulated PTU.
     let dir = tempfile::tempdir().unwrap();
-    let camera = StereoCamera { width_px: 64, height_px: 48, focal_px: 50.0, ..StereoCamera::default() };
-    for side in ["left", "right"] {
-        std::fs::create_dir(dir.path().join(side)).unwrap();
-        for k in 0..2 {
-            image::GrayImage::new(64, 48).save(dir.path().join(format!("{side}/{k}.png"))).unwrap();
-        }
-    }
-    std::fs::write(
-        dir.path().join("frames.csv"),
-        "time_s,left,right\n0.0,left/0.png,right/0.png\n0.5,left/1.png,right/1.png\n",
-    )
-    .unwrap();
-    let source = Box::new(ImageDirectory::open(dir.path()).unwrap());
+    let (source, camera) = blank_pairs(dir.path());
     let emulator = on_tcp(PtuEmulatorConfig::default());
     let head = Ptu::connect(PtuConfig::new(&emulator.connection)).unwrap();
     let step = head.axes().pan_step;
