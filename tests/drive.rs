@@ -594,3 +594,25 @@ fn a_camera_to_rectify_takes_its_calibration_from_the_camera_info_files() {
     let err = ubf::drive::DriveConfig::load(&ubf::registry(), &file).unwrap_err().to_string();
     assert!(err.contains("robot.ron: camera.rectify:") && err.contains("to the right"), "{err}");
 }
+
+#[test]
+fn a_camera_fault_stops_the_drive_and_never_reconnects_the_motors() {
+    // A pair that cannot be read mid-drive is a camera fault: the robot is
+    // stopped and the drive ends non-zero, naming the camera. It is not a
+    // lost link: with `on_link_loss: Reconnect` (the default) the drive
+    // used to reconnect, enabling the motors again, every second or two.
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 4);
+    std::fs::write(dir.path().join("frames/left/000003.png"), b"not a PNG").unwrap();
+    let (mut emulator, address, _) = emulator();
+    let file = dir.path().join("robot.ron");
+    let extra = r#"max_time_s: 8.0,
+            camera: (source: Directory("frames"), stereo: (focal_px: 554.3)),"#;
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), extra)).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("camera:"), "{stderr}");
+    assert_eq!(stderr.matches("connected to").count(), 1, "{stderr}");
+}

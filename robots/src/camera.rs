@@ -146,7 +146,7 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
                     state.stereo.calibration = Some(StereoCamera { mount, ..*camera });
                     state.stereo.images = Some(images);
                 }
-                Ok(Err(e)) => return Err(RobotError::Protocol(format!("camera: {e}"))),
+                Ok(Err(e)) => return Err(RobotError::Camera(e)),
                 // No new pair, or the source has ended: the last frame stays.
                 Err(TryRecvError::Empty | TryRecvError::Disconnected) => return Ok(()),
             }

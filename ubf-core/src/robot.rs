@@ -2,8 +2,10 @@
 
 use crate::{Command, Hold, Limits, Pose2, State};
 
-/// Why a robot could not sense or act.
+/// Why a robot could not sense or act. More kinds may come; match with a
+/// catch-all arm.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RobotError {
     /// The link to the robot is gone (cable, socket, emulator killed).
     #[error("robot disconnected: {0}")]
@@ -14,6 +16,11 @@ pub enum RobotError {
     /// The robot said something that makes no sense.
     #[error("robot protocol: {0}")]
     Protocol(String),
+    /// The camera failed (an unreadable pair, a device gone): a camera
+    /// fault, not a lost link, so nothing reconnects to the robot, and its
+    /// motors are never enabled again, because of it.
+    #[error("camera: {0}")]
+    Camera(String),
     /// Anything else.
     #[error("{0}")]
     Other(String),

@@ -247,6 +247,9 @@ fn drive_sessions(
             SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
             SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
             SessionEnd::Panicked(why) => return Err(DriveError::Panic(why)),
+            // A camera fault stops the drive: reconnecting would enable the
+            // motors again for a camera that still fails.
+            SessionEnd::Failed(ControllerError::Robot(why @ RobotError::Camera(_))) => return Err(why.into()),
             SessionEnd::Failed(ControllerError::Robot(why)) => {
                 eprintln!("link lost: {why}");
                 if config.on_link_loss == OnLinkLoss::Exit {
