@@ -337,3 +337,24 @@ fn a_run_logged_for_ros2_decodes_with_the_standard_readers_and_repeats_its_bytes
     let tick = &verdict["topics"]["/ubf/tick"]["first"];
     assert_eq!(tick["nodes"][0]["path"], "root", "{tick}");
 }
+
+#[test]
+fn a_cyclone_teleop_drives_the_simulator_served_on_ros2() {
+    // `ubf simulate --ros2` is a ROS 2 robot: a controller nobody here
+    // wrote (Cyclone DDS, scripts/ros2/teleop.py) drives it forward at
+    // 0.3 m/s for 3 s and hears its odometry move.
+    install_cyclone();
+    let script = r#""$UBF" simulate "$ROOT/scenarios/goto-open-floor.ron" --ros2 --max-time 60 2>/dev/null & sim=$!
+python3 "$ROOT/scripts/ros2/teleop.py" --linear 0.3 --duration 3
+code=$?; kill -TERM $sim; wait $sim || code=9; exit $code"#;
+    let Some(out) = in_namespace(script, &[]) else { return };
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let heard: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (first, last) = (&heard["first"], &heard["last"]);
+    let dx = last["x"].as_f64().unwrap() - first["x"].as_f64().unwrap();
+    let dy = last["y"].as_f64().unwrap() - first["y"].as_f64().unwrap();
+    // 0.9 m commanded; the Powerbot's acceleration and the first and last
+    // ticks take some of it, the timing of the teleop's loop adds some.
+    assert!((0.6..=1.1).contains(&dx.hypot(dy)), "moved {dx:.3}, {dy:.3}: {heard}");
+    assert!(heard["odometry"].as_u64().unwrap() > 20, "{heard}");
+}

@@ -10,6 +10,7 @@
 //! - [`frames`]: rendered stereo pairs recorded, and recordings replayed
 //!   through the feature pipeline;
 //! - [`drive`]: a robot file driving a real robot (ARCOS or ROS 2);
+//! - [`simulate`]: the simulator served as a ROS 2 robot;
 //! - the sinks: [`trajectory`] (CSV), [`mcap_log`] (JSON MCAP for
 //!   Foxglove, read back by [`replay`]), [`ros2_log`] (rosbag2),
 //!   [`ros2_publish`] (live ROS 2, through [`ros2_view`]); [`plot`] draws a
@@ -29,6 +30,7 @@ pub mod ros2_publish;
 pub mod ros2_view;
 pub mod run;
 pub mod scenario;
+pub mod simulate;
 pub mod sweep;
 pub mod trajectory;
 pub mod tree;

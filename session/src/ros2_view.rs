@@ -99,6 +99,8 @@ pub struct Shown {
     pub robot: bool,
     /// The camera's images, at each new stereo frame that carries them.
     pub images: bool,
+    /// The tree's decision (`ubf/tick`) and its goal (`ubf/goal`).
+    pub tree: bool,
 }
 
 /// Turns ticks into ROS 2 messages.
@@ -154,7 +156,7 @@ impl Ros2View {
         }
         // The goal when it changes, and once a second for viewers that
         // join late with a volatile reader (RViz's default).
-        let goal = state.goal.map(|g| [g.x, g.y, g.tolerance]);
+        let goal = state.goal.filter(|_| self.shown.tree).map(|g| [g.x, g.y, g.tolerance]);
         if goal != self.goal || record.time() >= self.goal_at + GOAL_EVERY_S {
             self.goal = goal;
             self.goal_at = record.time();
@@ -177,7 +179,9 @@ impl Ros2View {
                 emit(topics::RIGHT_IMAGE, stamp, Message::Image(image(stamp, "camera_right", images, &images.right)));
             }
         }
-        emit(topics::TICK, t, Message::Tick(self.tick(t, record)));
+        if self.shown.tree {
+            emit(topics::TICK, t, Message::Tick(self.tick(t, record)));
+        }
     }
 
     fn tick(&self, stamp: f64, record: &TickRecord) -> Tick {

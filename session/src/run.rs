@@ -133,7 +133,8 @@ pub fn run_until(
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
     if live.is_some_and(|l| l.ros2) {
-        let publisher = background_publisher(Shown { robot: true, images: true }, None, "").map_err(RunError::Ros2)?;
+        let publisher =
+            background_publisher(Shown { robot: true, images: true, tree: true }, None, "").map_err(RunError::Ros2)?;
         controller.add_sink(Box::new(publisher));
     }
     let log = match outputs {
@@ -149,7 +150,7 @@ pub fn run_until(
             controller.add_sink(Box::new(log.clone()));
             let bag = match rosbag {
                 true => {
-                    let bag = Ros2Log::create(&dir.join(ROSBAG_DIR), Shown { robot: true, images }, 0.0)?;
+                    let bag = Ros2Log::create(&dir.join(ROSBAG_DIR), Shown { robot: true, images, tree: true }, 0.0)?;
                     let bag = Arc::new(Mutex::new(bag));
                     controller.add_sink(Box::new(bag.clone()));
                     Some(bag)

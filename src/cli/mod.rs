@@ -23,7 +23,7 @@ use clap::{Parser, Subcommand};
 use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_objective};
 use images::{parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
-use run::parse_speed;
+use run::{parse_seconds, parse_speed};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use sweep::{parse_jobs, parse_seeds};
@@ -370,6 +370,27 @@ enum Command {
         #[arg(long)]
         clockwise: bool,
     },
+    /// Serve a scenario's simulated robot as a ROS 2 robot (in
+    /// `ROS_DOMAIN_ID`), for another stack to drive: it takes `/cmd_vel` and
+    /// publishes `/odom`, `/tf`, `/scan` and camera images, paced at real
+    /// time, until Ctrl-C.
+    Simulate {
+        /// The scenario file (RON): its world, robot and start are served;
+        /// its tree is not used.
+        file: PathBuf,
+        /// Serve it on ROS 2 (the only way so far).
+        #[arg(long, required = true)]
+        ros2: bool,
+        /// Use this seed instead of the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Run this many times faster than real time.
+        #[arg(long, default_value_t = 1.0, value_parser = parse_speed)]
+        speed: f64,
+        /// Stop after this many simulated seconds.
+        #[arg(long, value_parser = parse_seconds)]
+        max_time: Option<f64>,
+    },
     /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
     /// for trying things out without a robot.
     EmulatePowerbot {
@@ -604,7 +625,10 @@ pub fn main_with(registry: Registry) -> ExitCode {
     // Not for the commands that drive a robot: they notice a closed output
     // as a write error and stop the robot before they exit.
     #[cfg(unix)]
-    if !matches!(cli.command, Command::Drive { .. } | Command::EmulatePowerbot { .. } | Command::EmulatePtu { .. }) {
+    if !matches!(
+        cli.command,
+        Command::Drive { .. } | Command::Simulate { .. } | Command::EmulatePowerbot { .. } | Command::EmulatePtu { .. }
+    ) {
         // SAFETY: restoring the default action of a signal, before any
         // thread has started.
         unsafe {
@@ -655,6 +679,9 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Experiment { which } => experiment::command(&registry, which),
         Command::Drive { file, dry_run, status, until_goal, ros2 } => {
             robot::drive(&registry, &file, dry_run, status, until_goal, ros2)
+        }
+        Command::Simulate { file, ros2: _, seed, speed, max_time } => {
+            run::simulate(&registry, &file, seed, speed, max_time)
         }
         Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
             let mut config =

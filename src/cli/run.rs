@@ -74,10 +74,43 @@ pub(super) fn replay(file: &Path, plot: Option<PathBuf>) -> Outcome {
     Ok(Exit::Success)
 }
 
+/// Serves a scenario's simulated robot on ROS 2 until Ctrl-C (or
+/// `max_time` simulated seconds).
+pub(super) fn simulate(
+    registry: &Registry,
+    file: &Path,
+    seed: Option<u64>,
+    speed: f64,
+    max_time: Option<f64>,
+) -> Outcome {
+    let scenario = Scenario::load(registry, file).map_err(CliError::bad_input)?;
+    let seed = seed.unwrap_or(scenario.seed);
+    let stop = crate::drive::install_stop_flag();
+    eprintln!("serving {} (seed {seed}) as a ROS 2 robot: /cmd_vel in; /odom, /tf, /scan out", scenario.name);
+    let served = ubf_session::simulate::serve(&scenario, seed, speed, max_time, &stop).map_err(CliError::failed)?;
+    let pose = served.true_pose;
+    eprintln!(
+        "stopped after {} ticks; the robot stands at ({:.3}, {:.3}) m, {:.1}°",
+        served.ticks,
+        pose.x,
+        pose.y,
+        pose.theta.to_degrees()
+    );
+    Ok(Exit::Success)
+}
+
 /// `--speed`: a finite factor from 0.01 to 1000.
 pub(super) fn parse_speed(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(speed) if (0.01..=1000.0).contains(&speed) => Ok(speed),
         _ => Err(format!("`{text}` is not a speed from 0.01 to 1000 (times real time)")),
+    }
+}
+
+/// A time in seconds: finite, above 0, at most a million.
+pub(super) fn parse_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s > 0.0 && s <= 1e6 => Ok(s),
+        _ => Err(format!("`{text}` is not a time from 0 to 1000000 seconds")),
     }
 }

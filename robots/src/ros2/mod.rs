@@ -11,5 +11,5 @@ pub mod msg;
 pub mod node;
 pub mod robot;
 
-pub use node::{domain_from_env, Node, Publisher, Qos};
+pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
 pub use robot::{Ros2Config, Ros2Robot};

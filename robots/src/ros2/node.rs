@@ -77,6 +77,27 @@ impl<M: RosMessage> Publisher<M> {
     }
 }
 
+/// A reader of one topic.
+pub struct Subscription<M: RosMessage> {
+    reader: DataReaderCdr<M>,
+    name: String,
+}
+
+impl<M: RosMessage> Subscription<M> {
+    /// The newest message that came since the last call, if any (older
+    /// ones are taken and dropped: a controller wants the latest).
+    pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
+        let mut latest = None;
+        loop {
+            match self.reader.take_next_sample() {
+                Ok(Some(sample)) => latest = Some(sample.into_value()),
+                Ok(None) => return Ok(latest),
+                Err(e) => return Err(RobotError::Protocol(format!("reading {}: {e}", self.name))),
+            }
+        }
+    }
+}
+
 /// A ROS 2 participant in one DDS domain, under one namespace.
 pub struct Node {
     participant: DomainParticipant,
@@ -147,11 +168,13 @@ impl Node {
     }
 
     /// A reader of `M` on topic `name`.
-    pub fn reader<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<DataReaderCdr<M>, RobotError> {
+    pub fn reader<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<Subscription<M>, RobotError> {
         let topic = self.topic::<M>(name, qos)?;
-        self.subscriber
-            .create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies()))
-            .map_err(|e| RobotError::Other(format!("subscribing {}: {e}", self.resolve(name))))
+        let name = self.resolve(name);
+        match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies())) {
+            Ok(reader) => Ok(Subscription { reader, name }),
+            Err(e) => Err(RobotError::Other(format!("subscribing {name}: {e}"))),
+        }
     }
 
     /// Takes in what discovery has reported since the last call.

@@ -2,8 +2,7 @@
 //! `/odom` and `/scan`.
 
 use super::msg::{LaserScan, Odometry, Twist};
-use super::node::{domain_from_env, Node, Publisher, Qos};
-use rustdds::no_key::DataReaderCdr;
+use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
 use serde::Deserialize;
 use std::time::{Duration, Instant};
 use ubf_core::{angle_difference, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
@@ -71,8 +70,8 @@ const HEADING_GAIN: f64 = 2.0;
 pub struct Ros2Robot {
     config: Ros2Config,
     cmd_vel: Publisher<Twist>,
-    odom: DataReaderCdr<Odometry>,
-    scan: DataReaderCdr<LaserScan>,
+    odom: Subscription<Odometry>,
+    scan: Subscription<LaserScan>,
     limits: Limits,
     stale_after: Duration,
     /// Odometry's first pose and the world pose it stands for.
@@ -100,7 +99,7 @@ impl Ros2Robot {
         let scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?;
         let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
         let first = loop {
-            if let Some(odometry) = take_latest(&mut odom)? {
+            if let Some(odometry) = odom.take_latest()? {
                 break odometry;
             }
             if Instant::now() >= deadline {
@@ -165,20 +164,6 @@ impl Ros2Robot {
     }
 }
 
-/// The newest message a reader holds, if any, taking all.
-fn take_latest<M: 'static + serde::de::DeserializeOwned>(
-    reader: &mut DataReaderCdr<M>,
-) -> Result<Option<M>, RobotError> {
-    let mut latest = None;
-    loop {
-        match reader.take_next_sample() {
-            Ok(Some(sample)) => latest = Some(sample.into_value()),
-            Ok(None) => return Ok(latest),
-            Err(e) => return Err(RobotError::Protocol(format!("reading a ROS 2 message: {e}"))),
-        }
-    }
-}
-
 /// A scan's beams as range readings from the robot's centre (the scanner's
 /// offset from `base_link` is not looked up).
 fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
@@ -198,7 +183,7 @@ fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
 impl Robot for Ros2Robot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let now = Instant::now();
-        if let Some(odometry) = take_latest(&mut self.odom)? {
+        if let Some(odometry) = self.odom.take_latest()? {
             self.latest_odom = (odometry, now);
         }
         let age = now - self.latest_odom.1;
@@ -206,7 +191,7 @@ impl Robot for Ros2Robot {
             let topic = self.node.resolve(&self.config.odom);
             return Err(self.lost(format!("no odometry on {topic} for {:.2} s", age.as_secs_f64())));
         }
-        if let Some(scan) = take_latest(&mut self.scan)? {
+        if let Some(scan) = self.scan.take_latest()? {
             self.latest_scan = Some((scan, now));
         }
         match &self.latest_scan {

@@ -305,7 +305,7 @@ fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig,
     let stem = csv.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
     let dir = csv.with_file_name(format!("{stem}-rosbag2"));
     let epoch_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-    let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images }, epoch_s)
+    let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images, tree: true }, epoch_s)
         .map_err(|e| e.to_string())
         .and_then(|bag| BackgroundSink::spawn("rosbag2 log", bag, LOG_QUEUE).map_err(|e| e.to_string()));
     match opened {
@@ -327,7 +327,7 @@ fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -
         return Ok(());
     }
     let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
-    let shown = Shown { robot: !ros2_robot, images: config.log_images };
+    let shown = Shown { robot: !ros2_robot, images: config.log_images, tree: true };
     let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace)
         .map_err(|e| DriveError::Ros2(e.to_string()))?;
     controller.add_sink(Box::new(publisher));

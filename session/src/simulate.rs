@@ -1,0 +1,115 @@
+//! `ubf simulate SCENARIO --ros2`: the simulator served as a ROS 2 robot,
+//! for another stack (Nav2, a teleop node) to drive. It takes
+//! `geometry_msgs/msg/Twist` on `/cmd_vel` and publishes what a robot's
+//! driver does (`/odom`, `/tf`, `/scan`, camera images), paced at real
+//! time.
+//!
+//! It is the session loop like every other command: the simulated robot,
+//! a paced clock, a ROS 2 publisher as its sink, and for a tree one
+//! behaviour, [`FollowCmdVel`], that obeys the latest `/cmd_vel`.
+
+use crate::ros2_publish::background_publisher;
+use crate::ros2_view::Shown;
+use crate::scenario::Scenario;
+use std::ops::ControlFlow;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+use ubf_core::{
+    Action, Behavior, Controller, Ends, PacedClock, Pose2, RobotError, Session, SessionEnd, State, TracingSink,
+};
+use ubf_robots::ros2::msg::Twist;
+use ubf_robots::ros2::{domain_from_env, Node, Qos, Subscription};
+use ubf_robots::sim::SimRobot;
+
+/// A command older than this is no command: the robot stops, as ROS 2
+/// base drivers do when their controller goes quiet.
+const COMMAND_TIMEOUT: Duration = Duration::from_millis(500);
+
+/// A behaviour that obeys the latest `/cmd_vel`: its linear x and angular z
+/// as the robot's velocity and turn rate, or STOP once no command has come
+/// for half a second.
+pub struct FollowCmdVel {
+    cmd_vel: Subscription<Twist>,
+    latest: Option<(Twist, Instant)>,
+    /// Last, so that it is dropped after its reader.
+    _node: Node,
+}
+
+impl FollowCmdVel {
+    /// Subscribes `/cmd_vel` in `domain`.
+    pub fn subscribe(domain: u16) -> Result<FollowCmdVel, RobotError> {
+        let node = Node::join(domain, "")?;
+        let cmd_vel = node.reader::<Twist>("cmd_vel", Qos::Reliable)?;
+        Ok(FollowCmdVel { cmd_vel, latest: None, _node: node })
+    }
+}
+
+impl Behavior for FollowCmdVel {
+    fn gen_action(&mut self, _: &State) -> Action {
+        match self.cmd_vel.take_latest() {
+            Ok(Some(twist)) => self.latest = Some((twist, Instant::now())),
+            Ok(None) => {}
+            Err(e) => tracing::warn!("{e}"),
+        }
+        match self.latest {
+            Some((twist, at)) if at.elapsed() <= COMMAND_TIMEOUT => {
+                Action::with_vote(1.0).velocity(twist.linear.x).rot_velocity(twist.angular.z)
+            }
+            _ => Action::stop(1.0),
+        }
+    }
+
+    fn name(&self) -> &str {
+        "FollowCmdVel"
+    }
+}
+
+/// How a served simulation ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Served {
+    /// Ticks simulated.
+    pub ticks: u64,
+    /// Where the robot really ended.
+    pub true_pose: Pose2,
+}
+
+/// Why a simulation could not be served.
+#[derive(Debug, thiserror::Error)]
+pub enum SimulateError {
+    /// ROS 2 could not be joined.
+    #[error("ROS 2: {0}")]
+    Ros2(RobotError),
+    /// The simulation failed.
+    #[error("{0}")]
+    Failed(String),
+}
+
+/// Serves `scenario` (its world, robot and start; not its tree) with
+/// `seed` as a ROS 2 robot, `speed` times real time, until `stop` is set or
+/// `max_time_s` of simulated time has passed.
+pub fn serve(
+    scenario: &Scenario,
+    seed: u64,
+    speed: f64,
+    max_time_s: Option<f64>,
+    stop: &AtomicBool,
+) -> Result<Served, SimulateError> {
+    let domain = domain_from_env().map_err(SimulateError::Ros2)?;
+    let follow = FollowCmdVel::subscribe(domain).map_err(SimulateError::Ros2)?;
+    let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
+    let mut controller = Controller::new(sim, Box::new(follow), Box::new(PacedClock::new(scenario.period_s, speed)));
+    controller.add_sink(Box::new(TracingSink));
+    let publisher = background_publisher(Shown { robot: true, images: true, tree: false }, Some(domain), "")
+        .map_err(SimulateError::Ros2)?;
+    controller.add_sink(Box::new(publisher));
+    let mut session = Session::new(controller, Ends { max_time_s, ..Ends::default() });
+    let ended = session.run(stop, |_| ControlFlow::Continue(()));
+    let (controller, shutdown) = session.finish();
+    match ended {
+        SessionEnd::Failed(e) => return Err(SimulateError::Failed(e.to_string())),
+        SessionEnd::Panicked(why) => return Err(SimulateError::Failed(format!("internal error: {why}"))),
+        _ => shutdown.map_err(|e| SimulateError::Failed(e.to_string()))?,
+    }
+    let true_pose = controller.robot().true_pose();
+    Ok(Served { ticks: controller.last_record().tick + 1, true_pose })
+}
