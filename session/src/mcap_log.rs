@@ -379,7 +379,7 @@ impl McapLog {
             time,
             velocity: record.command.velocity(),
             rot_velocity: record.command.rot_velocity(),
-            winner: layout.winning_leaf(record).map(|i| layout.nodes[i].path.clone()),
+            winner: layout.winning_path(record).map(str::to_owned),
             nodes: layout
                 .nodes
                 .iter()

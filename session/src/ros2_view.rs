@@ -189,7 +189,7 @@ impl Ros2View {
         Tick {
             stamp: Time::from_seconds(stamp),
             tick: record.tick,
-            winner: layout.winning_leaf(record).map(|i| layout.nodes[i].path.clone()).unwrap_or_default(),
+            winner: layout.winning_path(record).unwrap_or_default().to_owned(),
             linear: record.command.velocity(),
             angular: record.command.rot_velocity().unwrap_or(0.0),
             stop: record.command == ubf_core::Command::Stop,

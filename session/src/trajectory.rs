@@ -84,7 +84,7 @@ impl TrajectoryWriter {
         // A heading command has no rate yet; the robot picks one.
         let (v, w) = (record.command.velocity(), record.command.rot_velocity().unwrap_or(f64::NAN));
         let layout = &self.layout;
-        let winner = layout.winning_leaf(record).map_or("", |i| layout.nodes[i].path.as_str());
+        let winner = layout.winning_path(record).unwrap_or("");
         write!(self.out, "{:.3},", record.time())?;
         if self.columns.truth {
             match &record.truth {

@@ -50,6 +50,12 @@ impl TreeLayout {
         }
     }
 
+    /// The path of [`TreeLayout::winning_leaf`] (`root/Avoid`), if there is
+    /// one.
+    pub fn winning_path(&self, record: &TickRecord) -> Option<&str> {
+        self.winning_leaf(record).map(|i| self.nodes[i].path.as_str())
+    }
+
     /// The leaf reached by following the winners down from the root, if the
     /// root had a winner at every level down to a leaf or a silent composite.
     pub fn winning_leaf(&self, record: &TickRecord) -> Option<usize> {

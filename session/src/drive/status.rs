@@ -40,7 +40,7 @@ impl StatusLine {
     fn line(&self, record: &TickRecord) -> String {
         let state = &record.state;
         let layout = &self.layout;
-        let winner = layout.winning_leaf(record).map_or("-", |i| layout.nodes[i].path.as_str());
+        let winner = layout.winning_path(record).unwrap_or("-");
         let hold = match record.hold {
             Some(ubf_core::Hold::StaleData) => "stale data",
             Some(ubf_core::Hold::Contact) => "contact",
