@@ -57,11 +57,6 @@ impl Time {
         let sec = seconds.floor();
         Time { sec: sec.min(i32::MAX as f64) as i32, nanosec: (((seconds - sec) * 1e9) as u32).min(999_999_999) }
     }
-
-    /// The time in seconds.
-    pub fn seconds(&self) -> f64 {
-        self.sec as f64 + self.nanosec as f64 * 1e-9
-    }
 }
 
 /// `std_msgs/msg/Header`.
