@@ -440,6 +440,48 @@ fn sigterm_ends_a_flooded_and_suspended_drive_promptly() {
     assert!(std::fs::read_to_string(dir.path().join("log.csv")).unwrap().lines().count() > 10);
 }
 
+/// The fastest the log's odometry moved over any half second, m/s.
+fn fastest_odometry_speed(log: &str) -> f64 {
+    let mut lines = log.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|&h| h == name).unwrap();
+    let (t, x, y) = (column("time_s"), column("odom_x"), column("odom_y"));
+    let rows: Vec<(f64, f64, f64)> = lines
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            Some((f.get(t)?.parse().ok()?, f.get(x)?.parse().ok()?, f.get(y)?.parse().ok()?))
+        })
+        .collect();
+    let mut fastest = 0.0_f64;
+    for (i, a) in rows.iter().enumerate() {
+        if let Some(b) = rows[i..].iter().find(|b| b.0 - a.0 >= 0.5) {
+            fastest = fastest.max((b.1 - a.1).hypot(b.2 - a.2) / (b.0 - a.0));
+        }
+    }
+    fastest
+}
+
+#[test]
+fn sigterm_at_speed_brakes_before_the_motors_go_off() {
+    // At 1 m/s the emulated Powerbot needs 2 s to brake at its 0.5 m/s²:
+    // the motors go off only once it has.
+    let (mut emulator, address, mut out) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let fast = "Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: 1.0))])";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 40.0, y: 0.0),", fast)).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    std::thread::sleep(Duration::from_secs(4));
+    Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap();
+    wait_for(&mut drive, 10.0).expect("ubf drive exits on SIGTERM");
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    let fastest = fastest_odometry_speed(&std::fs::read_to_string(dir.path().join("log.csv")).unwrap());
+    assert!(fastest > 0.9, "the robot was at speed when told to stop: {fastest} m/s");
+    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
+    assert!(speed.abs() <= 20.0, "motors switched off at {speed} mm/s: {line}");
+}
+
 #[test]
 fn a_second_interrupt_forces_the_exit_after_stop() {
     let (mut emulator, address, mut out) = emulator();

@@ -15,11 +15,25 @@ use ubf_robots::arcos::client::{ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::link;
 use ubf_robots::model::RobotModel;
 
-/// A session with the simulator `UBF_AMRISIM` names.
+/// A session with the simulator `UBF_AMRISIM` names, retried for half a
+/// minute: AMRISim takes a while to load its model and start listening, and
+/// a test started beside it should wait rather than fail.
 fn connect() -> ArcosRobot {
     let address = std::env::var("UBF_AMRISIM").expect("set UBF_AMRISIM=tcp://host:8101 to a running AMRISim");
-    let link = link::open(&address, 9600).expect("AMRISim answers");
-    ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).expect("a Powerbot session")
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    loop {
+        let session = link::open(&address, 9600)
+            .map_err(ubf_core::RobotError::from)
+            .and_then(|link| ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()));
+        match session {
+            Ok(robot) => return robot,
+            Err(e) if std::time::Instant::now() < deadline => {
+                eprintln!("AMRISim at {address} not ready ({e}); retrying");
+                std::thread::sleep(std::time::Duration::from_millis(500));
+            }
+            Err(e) => panic!("no Powerbot session with AMRISim at {address} in 30 s: {e}"),
+        }
+    }
 }
 
 #[test]

@@ -19,6 +19,18 @@ const ATTEMPTS: usize = 5;
 /// after about 2 s).
 const PULSE_AFTER: Duration = Duration::from_millis(500);
 
+/// The speeds below which a stopping robot counts as stopped, so its
+/// motors may be switched off: mm/s and °/s.
+const STOPPED_MM_S: f64 = 20.0;
+const STOPPED_DEG_S: f64 = 3.0;
+/// Decelerations assumed when the controller reports none: slower than any
+/// Pioneer-family default, so the wait errs long. mm/s² and °/s².
+const CAUTIOUS_DECEL_MM_S2: f64 = 200.0;
+const CAUTIOUS_ROT_DECEL_DEG_S2: f64 = 50.0;
+/// Longest braking time allowed for, s: a robot still moving after this is
+/// not braking and its motors go off anyway.
+const MOST_BRAKING_S: f64 = 10.0;
+
 /// How long to wait for the CONFIG reply.
 const CONFIG_TIMEOUT: Duration = Duration::from_secs(1);
 
@@ -51,14 +63,15 @@ pub struct ConnectOptions {
     /// stands for: the origin for a first session, the last known pose when
     /// a lost session is reopened, so that goals keep their meaning.
     pub origin: Pose2,
-    /// Longest wait, after STOP, for the robot to report standstill before
-    /// its motors are switched off.
+    /// Margin, after STOP, beyond the time the robot needs to brake from
+    /// its speed at the controller's deceleration, to wait for it to report
+    /// standstill before its motors are switched off.
     pub standstill_wait: Duration,
 }
 
 impl Default for ConnectOptions {
     /// Motors on, the controller's limits and accelerations, the world
-    /// frame at the robot, a 1 s standstill wait.
+    /// frame at the robot, a 1 s margin on the braking time.
     fn default() -> Self {
         ConnectOptions {
             enable_motors: true,
@@ -129,6 +142,8 @@ pub struct ArcosRobot {
     /// The rotational speed limit last sent (SETRV), °/s.
     rot_limit_sent: u16,
     standstill_wait: Duration,
+    /// The decelerations this session set, if any: mm/s² and °/s².
+    decelerations_set: Option<(f64, f64)>,
     closed: bool,
 }
 
@@ -276,10 +291,12 @@ impl ArcosRobot {
         send(link.as_mut(), ClientCommand::SetV((limits.max_velocity * 1000.0).round() as u16))?;
         let rot_limit_sent = limits.max_rot_velocity.to_degrees().round() as u16;
         send(link.as_mut(), ClientCommand::SetRv(rot_limit_sent))?;
+        let mut decelerations_set = None;
         if let Some(a) = options.accelerations {
             let top = |top: Option<i16>| top.filter(|&t| t > 0).map_or(f64::from(i16::MAX), f64::from);
             let mm_s2 = (a.translation * 1000.0).min(top(config.as_ref().map(|c| c.trans_acc_top))).round() as i16;
             let deg_s2 = a.rotation_deg.min(top(config.as_ref().map(|c| c.rot_acc_top))).round() as i16;
+            decelerations_set = Some((f64::from(mm_s2), f64::from(deg_s2)));
             for command in [
                 ClientCommand::SetA(mm_s2),
                 ClientCommand::SetA(-mm_s2),
@@ -324,6 +341,7 @@ impl ArcosRobot {
             origin: options.origin,
             rot_limit_sent,
             standstill_wait: options.standstill_wait,
+            decelerations_set,
             closed: false,
         })
     }
@@ -412,12 +430,20 @@ impl ArcosRobot {
         Ok(())
     }
 
-    /// Waits, up to the configured bound, until a fresh SIP says the robot
-    /// stands still: STOP decelerates under power, while motors switched off
-    /// at speed let a 100 kg robot coast.
+    /// Waits until a fresh SIP says the robot is down to a walking pace
+    /// ([`STOPPED_MM_S`]), or until the speed it had at STOP could have
+    /// been braked away at the controller's deceleration plus the
+    /// configured margin: STOP decelerates under power, while motors
+    /// switched off at speed let a 100 kg robot coast.
     fn wait_for_standstill(&self) {
         let asked = Instant::now();
-        while asked.elapsed() < self.standstill_wait {
+        let bound = {
+            let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let (v, w) = latest.sip.as_ref().map_or((0.0, 0.0), |sip| self.speeds(sip));
+            let (decel, rot_decel) = self.decelerations();
+            self.standstill_wait + braking_time(v, decel).max(braking_time(w, rot_decel))
+        };
+        while asked.elapsed() < bound {
             std::thread::sleep(Duration::from_millis(10));
             let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             if latest.ended {
@@ -426,12 +452,41 @@ impl ArcosRobot {
             let fresh = latest.arrived.is_some_and(|t| t > asked);
             if let (true, Some(sip)) = (fresh, &latest.sip) {
                 let (v, w) = self.speeds(sip);
-                if v.abs() < 5.0 && w.abs() < 1.0 {
+                if v.abs() <= STOPPED_MM_S && w.abs() <= STOPPED_DEG_S {
                     return;
                 }
             }
         }
+        let speed = self
+            .latest
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .sip
+            .as_ref()
+            .map(|s| self.speeds(s).0);
+        tracing::warn!(
+            "{}: still at {:.0} mm/s {:.1} s after STOP; switching the motors off",
+            self.identity.name,
+            speed.unwrap_or(f64::NAN),
+            bound.as_secs_f64()
+        );
     }
+
+    /// The decelerations STOP brakes at, mm/s² and °/s²: those the session
+    /// set, else those the CONFIG reply reports, else a cautious guess.
+    fn decelerations(&self) -> (f64, f64) {
+        let set = self.decelerations_set;
+        let reported =
+            self.config.as_ref().map(|c| (f64::from(c.settings.trans_decel), f64::from(c.settings.rot_decel)));
+        let (v, w) = set.or(reported).unwrap_or((0.0, 0.0));
+        let known = |value: f64, guess: f64| if value > 0.0 { value } else { guess };
+        (known(v, CAUTIOUS_DECEL_MM_S2), known(w, CAUTIOUS_ROT_DECEL_DEG_S2))
+    }
+}
+
+/// Seconds to brake `speed` away at `deceleration` (same units per second).
+fn braking_time(speed: f64, deceleration: f64) -> Duration {
+    Duration::from_secs_f64((speed.abs() / deceleration).min(MOST_BRAKING_S))
 }
 
 impl Robot for ArcosRobot {

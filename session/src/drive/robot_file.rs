@@ -184,8 +184,9 @@ pub struct DriveConfig {
     /// without it.
     #[serde(default)]
     pub on_behavior_panic: OnBehaviorPanic,
-    /// Longest wait on the way out for the robot to report standstill after
-    /// STOP, before its motors are switched off, s.
+    /// Margin on the way out, beyond the time the robot needs to brake from
+    /// its speed at STOP, to wait for it to report standstill before its
+    /// motors are switched off, s.
     #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "positive")]
     pub stop_wait_s: f64,
     /// Stop by itself after this long, s (unset: run until stopped).
