@@ -21,6 +21,11 @@
 //!
 //! Whatever the mark, every `ubf` command line in a shell block must be one
 //! that `ubf` accepts.
+//!
+//! The pages use the ports a user would (`127.0.0.1:8101` for ARCOS); the
+//! suite must not, since another program may hold them. In the scratch copy
+//! that address stands for a port free when the copy is made, in every
+//! block and in the robot files of `robots/config/`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -226,27 +231,69 @@ fn every_ron_block_loads() {
     assert!(loaded >= 2, "only {loaded} files found");
 }
 
+/// The address the pages serve ARCOS on, replaced in the scratch copy.
+const DOCS_ARCOS_ADDRESS: &str = "127.0.0.1:8101";
+
 /// A scratch copy of the repository: its top-level entries linked, `docs/`
-/// copied (a command may redraw a figure there), nothing else written.
-fn scratch() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    for entry in std::fs::read_dir(root()).unwrap() {
+/// copied (a command may redraw a figure there), `robots/config/` copied
+/// with [`DOCS_ARCOS_ADDRESS`] replaced by a free port's, nothing else
+/// written.
+struct Scratch {
+    dir: tempfile::TempDir,
+    /// What stands for [`DOCS_ARCOS_ADDRESS`].
+    arcos_address: String,
+}
+
+impl Scratch {
+    fn path(&self) -> &Path {
+        self.dir.path()
+    }
+
+    /// `body` with the pages' ports replaced by the scratch copy's.
+    fn localize(&self, body: &str) -> String {
+        body.replace(DOCS_ARCOS_ADDRESS, &self.arcos_address)
+    }
+}
+
+/// A loopback address with a port nobody held a moment ago.
+fn free_address() -> String {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    listener.local_addr().unwrap().to_string()
+}
+
+/// Links every entry of `from` into `to` except `skip`.
+fn link_entries(from: &Path, to: &Path, skip: &[&str]) {
+    for entry in std::fs::read_dir(from).unwrap() {
         let path = entry.unwrap().path();
         let name = path.file_name().unwrap();
-        if [".git", "out", "docs"].iter().any(|skip| name == *skip) {
+        if skip.iter().any(|skip| name == *skip) {
             continue;
         }
-        std::os::unix::fs::symlink(&path, dir.path().join(name)).unwrap();
+        std::os::unix::fs::symlink(&path, to.join(name)).unwrap();
     }
-    std::fs::create_dir(dir.path().join("docs")).unwrap();
+}
+
+fn scratch() -> Scratch {
+    let scratch = Scratch { dir: tempfile::tempdir().unwrap(), arcos_address: free_address() };
+    let dir = scratch.path();
+    link_entries(&root(), dir, &[".git", "out", "docs", "robots"]);
+    std::fs::create_dir(dir.join("docs")).unwrap();
     for entry in std::fs::read_dir(root().join("docs")).unwrap() {
         let path = entry.unwrap().path();
-        std::fs::copy(&path, dir.path().join("docs").join(path.file_name().unwrap())).unwrap();
+        std::fs::copy(&path, dir.join("docs").join(path.file_name().unwrap())).unwrap();
     }
-    let bin = dir.path().join(".bin");
+    std::fs::create_dir(dir.join("robots")).unwrap();
+    link_entries(&root().join("robots"), &dir.join("robots"), &["config"]);
+    std::fs::create_dir(dir.join("robots/config")).unwrap();
+    for entry in std::fs::read_dir(root().join("robots/config")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(dir.join("robots/config").join(path.file_name().unwrap()), scratch.localize(&text)).unwrap();
+    }
+    let bin = dir.join(".bin");
     std::fs::create_dir(&bin).unwrap();
     std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_ubf"), bin.join("ubf")).unwrap();
-    dir
+    scratch
 }
 
 /// Runs a block's commands with `sh -e` in `dir`, stderr into stdout, and
@@ -303,7 +350,7 @@ fn run_marked(mark: &str, limit: Duration) {
         if block.language() != "sh" || block.mark() != mark {
             continue;
         }
-        let (status, output) = run_block(dir.path(), &block.body, limit);
+        let (status, output) = run_block(dir.path(), &dir.localize(&block.body), limit);
         assert_eq!(status, block.expected_status(), "{}: exit status {status}; output:\n{output}", block.place);
         if let Some(expected) = blocks.get(i + 1).filter(|b| b.info == "text output") {
             assert_eq!(

@@ -50,6 +50,13 @@ fn emulator_with(args: &[&str]) -> (Killed, String, BufReader<std::process::Chil
     (Killed(child), address, out)
 }
 
+/// A loopback address nothing listens on: a port the system just handed
+/// out and took back (a fixed one may be held by another program).
+fn unused_address() -> String {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    listener.local_addr().unwrap().to_string()
+}
+
 /// Waits up to `seconds` for `child` to exit.
 fn wait_for(child: &mut Child, seconds: f64) -> Option<std::process::ExitStatus> {
     let deadline = std::time::Instant::now() + Duration::from_secs_f64(seconds);
@@ -110,15 +117,16 @@ fn drives_to_the_goal_and_stops_safely_on_sigterm() {
 fn bad_configurations_and_unreachable_robots_are_reported() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");
-    std::fs::write(&file, config("tcp://127.0.0.1:9", &dir.path().join("l.csv"), "speed: 2,")).unwrap();
+    let nobody = format!("tcp://{}", unused_address());
+    std::fs::write(&file, config(&nobody, &dir.path().join("l.csv"), "speed: 2,")).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("speed"));
-    // Nothing listens on port 9: with on_link_loss Exit, a clean error.
-    std::fs::write(&file, config("tcp://127.0.0.1:9", &dir.path().join("l.csv"), "on_link_loss: Exit,")).unwrap();
+    // Nothing listens there: with on_link_loss Exit, a clean error.
+    std::fs::write(&file, config(&nobody, &dir.path().join("l.csv"), "on_link_loss: Exit,")).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("127.0.0.1:9"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(&nobody[6..]));
 }
 
 #[cfg(unix)]
