@@ -276,7 +276,7 @@ fn link_entries(from: &Path, to: &Path, skip: &[&str]) {
 fn scratch() -> Scratch {
     let scratch = Scratch { dir: tempfile::tempdir().unwrap(), arcos_address: free_address() };
     let dir = scratch.path();
-    link_entries(&root(), dir, &[".git", "out", "docs", "robots"]);
+    link_entries(root(), dir, &[".git", "out", "docs", "robots"]);
     std::fs::create_dir(dir.join("docs")).unwrap();
     for entry in std::fs::read_dir(root().join("docs")).unwrap() {
         let path = entry.unwrap().path();

@@ -220,7 +220,7 @@ fn sigterm_leaves_the_robot_with_a_zero_twist() {
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 20.0, "");
     let Some(session) = drive_beside_robot(dir.path(), "", &file, Some(3.0)) else { return };
-    assert!(session.ubf.status.success(), "{}", stderr(&session));
+    assert_eq!(session.ubf.status.code(), Some(130), "{}", stderr(&session));
     assert!(session.twists.iter().any(|t| !is_zero(&t["twist"])), "it drove before the signal");
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
 }
@@ -346,7 +346,7 @@ fn a_cyclone_teleop_drives_the_simulator_served_on_ros2() {
     install_cyclone();
     let script = r#""$UBF" simulate "$ROOT/scenarios/goto-open-floor.ron" --ros2 --max-time 60 2>/dev/null & sim=$!
 python3 "$ROOT/scripts/ros2/teleop.py" --linear 0.3 --duration 3
-code=$?; kill -TERM $sim; wait $sim || code=9; exit $code"#;
+code=$?; kill -TERM $sim; wait $sim; [ $? -eq 130 ] || code=9; exit $code"#;
     let Some(out) = in_namespace(script, &[]) else { return };
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let heard: Value = serde_json::from_slice(&out.stdout).unwrap();

@@ -27,7 +27,7 @@ pub(super) fn drive(
     let stop = crate::drive::install_stop_flag();
     if dry_run {
         crate::drive::dry_run(&config, &model, &stop).map_err(CliError::failed)?;
-        return Ok(Exit::Success);
+        return Ok(if stop.load(Ordering::SeqCst) { Exit::Interrupted } else { Exit::Success });
     }
     use std::io::IsTerminal;
     let status = match (std::io::stderr().is_terminal(), status) {
@@ -45,6 +45,10 @@ pub(super) fn drive(
         }
     }
     match outcome.end.map_err(CliError::failed)? {
+        DriveEnd::Interrupted => {
+            eprintln!("interrupted; stopped");
+            Ok(Exit::Interrupted)
+        }
         DriveEnd::Stopped => {
             eprintln!("stopped");
             Ok(Exit::Success)
@@ -89,8 +93,9 @@ pub(super) fn emulate_ptu(listen: &str, pty: bool, config: &PtuEmulatorConfig) -
 }
 
 /// Serves clients one after another with `client` (which answers how many
-/// commands it took and a line to print) until Ctrl-C or SIGTERM: on a
-/// TCP address, or on a new pseudo-terminal whose path is printed.
+/// commands it took and a line to print) until Ctrl-C or SIGTERM (exit
+/// code 130, as for every command they end): on a TCP address, or on a new
+/// pseudo-terminal whose path is printed.
 fn serve_clients(
     what: &str,
     listen: &str,
@@ -119,7 +124,7 @@ fn serve_clients(
                 }
             }
         }
-        return Ok(Exit::Success);
+        return Ok(Exit::Interrupted);
     }
     let listener =
         std::net::TcpListener::bind(listen).map_err(|e| CliError::bad_input(format!("listening on {listen}: {e}")))?;
@@ -148,7 +153,7 @@ fn serve_clients(
             Err(e) => eprintln!("client error: {e}"),
         }
     }
-    Ok(Exit::Success)
+    Ok(Exit::Interrupted)
 }
 
 /// A new pseudo-terminal's master end, and the path a client opens.

@@ -96,7 +96,7 @@ pub(super) fn simulate(
         pose.y,
         pose.theta.to_degrees()
     );
-    Ok(Exit::Success)
+    Ok(if stop.load(std::sync::atomic::Ordering::SeqCst) { Exit::Interrupted } else { Exit::Success })
 }
 
 /// `--speed`: a finite factor from 0.01 to 1000.

@@ -124,7 +124,9 @@ fn arm_second_interrupt(emergency: Option<EmergencyStop>) {
 /// How a drive ended.
 #[derive(Debug, PartialEq, Eq)]
 pub enum DriveEnd {
-    /// Ctrl-C, SIGTERM or the time limit.
+    /// Ctrl-C or SIGTERM.
+    Interrupted,
+    /// The time limit, or a tree that ended by itself.
     Stopped,
     /// At the goal, with `until_goal`.
     GoalReached,
@@ -186,7 +188,10 @@ fn drive_sessions(
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
     let mut pose = Pose2::default();
     loop {
-        if stop.load(Ordering::SeqCst) || out_of_time() {
+        if stop.load(Ordering::SeqCst) {
+            return Ok(DriveEnd::Interrupted);
+        }
+        if out_of_time() {
             return Ok(DriveEnd::Stopped);
         }
         let camera = config.open_camera()?;
@@ -243,7 +248,8 @@ fn drive_sessions(
         arm_second_interrupt(None);
         attached?;
         match ended {
-            SessionEnd::Interrupted | SessionEnd::TimeLimit | SessionEnd::Done => return Ok(DriveEnd::Stopped),
+            SessionEnd::Interrupted => return Ok(DriveEnd::Interrupted),
+            SessionEnd::TimeLimit | SessionEnd::Done => return Ok(DriveEnd::Stopped),
             SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
             SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
             SessionEnd::Panicked(why) => return Err(DriveError::Panic(why)),
