@@ -666,3 +666,106 @@ fn a_camera_fault_stops_the_drive_and_never_reconnects_the_motors() {
     assert!(stderr.contains("camera:"), "{stderr}");
     assert_eq!(stderr.matches("connected to").count(), 1, "{stderr}");
 }
+
+/// `ubf drive FILE` on the emulator, with its robot file's `extra` fields,
+/// run by `sh -c` after `prelude` (a ulimit, say): its output, and how
+/// many times it connected.
+fn drive_through_shell(
+    dir: &std::path::Path,
+    address: &str,
+    extra: &str,
+    prelude: &str,
+) -> (std::process::Output, usize) {
+    let file = dir.join("robot.ron");
+    std::fs::write(&file, config(address, &dir.join("l.csv"), extra)).unwrap();
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!("{prelude} exec \"$0\" drive \"$1\""))
+        .arg(env!("CARGO_BIN_EXE_ubf"))
+        .arg(&file)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let connected = String::from_utf8_lossy(&out.stderr).matches("connected to").count();
+    (out, connected)
+}
+
+#[test]
+fn a_camera_thread_that_dies_stops_the_drive() {
+    // A pair listed at 1e30 s could never be waited for: the camera's
+    // thread used to panic on it, unnoticed, and the drive ran on blind
+    // and exited 0.
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 3);
+    let index = dir.path().join("frames/frames.csv");
+    let text = std::fs::read_to_string(&index).unwrap();
+    let last = text.lines().last().unwrap();
+    let (_, names) = last.split_once(',').unwrap();
+    std::fs::write(&index, text.replace(last, &format!("1e30,{names}"))).unwrap();
+    let (mut emulator, address, _) = emulator();
+    let extra = r#"max_time_s: 8.0, camera: (source: Directory("frames"), stereo: (focal_px: 554.3)),"#;
+    let (out, connected) = drive_through_shell(dir.path(), &address, extra, "");
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("camera:") && stderr.contains("1000000000000000000000000000000"), "{stderr}");
+    assert_eq!(connected, 1, "{stderr}");
+}
+
+#[test]
+fn a_log_that_cannot_be_written_stops_the_drive() {
+    // Files may grow to 24 kB (the disk is full, in effect): the logs
+    // fill that within seconds, and the drive must not run on unrecorded.
+    let dir = tempfile::tempdir().unwrap();
+    let (mut emulator, address, mut out) = emulator();
+    let (drive, connected) =
+        drive_through_shell(dir.path(), &address, "max_time_s: 60.0,", "trap '' XFSZ; ulimit -f 48;");
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("log"), "the failed log is named: {stderr}");
+    assert_eq!(connected, 1, "{stderr}");
+    assert!(line.contains("closed true"), "the robot was stopped and closed: {line}");
+}
+
+#[test]
+fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 2);
+    let (mut emulator, address, _) = emulator();
+    let (mut head, head_address, _) = {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
+            .args(["emulate-ptu", "--listen", "127.0.0.1:0"])
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut out = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        out.read_line(&mut line).unwrap();
+        let address = line.trim().rsplit(' ').next().unwrap().to_owned();
+        (Killed(child), address, out)
+    };
+    let extra = format!(
+        r#"max_time_s: 20.0,
+            camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{head_address}")),"#
+    );
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), &extra)).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(3));
+    head.kill().unwrap();
+    let status = wait_for(&mut drive, 10.0).expect("the drive ends once the head is gone");
+    emulator.kill().unwrap();
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut drive.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("pan-tilt unit on"), "{stderr}");
+    // A head's fault is not the robot's lost link: nothing reconnects.
+    assert!(!stderr.contains("link lost"), "{stderr}");
+    assert_eq!(stderr.matches("connected to").count(), 1, "{stderr}");
+}

@@ -61,34 +61,17 @@ impl<R: Robot> CameraRobot<R> {
         let thread = std::thread::Builder::new()
             .name("stereo-camera".into())
             .spawn(move || {
-                let started = Instant::now();
-                let mut first_time = None;
-                while !flag.load(Ordering::Relaxed) {
-                    let pair = match source.next_pair() {
-                        Ok(Some(pair)) => pair,
-                        Ok(None) => return,
-                        Err(e) => {
-                            let _ = sender.send(Err(e.to_string()));
-                            return;
-                        }
-                    };
-                    if paced {
-                        let offset = pair.time - *first_time.get_or_insert(pair.time);
-                        let due = started + Duration::from_secs_f64(offset.max(0.0));
-                        // In short naps, so that a stop is not kept waiting.
-                        while !flag.load(Ordering::Relaxed) && Instant::now() < due {
-                            std::thread::sleep(
-                                due.saturating_duration_since(Instant::now()).min(Duration::from_millis(50)),
-                            );
-                        }
-                    }
-                    let taken = Instant::now();
-                    let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
-                    let frame = found.map(|landmarks| (taken, landmarks, Arc::new(pair.into_images())));
-                    match sender.try_send(frame) {
-                        Ok(()) | Err(crossbeam_channel::TrySendError::Full(_)) => {}
-                        Err(crossbeam_channel::TrySendError::Disconnected(_)) => return,
-                    }
+                // A panic here would leave the robot driving on a camera
+                // that no longer delivers: it becomes a camera fault.
+                let run =
+                    std::panic::AssertUnwindSafe(|| take_pairs(source.as_mut(), &pipeline, &sender, &flag, paced));
+                if let Err(panic) = std::panic::catch_unwind(run) {
+                    let why = panic
+                        .downcast_ref::<&str>()
+                        .map(|s| (*s).to_owned())
+                        .or_else(|| panic.downcast_ref::<String>().cloned())
+                        .unwrap_or_else(|| "no message".into());
+                    let _ = sender.send(Err(format!("the camera's thread panicked: {why}")));
                 }
             })
             .map_err(RobotError::Io)?;
@@ -113,6 +96,49 @@ impl<R: Robot> CameraRobot<R> {
     /// Frames delivered so far.
     pub fn frames(&self) -> u64 {
         self.frames
+    }
+}
+
+/// The camera thread's work: pairs from `source` through `pipeline` into
+/// `frames` until `stop`, the source ends, or it fails (the failure sent
+/// on). With `paced`, each pair waits for its time from the first.
+fn take_pairs(
+    source: &mut (dyn CameraSource + Send),
+    pipeline: &StereoPipeline,
+    frames: &crossbeam_channel::Sender<Result<Frame, String>>,
+    stop: &AtomicBool,
+    paced: bool,
+) {
+    let started = Instant::now();
+    let mut first_time = None;
+    while !stop.load(Ordering::Relaxed) {
+        let pair = match source.next_pair() {
+            Ok(Some(pair)) => pair,
+            Ok(None) => return,
+            Err(e) => {
+                let _ = frames.send(Err(e.to_string()));
+                return;
+            }
+        };
+        if paced {
+            let offset = pair.time - *first_time.get_or_insert(pair.time);
+            let Some(due) = Duration::try_from_secs_f64(offset.max(0.0)).ok().and_then(|d| started.checked_add(d))
+            else {
+                let _ = frames.send(Err(format!("a pair's time, {} s, is beyond any clock", pair.time)));
+                return;
+            };
+            // In short naps, so that a stop is not kept waiting.
+            while !stop.load(Ordering::Relaxed) && Instant::now() < due {
+                std::thread::sleep(due.saturating_duration_since(Instant::now()).min(Duration::from_millis(50)));
+            }
+        }
+        let taken = Instant::now();
+        let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
+        let frame = found.map(|landmarks| (taken, landmarks, Arc::new(pair.into_images())));
+        match frames.try_send(frame) {
+            Ok(()) | Err(crossbeam_channel::TrySendError::Full(_)) => {}
+            Err(crossbeam_channel::TrySendError::Disconnected(_)) => return,
+        }
     }
 }
 

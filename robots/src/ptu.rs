@@ -213,9 +213,9 @@ impl Ptu {
     /// then keeps reading its encoders until dropped.
     pub fn connect(config: PtuConfig) -> Result<Ptu, RobotError> {
         let link = link::open(&config.connection, config.baud)
-            .map_err(|e| RobotError::Disconnected(format!("pan-tilt unit on {}: {e}", config.connection)))?;
+            .map_err(|e| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", config.connection)))?;
         let mut talk = Conversation { link, pending: Vec::new() };
-        let failed = |e: String| RobotError::Protocol(format!("pan-tilt unit on {}: {e}", config.connection));
+        let failed = |e: String| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", config.connection));
         let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
         let first = Self::read(&mut talk, &axes, &config).map_err(failed)?;
         let shared = Arc::new(Mutex::new(Shared { reading: Some((Instant::now(), first)), ..Shared::default() }));
@@ -224,7 +224,7 @@ impl Ptu {
         let thread = std::thread::Builder::new()
             .name("pan-tilt".into())
             .spawn(move || Self::run(talk, axes, settings, &for_thread, &flag))
-            .map_err(RobotError::Io)?;
+            .map_err(|e| RobotError::PanTilt(format!("starting the pan-tilt thread: {e}")))?;
         Ok(Ptu { config, axes, shared, stop, thread: Some(thread) })
     }
 
@@ -317,7 +317,7 @@ impl Ptu {
         self.shared()
             .failure
             .as_ref()
-            .map(|e| RobotError::Disconnected(format!("pan-tilt unit on {}: {e}", self.config.connection)))
+            .map(|e| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", self.config.connection)))
     }
 }
 
@@ -337,13 +337,13 @@ impl PanTilt for Ptu {
         let reading = self.shared().reading;
         match reading {
             Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok(aim),
-            Some((at, _)) => Err(RobotError::Other(format!(
+            Some((at, _)) => Err(RobotError::PanTilt(format!(
                 "pan-tilt unit on {}: no reading for {:.2} s (stale after {} s)",
                 self.config.connection,
                 at.elapsed().as_secs_f64(),
                 self.config.stale_after_s
             ))),
-            None => Err(RobotError::Other(format!("pan-tilt unit on {}: no reading yet", self.config.connection))),
+            None => Err(RobotError::PanTilt(format!("pan-tilt unit on {}: no reading yet", self.config.connection))),
         }
     }
 }

@@ -21,9 +21,22 @@ pub enum RobotError {
     /// motors are never enabled again, because of it.
     #[error("camera: {0}")]
     Camera(String),
+    /// The pan-tilt unit the camera rides on failed (its link, a reading
+    /// gone stale): like a camera fault, not a lost link to the robot.
+    #[error("{0}")]
+    PanTilt(String),
     /// Anything else.
     #[error("{0}")]
     Other(String),
+}
+
+impl RobotError {
+    /// Whether the link to the robot itself was lost, so that reopening it
+    /// may help: not a fault of the camera or another device it carries,
+    /// for which a new session would only enable the motors again.
+    pub fn is_link_loss(&self) -> bool {
+        matches!(self, RobotError::Disconnected(_) | RobotError::Io(_))
+    }
 }
 
 /// A robot the controller can drive: a simulator, a serial-port Powerbot, or

@@ -51,9 +51,10 @@ impl TickSink for TracingSink {
 /// the writer thread and come back, so ticks allocate nothing once each
 /// buffer has been used. When the writer has every buffer (it has fallen
 /// `capacity` records behind), further records are dropped and counted
-/// rather than the tick waiting. If the sink fails, a warning names it, the
-/// rest of the records are dropped, and [`TickSink::finish`] returns the
-/// failure: the robot is not stopped for want of a log.
+/// rather than the tick waiting. If the sink fails or its thread dies, the
+/// writer flushes what it can and the next [`TickSink::record`] returns the
+/// failure, named: the session then ends (its robot stopped) rather than
+/// running on unrecorded.
 pub struct BackgroundSink {
     name: String,
     to_writer: Option<Sender<Message>>,
@@ -86,18 +87,18 @@ impl BackgroundSink {
                 let written = match message {
                     Message::Start(layout) => sink.start(&layout),
                     Message::Record(record) => {
-                        let written = if result.is_ok() { sink.record(&record) } else { Ok(()) };
+                        let written = sink.record(&record);
                         let _ = give_back.send(record);
                         written
                     }
                 };
-                if let (Ok(()), Err(e)) = (&result, written) {
-                    tracing::warn!("{label}: {e}; nothing more is written there");
-                    result = Err(e);
+                if let Err(e) = written {
+                    result = Err(io::Error::new(e.kind(), format!("{label}: {e}")));
+                    break;
                 }
             }
             // Flush what was written, even after a failure.
-            let finished = sink.finish();
+            let finished = sink.finish().map_err(|e| io::Error::new(e.kind(), format!("{label}: {e}")));
             result.and(finished)
         })?;
         Ok(BackgroundSink { name, to_writer: Some(to_writer), spare, writer: Some(writer), dropped: 0 })
@@ -119,6 +120,13 @@ impl TickSink for BackgroundSink {
     }
 
     fn record(&mut self, record: &TickRecord) -> io::Result<()> {
+        // The writer only ends early when it failed or panicked.
+        if self.writer.as_ref().is_some_and(JoinHandle::is_finished) {
+            return match self.finish() {
+                Err(e) => Err(e),
+                Ok(()) => Err(io::Error::other(format!("{}: the writer stopped", self.name))),
+            };
+        }
         let Some(to_writer) = &self.to_writer else { return Ok(()) };
         let Ok(mut copy) = self.spare.try_recv() else {
             if self.dropped == 0 {

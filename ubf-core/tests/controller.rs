@@ -199,6 +199,39 @@ fn a_background_sink_writes_every_record_in_order_on_its_own_thread() {
     assert_eq!(log.records[3].command, Command::Stop);
 }
 
+/// A sink that fails on its third record, or panics there.
+struct Failing {
+    panics: bool,
+}
+
+impl TickSink for Failing {
+    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+        match record.tick {
+            2 if self.panics => panic!("the disk caught fire"),
+            2 => Err(std::io::Error::other("no space left on device")),
+            _ => Ok(()),
+        }
+    }
+}
+
+#[test]
+fn a_failed_background_writer_ends_the_session_named() {
+    for panics in [false, true] {
+        let sink = BackgroundSink::spawn("log /tmp/x.csv", Failing { panics }, 8).unwrap();
+        let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
+        controller.add_sink(Box::new(sink));
+        let error = (0..200)
+            .find_map(|_| {
+                std::thread::sleep(std::time::Duration::from_millis(2));
+                controller.tick().err()
+            })
+            .expect("a tick reports the writer's failure");
+        let text = error.to_string();
+        assert!(text.contains("log /tmp/x.csv"), "{text}");
+        assert!(text.contains(if panics { "panicked" } else { "no space left" }), "{text}");
+    }
+}
+
 /// A sink whose writer waits at a gate before its first record.
 struct Gated {
     gate: crossbeam_channel::Receiver<()>,
@@ -230,22 +263,4 @@ fn a_stuck_writer_loses_records_not_ticks() {
     drop(open);
     sink.finish().unwrap();
     assert_eq!(*seen.lock().unwrap(), [0, 1, 2]);
-}
-
-#[test]
-fn a_failed_background_writer_is_reported_at_finish_and_the_ticks_go_on() {
-    struct Full;
-    impl TickSink for Full {
-        fn record(&mut self, _: &TickRecord) -> std::io::Result<()> {
-            Err(std::io::Error::other("disk full"))
-        }
-    }
-    let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
-    controller.add_sink(Box::new(BackgroundSink::spawn("log", Full, 4).unwrap()));
-    for _ in 0..10 {
-        controller.tick().expect("the robot is not stopped for want of a log");
-    }
-    let error = controller.shutdown().unwrap_err().to_string();
-    assert!(error.contains("disk full"), "{error}");
-    assert!(controller.robot().shut_down);
 }

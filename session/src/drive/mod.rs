@@ -253,9 +253,10 @@ fn drive_sessions(
             SessionEnd::GoalReached => return Ok(DriveEnd::GoalReached),
             SessionEnd::NoProgress => return Ok(DriveEnd::NoProgress),
             SessionEnd::Panicked(why) => return Err(DriveError::Panic(why)),
-            // A camera fault stops the drive: reconnecting would enable the
-            // motors again for a camera that still fails.
-            SessionEnd::Failed(ControllerError::Robot(why @ RobotError::Camera(_))) => return Err(why.into()),
+            // Only a lost link is worth a new session: for a camera or a
+            // head that fails, reconnecting would enable the motors again
+            // for a device that still fails.
+            SessionEnd::Failed(ControllerError::Robot(why)) if !why.is_link_loss() => return Err(why.into()),
             SessionEnd::Failed(ControllerError::Robot(why)) => {
                 eprintln!("link lost: {why}");
                 if config.on_link_loss == OnLinkLoss::Exit {
@@ -284,13 +285,14 @@ fn attach_logs<R: Robot>(
     eprintln!("logging to {}", path.display());
     logs.push(path.clone());
     let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan: false });
-    let sink = BackgroundSink::spawn("CSV log", csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
+    let sink =
+        BackgroundSink::spawn(format!("CSV log {}", path.display()), csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
     controller.add_sink(Box::new(sink));
     let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {
         return Ok(());
     };
     mcap.log_images(config.log_images);
-    match BackgroundSink::spawn("MCAP log", mcap, LOG_QUEUE) {
+    match BackgroundSink::spawn(format!("MCAP log {}", mcap_path.display()), mcap, LOG_QUEUE) {
         Ok(sink) => {
             eprintln!("and to {}", mcap_path.display());
             logs.push(mcap_path);
@@ -313,7 +315,9 @@ fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig,
     let epoch_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
     let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images, tree: true }, epoch_s)
         .map_err(|e| e.to_string())
-        .and_then(|bag| BackgroundSink::spawn("rosbag2 log", bag, LOG_QUEUE).map_err(|e| e.to_string()));
+        .and_then(|bag| {
+            BackgroundSink::spawn(format!("rosbag2 log {}", dir.display()), bag, LOG_QUEUE).map_err(|e| e.to_string())
+        });
     match opened {
         Ok(sink) => {
             eprintln!("and to {}", dir.display());
