@@ -769,3 +769,76 @@ fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
     assert!(!stderr.contains("link lost"), "{stderr}");
     assert_eq!(stderr.matches("connected to").count(), 1, "{stderr}");
 }
+
+#[test]
+fn impossible_robot_files_are_refused_with_their_place() {
+    // Each of these used to pass `ubf check` and then panic, hang, or
+    // switch a safeguard off on the robot.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let go =
+        |speed: &str| format!("Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: {speed}))])");
+    let frames = r#"camera: (source: Directory("."), "#;
+    let cases: [(&str, String, &str); 14] = [
+        ("period_s: 1e20,", go("0.3"), "from 0.01 to 1 s"),
+        ("period_s: 65535.0,", go("0.3"), "from 0.01 to 1 s"),
+        ("safety: (stale_after_s: 1e300),", go("0.3"), "from 0.001 to 10 s"),
+        ("safety: (link_lost_after_s: 1e300),", go("0.3"), "from 0.001 to 60 s"),
+        ("safety: (stale_after_s: 2.0, link_lost_after_s: 1.3),", go("0.3"), "must not exceed link_lost_after_s"),
+        ("", go("600.0"), "at most 10 m/s"),
+        ("goal: (x: 8e9, y: 0.0),", go("0.3"), "from -10000 to 10000 m"),
+        (
+            &format!(r#"{frames}pan_tilt: (connection: "/dev/ttyUSB1", tilt_deg: 7200.0)),"#),
+            go("0.3"),
+            "from -90 to 90°",
+        ),
+        (
+            &format!(r#"{frames}pan_tilt: (connection: "/dev/ttyUSB1", tilt_deg: 1e999)),"#),
+            go("0.3"),
+            "from -90 to 90°",
+        ),
+        (&format!("{frames}stereo: (width_px: 16384, height_px: 16384)),"), go("0.3"), "8 to 8192"),
+        ("accelerations: (translation: 1e9, rotation_deg: 100.0),", go("0.3"), "at most 10 m/s²"),
+        ("baud: 12345,", go("0.3"), "not a serial baud rate"),
+        ("max_time_s: 1e30,", go("0.3"), "at most 1e7 s"),
+        ("max_velocity: 600.0,", go("0.3"), "at most 10 m/s"),
+    ];
+    let check = |body: &str| {
+        std::fs::write(&file, body).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["check", file.to_str().unwrap()]).output().unwrap();
+        (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let place = regex_lite_place(file.to_str().unwrap());
+    for (extra, root, rule) in &cases {
+        let (code, stderr) = check(&robot_file("/dev/ttyUSB0", &dir.path().join("l.csv"), extra, root));
+        assert_eq!(code, Some(2), "{extra} {root}: {stderr}");
+        assert!(stderr.contains(rule), "{extra} {root}: the rule is given: {stderr}");
+        assert!(place(&stderr), "{extra} {root}: the place is given as file:line:col: {stderr}");
+    }
+    // A connection nothing can open, and a camera directory that is not there.
+    let text = robot_file("htp://x", &dir.path().join("l.csv"), "", &go("0.3"));
+    let (code, stderr) = check(&text);
+    assert!(code == Some(2) && stderr.contains("is not a connection") && place(&stderr), "{stderr}");
+    let text =
+        robot_file("/dev/ttyUSB0", &dir.path().join("l.csv"), r#"camera: (source: Directory("nowhere")),"#, &go("0.3"));
+    let (code, stderr) = check(&text);
+    assert!(code == Some(2) && stderr.contains("nowhere"), "{stderr}");
+    let sweep = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["sweep", "scenarios/goto-open-floor.ron", "--seeds", "1..2", "--jobs", "100000"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(sweep.status.code(), Some(2), "{}", String::from_utf8_lossy(&sweep.stderr));
+}
+
+/// Whether an error names `file` with a line and column (`file:12:5`).
+fn regex_lite_place(file: &str) -> impl Fn(&str) -> bool + '_ {
+    move |stderr: &str| {
+        stderr.split(file).skip(1).any(|after| {
+            let mut parts = after.splitn(3, ':');
+            parts.next() == Some("")
+                && parts.next().is_some_and(|l| !l.is_empty() && l.chars().all(|c| c.is_ascii_digit()))
+                && parts.next().is_some_and(|rest| rest.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        })
+    }
+}

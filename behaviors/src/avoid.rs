@@ -33,7 +33,7 @@ pub struct AvoidCollisionConfig {
     #[serde(deserialize_with = "positive")]
     pub turn_gain: f64,
     /// Largest turn rate it asks for, °/s.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::rate_deg_s")]
     pub max_turn_deg: f64,
     /// Vote when an obstacle is at `stop_distance`; it falls to 0 at
     /// `slow_distance`.

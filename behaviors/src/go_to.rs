@@ -9,14 +9,14 @@ use ubf_core::{Action, Behavior, State};
 #[serde(default, deny_unknown_fields)]
 pub struct GoToConfig {
     /// Forward speed far from the goal, m/s.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::speed_m_s")]
     pub cruise_speed: f64,
     /// Turn rate per radian of heading error, 1/s.
     #[serde(deserialize_with = "positive")]
     pub turn_gain: f64,
     /// Largest turn rate it asks for, °/s. Bounded so that a large heading
     /// error does not swamp the other children of a fusing arbiter.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::rate_deg_s")]
     pub max_turn_deg: f64,
     /// Within this distance of the goal the speed ramps down, m.
     #[serde(deserialize_with = "non_negative")]

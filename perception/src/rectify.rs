@@ -255,7 +255,10 @@ fn check_size(width: u32, height: u32) -> Result<(), CalibrationError> {
     if side.contains(&width) && side.contains(&height) {
         Ok(())
     } else {
-        Err(CalibrationError::field("image_width, image_height", format!("{width} × {height}; each 8 to 16 384")))
+        Err(CalibrationError::field(
+            "image_width, image_height",
+            format!("{width} × {height}; each 8 to {}", crate::stereo::MAX_IMAGE_SIDE_PX),
+        ))
     }
 }
 

@@ -47,7 +47,7 @@ pub struct SonarUnit {
     #[serde(deserialize_with = "finite")]
     pub y: f64,
     /// Pointing direction, degrees counter-clockwise from forward.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "ubf_core::config::angle_deg")]
     pub heading_deg: f64,
 }
 
@@ -102,10 +102,10 @@ pub struct RobotModel {
     #[serde(deserialize_with = "positive")]
     pub track_width: f64,
     /// Largest forward speed the robot can do, m/s.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::speed_m_s")]
     pub max_velocity: f64,
     /// Largest turn rate the robot can do, °/s.
-    #[serde(deserialize_with = "positive")]
+    #[serde(deserialize_with = "ubf_core::config::rate_deg_s")]
     pub max_rot_velocity_deg: f64,
     /// The controller's unit conversions.
     pub arcos: ArcosParams,

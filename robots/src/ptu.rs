@@ -26,7 +26,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::config::positive;
 use ubf_core::{Aim, PanTilt, RobotError};
 
 /// A PTU as written under the camera in a robot file:
@@ -39,8 +38,8 @@ pub struct PtuConfig {
     /// Serial baud rate (the PTU's default: 9 600).
     #[serde(default = "PtuConfig::default_baud")]
     pub baud: u32,
-    /// The tilt the head holds, ° above the horizontal.
-    #[serde(default)]
+    /// The tilt the head holds, ° above the horizontal: −90 to 90.
+    #[serde(default, deserialize_with = "tilt_deg")]
     pub tilt_deg: f64,
     /// Whether the unit's positive pan turns the head clockwise seen from
     /// above (to the right). Ours turns it counter-clockwise (to the left);
@@ -48,11 +47,19 @@ pub struct PtuConfig {
     #[serde(default)]
     pub invert_pan: bool,
     /// Fastest pan, °/s (sent as the unit's pan speed on connecting).
-    #[serde(default = "PtuConfig::default_rate", deserialize_with = "positive")]
+    #[serde(default = "PtuConfig::default_rate", deserialize_with = "ubf_core::config::rate_deg_s")]
     pub max_rate_deg_s: f64,
-    /// A reading older than this is refused as stale, s.
-    #[serde(default = "PtuConfig::default_stale", deserialize_with = "positive")]
+    /// A reading older than this is refused as stale, s: up to 10.
+    #[serde(default = "PtuConfig::default_stale", deserialize_with = "stale_after_s")]
     pub stale_after_s: f64,
+}
+
+fn tilt_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, -90.0..=90.0, "from -90 to 90°")
+}
+
+fn stale_after_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, 0.001..=10.0, "from 0.001 to 10 s")
 }
 
 impl PtuConfig {
@@ -257,6 +264,9 @@ impl Ptu {
         };
         if !(axes.pan_step > 0.0 && axes.tilt_step > 0.0 && axes.pan_step.is_finite() && axes.tilt_step.is_finite()) {
             return Err(format!("unusable resolution: {axes:?}"));
+        }
+        if axes.pan_limits[0] > axes.pan_limits[1] || axes.tilt_limits[0] > axes.tilt_limits[1] {
+            return Err(format!("limits out of order (minimum above maximum): {axes:?}"));
         }
         let speed = (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0);
         talk.command(&format!("PS{speed}"))?;

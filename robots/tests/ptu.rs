@@ -146,6 +146,15 @@ fn nothing_answering_is_a_clear_error() {
     assert!(error.contains("/dev/no-such-ptu"), "{error}");
 }
 
+#[test]
+fn a_head_reporting_its_limits_out_of_order_is_refused_not_panicked_on() {
+    let config = PtuEmulatorConfig { pan_limits: [3090, -3090], ..PtuEmulatorConfig::default() };
+    let emulator = on_tcp(config);
+    let error = Ptu::connect(PtuConfig::new(&emulator.connection)).err().expect("refused").to_string();
+    assert!(error.contains("limits out of order"), "{error}");
+    emulator.stop.store(true, Ordering::Relaxed);
+}
+
 /// Two blank pairs, half a second apart, in `dir`, and the camera they
 /// suit.
 fn blank_pairs(dir: &std::path::Path) -> (Box<ImageDirectory>, StereoCamera) {

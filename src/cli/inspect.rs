@@ -12,6 +12,11 @@ pub(super) fn check(registry: &Registry, files: &[PathBuf]) -> Outcome {
     for file in files {
         let checked = if is_robot_file(file) {
             crate::drive::DriveConfig::load(registry, file)
+                .map_err(|e| e.to_string())
+                .and_then(|(config, model)| {
+                    config.check_camera().map_err(|e| format!("{}: camera: {e}", file.display()))?;
+                    Ok((config, model))
+                })
                 .map(|(config, model)| {
                     let nodes = ubf_core::TreeLayout::of(config.root.build(&ubf_core::BuildContext::new(0)).as_ref());
                     format!(
@@ -22,7 +27,6 @@ pub(super) fn check(registry: &Registry, files: &[PathBuf]) -> Outcome {
                         nodes.nodes.len()
                     )
                 })
-                .map_err(|e| e.to_string())
         } else {
             Scenario::load(registry, file).map(|s| format!("scenario \"{}\"", s.name)).map_err(|e| e.to_string())
         };

@@ -250,10 +250,15 @@ const MOST_LAYOUTS: usize = 10_000;
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LayoutSeeds(pub Vec<u64>);
 
-/// Parses a number of jobs, at least 1.
+/// The most jobs a sweep runs at once: more threads than any machine has
+/// cores only costs memory.
+const MOST_JOBS: usize = 1024;
+
+/// Parses a number of jobs, 1 to [`MOST_JOBS`].
 pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("at least one job is needed".into()),
+        Ok(n) if n > MOST_JOBS => Err(format!("{n} jobs is more than the {MOST_JOBS} a machine can use")),
         Ok(n) => Ok(n),
         Err(_) => Err(format!("`{text}` is not a number of jobs")),
     }

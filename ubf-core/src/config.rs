@@ -130,6 +130,40 @@ pub fn extent_m<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     number_where(d, |v| (0.01..=1e4).contains(&v), "from 0.01 to 10000 m")
 }
 
+/// A number within `range`, else an error that gives the rule (`rule`,
+/// e.g. "from 0.01 to 1 s"): for a crate's own bounded fields,
+/// `fn period<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+/// number_in(d, 0.01..=1.0, "from 0.01 to 1 s") }`.
+pub fn number_in<'de, D: Deserializer<'de>>(
+    d: D,
+    range: std::ops::RangeInclusive<f64>,
+    rule: &str,
+) -> Result<f64, D::Error> {
+    number_where(d, |v| range.contains(&v), rule)
+}
+
+/// A ground robot's speed, m/s: > 0 and at most 10 (faster than any robot
+/// this drives, so a slip of the keyboard is caught; the robot's own limits
+/// then bound it further).
+pub fn speed_m_s<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| v > 0.0 && v <= 10.0, "> 0 and at most 10 m/s")
+}
+
+/// A turn rate, °/s: > 0 and at most 3600 (ten turns a second).
+pub fn rate_deg_s<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| v > 0.0 && v <= 3600.0, "> 0 and at most 3600 °/s")
+}
+
+/// An angle, °: from −360 to 360.
+pub fn angle_deg<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| (-360.0..=360.0).contains(&v), "from -360 to 360°")
+}
+
+/// A coordinate in the world, m: within 10 km of the origin.
+pub fn coordinate_m<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_where(d, |v| (-1e4..=1e4).contains(&v), "from -10000 to 10000 m")
+}
+
 /// A finite number ≥ 0.
 pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     number_where(d, |v| v.is_finite() && v >= 0.0, "≥ 0")
@@ -178,6 +212,25 @@ pub fn optional_positive<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>,
         Some(v) if !(v.is_finite() && v > 0.0) => Err(D::Error::custom(format!("{v} is out of range: must be > 0"))),
         v => Ok(v),
     }
+}
+
+/// An optional number within `range` (see [`number_in`]).
+pub fn optional_number_in<'de, D: Deserializer<'de>>(
+    d: D,
+    range: std::ops::RangeInclusive<f64>,
+    rule: &str,
+) -> Result<Option<f64>, D::Error> {
+    match Option::<f64>::deserialize(d)? {
+        Some(v) if !range.contains(&v) => {
+            Err(D::Error::custom(format!("{} is out of range: must be {rule}", shown(v))))
+        }
+        v => Ok(v),
+    }
+}
+
+/// An optional duration, s: > 0 and at most 10⁷ s.
+pub fn optional_duration_s<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    optional_number_in(d, f64::MIN_POSITIVE..=1e7, "> 0 and at most 1e7 s")
 }
 
 /// An optional finite number ≥ 0.

@@ -16,16 +16,38 @@ pub struct SafetyPolicy {
     /// Sensor data older than this, s, sends STOP instead of any motion
     /// command (ARCOS sends a SIP every 0.1 s: the default allows two
     /// missed cycles and a little jitter).
-    #[serde(deserialize_with = "crate::config::positive")]
+    #[serde(deserialize_with = "stale_after_s")]
     pub stale_after_s: f64,
     /// Sensor data older than this, s, is a lost link: the robot reports
     /// a disconnection. Counted from the first tick until data first comes.
-    #[serde(deserialize_with = "crate::config::positive")]
+    #[serde(deserialize_with = "link_lost_after_s")]
     pub link_lost_after_s: f64,
     /// After a stall or a bumper, hold still until the condition has been
     /// clear this long, s; `None` holds until the operator restarts.
-    #[serde(deserialize_with = "crate::config::optional_non_negative")]
+    #[serde(deserialize_with = "crate::config::optional_duration_s")]
     pub resume_after_s: Option<f64>,
+}
+
+/// Stale after 1 ms to 10 s: beyond that the guard would not guard.
+fn stale_after_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    crate::config::number_in(d, 0.001..=10.0, "from 0.001 to 10 s")
+}
+
+/// A link lost after 1 ms to 60 s.
+fn link_lost_after_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    crate::config::number_in(d, 0.001..=60.0, "from 0.001 to 60 s")
+}
+
+impl crate::config::Check for SafetyPolicy {
+    fn check(&self) -> Result<(), String> {
+        if self.stale_after_s > self.link_lost_after_s {
+            return Err(format!(
+                "stale_after_s ({} s) must not exceed link_lost_after_s ({} s): data is stale before the link is lost",
+                self.stale_after_s, self.link_lost_after_s
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for SafetyPolicy {

@@ -10,10 +10,10 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct Goal {
     /// Metres, world frame.
-    #[serde(deserialize_with = "crate::config::finite")]
+    #[serde(deserialize_with = "crate::config::coordinate_m")]
     pub x: f64,
     /// Metres, world frame.
-    #[serde(deserialize_with = "crate::config::finite")]
+    #[serde(deserialize_with = "crate::config::coordinate_m")]
     pub y: f64,
     /// Distance in metres within which the goal counts as reached.
     #[serde(default = "Goal::default_tolerance", deserialize_with = "crate::config::positive")]

@@ -158,7 +158,7 @@ impl Default for StereoCamera {
 }
 
 /// The largest image side a calibration may give, pixels.
-pub const MAX_IMAGE_SIDE_PX: u32 = 16_384;
+pub const MAX_IMAGE_SIDE_PX: u32 = 8_192;
 /// The widest field of view a calibration may give (a rectified pinhole
 /// pair cannot see 180°), degrees.
 pub const MAX_FIELD_OF_VIEW_DEG: f64 = 170.0;

@@ -39,12 +39,17 @@ const CONFIG_TIMEOUT: Duration = Duration::from_secs(1);
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Accelerations {
-    /// Translational, m/s².
-    #[serde(deserialize_with = "ubf_core::config::positive")]
+    /// Translational, m/s²: > 0, at most 10.
+    #[serde(deserialize_with = "translation_m_s2")]
     pub translation: f64,
-    /// Rotational, °/s².
-    #[serde(deserialize_with = "ubf_core::config::positive")]
+    /// Rotational, °/s²: > 0, at most 3600.
+    #[serde(deserialize_with = "ubf_core::config::rate_deg_s")]
     pub rotation_deg: f64,
+}
+
+/// A translational acceleration, m/s²: above 0, at most 10 (1 g).
+fn translation_m_s2<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, f64::MIN_POSITIVE..=10.0, "> 0 and at most 10 m/s²")
 }
 
 /// How to open a session.

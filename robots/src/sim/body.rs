@@ -14,13 +14,13 @@ use ubf_core::{wrap_angle, Command, Limits, Pose2, Turn};
 #[serde(deny_unknown_fields)]
 pub struct StartPose {
     /// Metres.
-    #[serde(default, deserialize_with = "finite")]
+    #[serde(default, deserialize_with = "ubf_core::config::coordinate_m")]
     pub x: f64,
     /// Metres.
-    #[serde(default, deserialize_with = "finite")]
+    #[serde(default, deserialize_with = "ubf_core::config::coordinate_m")]
     pub y: f64,
     /// Degrees from the x axis, counter-clockwise.
-    #[serde(default, deserialize_with = "finite")]
+    #[serde(default, deserialize_with = "ubf_core::config::angle_deg")]
     pub heading_deg: f64,
 }
 

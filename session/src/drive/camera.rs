@@ -83,6 +83,17 @@ impl DriveConfig {
         Ok(Some(OpenCamera { source, paced, pan_tilt }))
     }
 
+    /// Opens the camera's source and lets it go, for `ubf check`: a
+    /// directory that is not there, or a device that cannot be opened, is
+    /// found before the drive. The pan-tilt head is left alone: it may be
+    /// switched off until the drive.
+    pub fn check_camera(&self) -> Result<(), CameraError> {
+        match &self.camera {
+            Some(camera) => open_source(camera).map(drop),
+            None => Ok(()),
+        }
+    }
+
     /// `robot` with the opened camera and the egomotion tracker (starting
     /// at `origin`) around it.
     pub(super) fn equip<R: Robot>(

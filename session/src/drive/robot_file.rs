@@ -5,7 +5,7 @@ use crate::ros2_log::LogFormat;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use ubf_core::config::{positive, RonError};
+use ubf_core::config::RonError;
 use ubf_core::{
     BehaviorSpec, BuildContext, Goal, Limits, OnBehaviorPanic, Pose2, ProgressCheck, Registry, SafetyPolicy,
 };
@@ -133,14 +133,15 @@ pub struct DriveConfig {
     pub name: String,
     /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port` for an ARCOS
     /// robot, or `ros2` for a ROS 2 robot (`/cmd_vel` in, `/odom` out).
+    #[serde(deserialize_with = "connection")]
     pub connection: String,
     /// Serial baud rate (ARCOS starts at 9600).
-    #[serde(default = "DriveConfig::default_baud")]
+    #[serde(default = "DriveConfig::default_baud", deserialize_with = "baud")]
     pub baud: u32,
     /// The robot model.
     pub model: ModelChoice,
     /// Seconds between control ticks (ARCOS sends a SIP every 0.1 s).
-    #[serde(default = "DriveConfig::default_period", deserialize_with = "positive")]
+    #[serde(default = "DriveConfig::default_period", deserialize_with = "drive_period_s")]
     pub period_s: f64,
     /// Where the tick log goes, relative to the working directory.
     #[serde(default = "DriveConfig::default_log")]
@@ -170,14 +171,14 @@ pub struct DriveConfig {
     pub accelerations: Option<Accelerations>,
     /// A cap on translational speed, m/s, below the model's (sent as SETV
     /// on connect and applied to every command).
-    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    #[serde(default, deserialize_with = "optional_speed_m_s")]
     pub max_velocity: Option<f64>,
     /// A cap on rotational speed, °/s, below the model's (sent as SETRV).
-    #[serde(default, deserialize_with = "ubf_core::config::optional_positive")]
+    #[serde(default, deserialize_with = "optional_rate_deg_s")]
     pub max_rot_velocity_deg: Option<f64>,
     /// When to hold the robot still whatever the tree wants: stale data,
     /// a lost link, a stall or a bumper.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::checked")]
     pub safety: SafetyPolicy,
     /// What a panicking behaviour does: `Stop` ends the drive (the robot
     /// is stopped and the session closed), `SkipBehavior` carries on
@@ -187,10 +188,10 @@ pub struct DriveConfig {
     /// Margin on the way out, beyond the time the robot needs to brake from
     /// its speed at STOP, to wait for it to report standstill before its
     /// motors are switched off, s.
-    #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "positive")]
+    #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "stop_wait_s")]
     pub stop_wait_s: f64,
     /// Stop by itself after this long, s (unset: run until stopped).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "ubf_core::config::optional_duration_s")]
     pub max_time_s: Option<f64>,
     /// End the drive (robot stopped, session closed) once the robot
     /// believes it is at the goal; `ubf drive --until-goal` sets it.
@@ -217,6 +218,63 @@ pub struct DriveConfig {
 
 /// The `connection` that names a ROS 2 robot.
 pub const ROS2_CONNECTION: &str = "ros2";
+
+/// A drive's control period: 10 ms to 1 s (a Powerbot's SIP comes every
+/// 100 ms; a longer period would leave SIGTERM and the watchdog waiting).
+fn drive_period_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, 0.01..=1.0, "from 0.01 to 1 s")
+}
+
+/// The margin on the stop wait: up to 10 s.
+fn stop_wait_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, 0.0..=10.0, "from 0 to 10 s")
+}
+
+/// An optional cap on speed, m/s (as [`ubf_core::config::speed_m_s`]).
+fn optional_speed_m_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    ubf_core::config::optional_number_in(d, f64::MIN_POSITIVE..=10.0, "> 0 and at most 10 m/s")
+}
+
+/// An optional cap on turn rate, °/s (as [`ubf_core::config::rate_deg_s`]).
+fn optional_rate_deg_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    ubf_core::config::optional_number_in(d, f64::MIN_POSITIVE..=3600.0, "> 0 and at most 3600 °/s")
+}
+
+/// A connection `ubf` knows how to open: `ros2`, `tcp://HOST:PORT`, or a
+/// serial device's path (no scheme).
+fn connection<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    use serde::de::Error;
+    let text = String::deserialize(d)?;
+    if text == ROS2_CONNECTION || known_device(&text) {
+        return Ok(text);
+    }
+    Err(D::Error::custom(format!(
+        "`{text}` is not a connection: give a serial device (`/dev/ttyUSB0`), `tcp://host:port` or `ros2`"
+    )))
+}
+
+/// Whether `text` is a serial device's path or `tcp://HOST:PORT`.
+pub(crate) fn known_device(text: &str) -> bool {
+    match text.split_once("://") {
+        Some(("tcp", address)) => {
+            address.rsplit_once(':').is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok())
+        }
+        Some(_) => false,
+        None => !text.is_empty(),
+    }
+}
+
+/// A serial line's baud rate, one a serial port offers.
+fn baud<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    use serde::de::Error;
+    const RATES: [u32; 9] = [1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400];
+    let rate = u32::deserialize(d)?;
+    if RATES.contains(&rate) {
+        Ok(rate)
+    } else {
+        Err(D::Error::custom(format!("{rate} is not a serial baud rate: one of {RATES:?}")))
+    }
+}
 
 impl DriveConfig {
     fn default_baud() -> u32 {
@@ -249,7 +307,7 @@ impl DriveConfig {
             max_rot_velocity_deg: self.max_rot_velocity_deg,
             accelerations: self.accelerations,
             origin,
-            standstill_wait: Duration::from_secs_f64(self.stop_wait_s.min(10.0)),
+            standstill_wait: Duration::from_secs_f64(self.stop_wait_s),
         }
     }
 
