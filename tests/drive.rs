@@ -842,3 +842,40 @@ fn regex_lite_place(file: &str) -> impl Fn(&str) -> bool + '_ {
         })
     }
 }
+
+#[test]
+fn the_pose_survives_three_link_cuts_while_moving() {
+    // Three sessions lose their link for 1.5 s at speed, the robot driving
+    // on and then braking once STOP gets through; all of it reaches the
+    // driver only while it waits for standstill, and belongs in the pose
+    // the next session starts from. Each emulated session restarts its
+    // odometry at zero, as AMRISim does.
+    let (mut emulator, address, mut out) = emulator_with(&["--listen", "127.0.0.1:0", "--cut", "2:1.5", "--cuts", "3"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let root = "Composite(arbiter: CommandFusion, children: [
+        (behavior: Stop(), weight: 1.0), (behavior: GoTo(cruise_speed: 0.5))])";
+    let extra = "until_goal: true, max_time_s: 60.0, goal: (x: 6.0, y: 0.0, tolerance: 0.05),";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, root)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert!(drive.status.success(), "{stderr}");
+    let sessions = stderr.matches("connected to").count();
+    assert_eq!(sessions, 4, "three cut sessions and the one that arrives: {stderr}");
+    // Each session's travel in its own frame; the drive heads along x.
+    let (mut x, mut y) = (0.0, 0.0);
+    for _ in 0..sessions {
+        let line = report_line(&mut out);
+        let pose = line.split("pose (").nth(1).unwrap().split(')').next().unwrap();
+        let (dx, dy) = pose.split_once(", ").unwrap();
+        x += dx.parse::<f64>().unwrap();
+        y += dy.parse::<f64>().unwrap();
+    }
+    emulator.kill().unwrap();
+    let rest = stderr.split("came to rest at (").nth(1).expect("the final pose is said").split(')').next().unwrap();
+    let (bx, by) = rest.split_once(", ").unwrap();
+    let (bx, by): (f64, f64) = (bx.parse().unwrap(), by.parse().unwrap());
+    let miss = (bx - x).hypot(by - y);
+    eprintln!("after three cuts the pose is {miss:.4} m off");
+    assert!(miss <= 0.02, "believes ({bx:.3}, {by:.3}), is at ({x:.3}, {y:.3}): {miss:.3} m off; {stderr}");
+}

@@ -414,6 +414,15 @@ enum Command {
         /// simulator does; for rehearsing what the client does.
         #[arg(long, value_name = "AFTER:FOR", value_parser = parse_silence)]
         silence: Option<(f64, f64)>,
+        /// Cut the link AFTER seconds into each session, for FOR seconds:
+        /// nothing read or sent while the robot drives on under its last
+        /// command (and its watchdog), as with a cable pulled and plugged
+        /// back in.
+        #[arg(long, value_name = "AFTER:FOR", value_parser = parse_silence)]
+        cut: Option<(f64, f64)>,
+        /// Cut only the first N sessions (default: every one).
+        #[arg(long, value_name = "N", requires = "cut")]
+        cuts: Option<u32>,
     },
     /// Reproduce one of the thesis's experiments.
     Experiment {
@@ -683,17 +692,18 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Simulate { file, ros2: _, seed, speed, max_time } => {
             run::simulate(&registry, &file, seed, speed, max_time)
         }
-        Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence } => {
+        Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence, cut, cuts } => {
             let mut config =
                 ubf_robots::arcos::emulator::EmulatorConfig::new(ubf_robots::model::RobotModel::powerbot());
             if let Some((length, width)) = room {
                 config = config.in_room(length, width);
             }
             config.sip_period = std::time::Duration::from_secs_f64(sip_period_ms / 1000.0);
-            config.silence = silence.map(|(after, span)| {
-                (std::time::Duration::from_secs_f64(after), std::time::Duration::from_secs_f64(span))
-            });
-            robot::emulate(&listen, pty, &config)
+            let window =
+                |(after, span)| (std::time::Duration::from_secs_f64(after), std::time::Duration::from_secs_f64(span));
+            config.silence = silence.map(window);
+            config.cut = cut.map(window);
+            robot::emulate(&listen, pty, &config, cuts)
         }
         Command::EmulatePtu { listen, pty, clockwise } => {
             let config = ubf_robots::ptu::PtuEmulatorConfig {

@@ -36,6 +36,15 @@ pub(super) fn drive(
         (false, false) => crate::drive::Status::Off,
     };
     let outcome = crate::drive::drive(&config, &model, &stop, status);
+    if let Some(pose) = outcome.pose {
+        eprintln!(
+            "the robot came to rest at ({:.3}, {:.3}) m, {:.1}° by its odometry, in the frame where it stood when the \
+             drive began",
+            pose.x,
+            pose.y,
+            pose.theta.to_degrees()
+        );
+    }
     match outcome.logs.as_slice() {
         [] => eprintln!("no session opened; no log written"),
         [one] => eprintln!("log in {}", one.display()),
@@ -65,11 +74,21 @@ pub(super) fn drive(
     }
 }
 
-/// Emulates a Powerbot on a TCP address, or on a new pseudo-terminal.
-pub(super) fn emulate(listen: &str, pty: bool, config: &EmulatorConfig) -> Outcome {
+/// Emulates a Powerbot on a TCP address, or on a new pseudo-terminal; its
+/// link cut only in the first `cuts` sessions, if given.
+pub(super) fn emulate(listen: &str, pty: bool, config: &EmulatorConfig, cuts: Option<u32>) -> Outcome {
     use ubf_robots::arcos::emulator::serve;
+    let sessions = std::sync::atomic::AtomicU32::new(0);
     let client = |link: Box<dyn Link>, stop: &Arc<AtomicBool>| {
-        serve(link, config, stop).map(|report| (report.commands, emulator_report(&report)))
+        let mut config = config.clone();
+        if cuts.is_some_and(|cuts| sessions.load(Ordering::Relaxed) >= cuts) {
+            config.cut = None;
+        }
+        let served = serve(link, &config, stop);
+        if served.as_ref().is_ok_and(|report| report.commands > 0) {
+            sessions.fetch_add(1, Ordering::Relaxed);
+        }
+        served.map(|report| (report.commands, emulator_report(&report)))
     };
     serve_clients("a Powerbot", listen, pty, client)
 }

@@ -190,6 +190,20 @@ impl<R: Robot> Controller<R> {
         first_error.map_or(Ok(()), Err)
     }
 
+    /// Where the robot came to rest, by its own account, after
+    /// [`Controller::shutdown`]: it senses once more, since a robot brakes
+    /// after STOP and readings that arrived while it did (a link that came
+    /// back during the wait) are not in the last tick's state. A robot that
+    /// can no longer say, or fails to, leaves whatever pose it did set, else
+    /// the last tick's.
+    pub fn settled_pose(&mut self) -> crate::Pose2 {
+        let mut state = self.state().clone();
+        // A stale or lost link is an error here, not news: the pose the
+        // robot set before saying so is still its latest.
+        let _ = self.robot.sense(&mut state);
+        state.pose
+    }
+
     /// Gives back the robot and the root behaviour.
     pub fn into_parts(self) -> (R, Box<dyn Behavior>) {
         (self.robot, self.root)

@@ -47,6 +47,11 @@ pub struct EmulatorConfig {
     /// SIPs and does not move, while still reading commands (and obeying
     /// them once it thaws), as a simulator paused mid-run does.
     pub silence: Option<(Duration, Duration)>,
+    /// Cuts the link this long after OPEN, for the second duration:
+    /// nothing is read or sent (the client's bytes wait in the link), while
+    /// the robot drives on under its last command and its watchdog, as
+    /// with a cable pulled and plugged back in.
+    pub cut: Option<(Duration, Duration)>,
 }
 
 /// Range a sonar reports without an echo, mm.
@@ -77,6 +82,7 @@ impl EmulatorConfig {
             walls: Vec::new(),
             start_mm: (0.0, 0.0),
             silence: None,
+            cut: None,
         }
     }
 
@@ -367,16 +373,22 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
     let mut last_sip_sent: Option<Instant> = None;
     let mut last_stop: Option<Instant> = None;
     let mut buffer = [0u8; 256];
-    let silent = |opened_at: Instant| {
-        config.silence.is_some_and(|(after, span)| {
+    let within = |window: Option<(Duration, Duration)>, opened_at: Instant| {
+        window.is_some_and(|(after, span)| {
             let t = opened_at.elapsed();
             t >= after && t < after + span
         })
     };
+    let silent = |opened_at: Instant| within(config.silence, opened_at);
     while !stop.load(Ordering::Relaxed) {
-        match link.read(&mut buffer) {
-            Ok(0) => break,
-            Ok(n) => decoder.push(&buffer[..n]),
+        let cut_now = phase == Phase::Open && within(config.cut, opened_at);
+        if cut_now {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        match if cut_now { Ok(None) } else { link.read(&mut buffer).map(Some) } {
+            Ok(None) => {}
+            Ok(Some(0)) => break,
+            Ok(Some(n)) => decoder.push(&buffer[..n]),
             Err(e) if is_timeout(&e) => {}
             Err(e) if e.kind() == io::ErrorKind::ConnectionReset || client_left_terminal(&e) => break,
             Err(e) => return Err(e),
@@ -516,6 +528,9 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
             },
             ..Sip::default()
         };
+        if cut_now {
+            continue;
+        }
         let packet = frame(&sip.body());
         for _ in 0..due {
             link.write_all(&packet)?;

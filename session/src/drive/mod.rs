@@ -144,6 +144,9 @@ pub struct DriveOutcome {
     pub end: Result<DriveEnd, DriveError>,
     /// The sessions' logs.
     pub logs: Vec<PathBuf>,
+    /// Where the robot came to rest by its odometry, in the drive's world
+    /// frame (where it stood when the drive began), if a session opened.
+    pub pose: Option<Pose2>,
 }
 
 /// The first of `base`, `stem.2.ext`, `stem.3.ext`, … that does not exist,
@@ -173,8 +176,9 @@ const LOG_QUEUE: usize = 256;
 /// the log is flushed, whatever ended the session (a panic included).
 pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool, status: Status) -> DriveOutcome {
     let mut logs = Vec::new();
-    let end = drive_sessions(config, model, stop, status, &mut logs);
-    DriveOutcome { end, logs }
+    let mut pose = None;
+    let end = drive_sessions(config, model, stop, status, &mut logs, &mut pose);
+    DriveOutcome { end, logs, pose }
 }
 
 fn drive_sessions(
@@ -183,6 +187,7 @@ fn drive_sessions(
     stop: &AtomicBool,
     status: Status,
     logs: &mut Vec<PathBuf>,
+    settled: &mut Option<Pose2>,
 ) -> Result<DriveEnd, DriveError> {
     let started = Instant::now();
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
@@ -240,8 +245,9 @@ fn drive_sessions(
         };
         // Whatever happened: stop the robot, close the session and flush
         // the logs.
-        let (controller, shutdown) = session.finish();
-        pose = controller.state().pose;
+        let (mut controller, shutdown) = session.finish();
+        pose = controller.settled_pose();
+        *settled = Some(pose);
         if let Err(e) = shutdown {
             tracing::warn!("shutting down: {e}");
         }
