@@ -1,0 +1,166 @@
+//! The egomotion settings, as written in a scenario file: which estimator
+//! and its settings, matching, the keyframe bank and the odometry checks.
+
+use super::matching::MatchConfig;
+use super::odometry::{OdometryFusion, OdometryGate};
+use crate::error_model::ErrorModelKind;
+use serde::Deserialize;
+use ubf_core::config::{non_negative, positive};
+
+/// Settings of the thesis's simplified estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Simple2dConfig {
+    /// A range change above this means translation, m.
+    #[serde(deserialize_with = "non_negative")]
+    pub translation_threshold_m: f64,
+    /// A bearing change above this means rotation, °.
+    #[serde(deserialize_with = "non_negative")]
+    pub rotation_threshold_deg: f64,
+    /// Rotation compensation RC (eq. 60); the thesis left it at 1.
+    #[serde(deserialize_with = "positive")]
+    pub rc: f64,
+    /// Translation compensation TC (eq. 61); the thesis left it at 1.
+    #[serde(deserialize_with = "positive")]
+    pub tc: f64,
+    /// The fixes the estimator needs to survive a robot that turns: the
+    /// motion type taken from the commanded phase (a turn on the spot, or a
+    /// straight step) where it is known, a translation threshold scaled to
+    /// each landmark's depth noise, weighted medians instead of means (one
+    /// near-triangulated outlier cannot capture the estimate), and a
+    /// range-consistency gate around the median. `false` is the estimator
+    /// exactly as §4.4.7 describes it.
+    pub robust: bool,
+    /// Pixel noise assumed when scaling the threshold and the gate, px.
+    #[serde(deserialize_with = "positive")]
+    pub pixel_sigma: f64,
+}
+
+impl Default for Simple2dConfig {
+    fn default() -> Self {
+        Simple2dConfig {
+            translation_threshold_m: 0.02,
+            rotation_threshold_deg: 0.3,
+            rc: 1.0,
+            tc: 1.0,
+            robust: true,
+            pixel_sigma: 0.3,
+        }
+    }
+}
+
+/// Settings of the rigid estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RigidConfig {
+    /// RANSAC draws of two matches.
+    pub iterations: u32,
+    /// Pixel noise assumed when judging residuals, px.
+    #[serde(deserialize_with = "positive")]
+    pub pixel_sigma: f64,
+}
+
+impl Default for RigidConfig {
+    fn default() -> Self {
+        RigidConfig { iterations: 64, pixel_sigma: 0.3 }
+    }
+}
+
+/// Which estimator, as written in a scenario file.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum EstimatorKind {
+    /// The thesis's simplified 2D estimator.
+    Simple2d(#[serde(default)] Simple2dConfig),
+    /// Weighted Kabsch inside RANSAC.
+    Rigid(#[serde(default)] RigidConfig),
+}
+
+impl Default for EstimatorKind {
+    fn default() -> Self {
+        EstimatorKind::Rigid(RigidConfig::default())
+    }
+}
+
+/// The egomotion settings, as written in a scenario file.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EgomotionConfig {
+    /// The estimator.
+    pub estimator: EstimatorKind,
+    /// The error model weighting landmarks and giving step CVs.
+    pub model: ErrorModelKind,
+    /// Descriptor matching between frames.
+    pub matching: MatchConfig,
+    /// Reference frames (keyframes) kept from distinct viewpoints, each a
+    /// frame new ones can be matched against.
+    #[serde(deserialize_with = "at_least_one")]
+    pub keyframes: usize,
+    /// A frame becomes a keyframe when the robot is at least this far from
+    /// every keyframe, m…
+    #[serde(deserialize_with = "positive")]
+    pub keyframe_spacing_m: f64,
+    /// …or turned at least this far from every keyframe's heading, °.
+    #[serde(deserialize_with = "positive")]
+    pub keyframe_spacing_deg: f64,
+    /// A keyframe is retired once the robot has driven this far from it:
+    /// little of what it saw is still in view, m.
+    #[serde(deserialize_with = "positive")]
+    pub keyframe_range_m: f64,
+    /// A match to a keyframe is trusted outright with at least this many
+    /// consistent landmarks; with fewer (but enough for the estimator) the
+    /// next keyframe is tried and the best match kept.
+    #[serde(deserialize_with = "at_least_one")]
+    pub good_match_landmarks: usize,
+    /// The robot's top speed: motions faster than this are impossible and
+    /// rejected (thesis §4.4.6), m/s.
+    #[serde(deserialize_with = "positive")]
+    pub max_speed: f64,
+    /// Rejects a visual motion that disagrees with odometry's by more than
+    /// odometry can err over the same stretch: a wrong consensus of far
+    /// landmarks. `None` turns the check off (pure egomotion).
+    pub odometry_gate: Option<OdometryGate>,
+    /// The robot's top turn rate: turns faster than this, or wider than
+    /// the field of view, are impossible between frames that share
+    /// landmarks and rejected, °/s.
+    #[serde(deserialize_with = "positive")]
+    pub max_turn_rate_deg: f64,
+    /// Whether each visual motion that passes the odometry gate is
+    /// combined with odometry's over the same stretch, weighed by the
+    /// estimator's covariance and the gate's `noise` model (the rigid
+    /// estimator only; without a gate or its `noise` nothing is combined).
+    pub odometry_fusion: OdometryFusion,
+    /// Navigate by egomotion: the robot's pose that behaviours steer by
+    /// becomes egomotion's pose at the newest frame, carried on by what
+    /// odometry says the robot did since, instead of odometry alone. Off
+    /// by default: the thesis's robot navigated by odometry.
+    pub navigate: bool,
+}
+
+fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usize, D::Error> {
+    let n = usize::deserialize(deserializer)?;
+    if n == 0 {
+        return Err(serde::de::Error::custom("must be at least 1"));
+    }
+    Ok(n)
+}
+
+impl Default for EgomotionConfig {
+    fn default() -> Self {
+        EgomotionConfig {
+            estimator: EstimatorKind::default(),
+            model: ErrorModelKind::default(),
+            matching: MatchConfig::default(),
+            keyframes: 10,
+            keyframe_spacing_m: 1.0,
+            keyframe_spacing_deg: 15.0,
+            keyframe_range_m: 10.0,
+            good_match_landmarks: 6,
+            max_speed: 0.6,
+            max_turn_rate_deg: 100.0,
+            odometry_gate: Some(OdometryGate::default()),
+            odometry_fusion: OdometryFusion::Off,
+            navigate: false,
+        }
+    }
+}

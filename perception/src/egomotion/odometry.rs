@@ -1,0 +1,278 @@
+//! What odometry adds to a visual motion: the gate that rejects a motion
+//! odometry cannot explain, and the fusion of the two.
+
+use super::step::PlanarMotion;
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+use ubf_core::config::{non_negative, positive};
+use ubf_core::{angle_difference, Pose2};
+
+/// What of odometry's motion egomotion combines with the visual one.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+pub enum OdometryFusion {
+    /// Nothing: egomotion stays purely visual, as the thesis measured it.
+    #[default]
+    Off,
+    /// Odometry's sideways motion only. Matched mostly to far landmarks, a
+    /// visual motion cannot tell a sideways slide from a slight turn (both
+    /// move a far bearing alike), while the wheels barely err sideways over
+    /// a few metres; a wheel scale error, which odometry's distance and
+    /// turns carry, leaves its sideways motion alone.
+    Sideways,
+    /// Forward, sideways and heading: better still where odometry errs only
+    /// at random, as the gate's `noise` says, and worse than none where its
+    /// wheel scale is off (a systematic error the noise model does not
+    /// cover is carried into the pose frame after frame).
+    Full,
+}
+
+/// How far a visual motion may disagree with odometry's before it is taken
+/// for a wrong match.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OdometryGate {
+    /// Position disagreement allowed at zero distance, m…
+    #[serde(deserialize_with = "non_negative")]
+    pub metres: f64,
+    /// …plus this share of the distance odometry drove.
+    #[serde(deserialize_with = "non_negative")]
+    pub share: f64,
+    /// Heading disagreement allowed at zero distance, °…
+    #[serde(deserialize_with = "non_negative")]
+    pub degrees: f64,
+    /// …plus this much per metre driven.
+    #[serde(deserialize_with = "non_negative")]
+    pub degrees_per_m: f64,
+    /// Odometry's own error, for a finer test of an estimate that comes
+    /// with a covariance (the rigid estimator's): the disagreement weighed
+    /// by both. `None` keeps only the bounds above.
+    pub noise: Option<OdometryNoise>,
+}
+
+impl Default for OdometryGate {
+    fn default() -> Self {
+        OdometryGate {
+            metres: 0.3,
+            share: 0.1,
+            degrees: 5.0,
+            degrees_per_m: 1.0,
+            noise: Some(OdometryNoise::default()),
+        }
+    }
+}
+
+/// Odometry's error over a stretch of `d` metres, as standard deviations:
+/// position `position_m + position_share·d`, heading
+/// `√(heading_deg² + heading_deg_per_sqrt_m²·d)` (a floor and a random slip).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OdometryNoise {
+    /// Position σ at zero distance (timing between a frame and its
+    /// odometry), m…
+    #[serde(deserialize_with = "non_negative")]
+    pub position_m: f64,
+    /// …plus this share of the distance driven.
+    #[serde(deserialize_with = "non_negative")]
+    pub position_share: f64,
+    /// Heading σ at zero distance, °…
+    #[serde(deserialize_with = "non_negative")]
+    pub heading_deg: f64,
+    /// …plus a random slip, ° per √m.
+    #[serde(deserialize_with = "non_negative")]
+    pub heading_deg_per_sqrt_m: f64,
+    /// The test's threshold on the squared Mahalanobis distance (3 degrees
+    /// of freedom: 16.27 rejects one consistent motion in a thousand).
+    #[serde(deserialize_with = "positive")]
+    pub chi2: f64,
+}
+
+impl Default for OdometryNoise {
+    /// The slip is the heading drift `ubf model fit-costs` measured on the
+    /// odometry bridge of the thesis routes (0.20° per √m); the floors are
+    /// judgement, a few times the frame-to-odometry timing error.
+    fn default() -> Self {
+        OdometryNoise {
+            position_m: 0.02,
+            position_share: 0.01,
+            heading_deg: 0.2,
+            heading_deg_per_sqrt_m: 0.2,
+            chi2: 16.27,
+        }
+    }
+}
+
+impl OdometryNoise {
+    /// The covariance (forward, left, yaw) of odometry's motion over a
+    /// stretch of `driven` metres.
+    fn covariance(&self, driven: f64) -> Matrix3<f64> {
+        let position = self.position_m + self.position_share * driven;
+        let heading2 =
+            (self.heading_deg.powi(2) + self.heading_deg_per_sqrt_m.powi(2) * driven) * 1f64.to_radians().powi(2);
+        Matrix3::from_diagonal(&Vector3::new(position * position, position * position, heading2))
+    }
+
+    /// `motion − odometric` (forward, left, yaw), the yaw difference
+    /// wrapped to within half a turn.
+    fn difference(motion: &PlanarMotion, odometric: &Pose2) -> Vector3<f64> {
+        Vector3::new(
+            motion.forward - odometric.x,
+            motion.left - odometric.y,
+            angle_difference(motion.yaw, odometric.theta),
+        )
+    }
+
+    /// Whether a visual `motion` with covariance `visual` (forward, left,
+    /// yaw) is consistent with `odometric`, driven over `driven` metres.
+    pub(super) fn consistent(
+        &self,
+        motion: &PlanarMotion,
+        visual: &Matrix3<f64>,
+        odometric: &Pose2,
+        driven: f64,
+    ) -> bool {
+        let difference = Self::difference(motion, odometric);
+        (visual + self.covariance(driven))
+            .try_inverse()
+            .is_some_and(|inverse| (difference.transpose() * inverse * difference)[0] <= self.chi2)
+    }
+
+    /// The visual `motion` (covariance `visual`) and what `fusion` takes of
+    /// `odometric`, driven over `driven` metres, combined by their
+    /// information: the motion both measurements make most likely, and its
+    /// covariance. `None` if a covariance is singular.
+    ///
+    /// Each corrects the other where it is weak. Matched mostly to far
+    /// landmarks, the visual motion cannot tell a sideways slide from a
+    /// slight turn, while odometry's sideways error over a few metres is
+    /// centimetres; with the sideways motion pinned, the far bearings fix
+    /// the turn.
+    pub(super) fn fuse(
+        &self,
+        fusion: OdometryFusion,
+        motion: &PlanarMotion,
+        visual: &Matrix3<f64>,
+        odometric: &Pose2,
+        driven: f64,
+    ) -> Option<(PlanarMotion, Matrix3<f64>)> {
+        if fusion == OdometryFusion::Off {
+            return None;
+        }
+        let (visual_info, mut odometry_info) = (visual.try_inverse()?, self.covariance(driven).try_inverse()?);
+        // The covariance is diagonal: dropping a row and column of its
+        // information leaves the others as they were.
+        if fusion == OdometryFusion::Sideways {
+            odometry_info[(0, 0)] = 0.0;
+            odometry_info[(2, 2)] = 0.0;
+        }
+        let covariance = (visual_info + odometry_info).try_inverse()?;
+        // The correction to the visual motion, from the difference alone, so
+        // that a yaw near ±π does not wrap.
+        let correction = covariance * odometry_info * -Self::difference(motion, odometric);
+        let fused = PlanarMotion {
+            forward: motion.forward + correction[0],
+            left: motion.left + correction[1],
+            yaw: motion.yaw + correction[2],
+        };
+        Some((fused, covariance))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::egomotion::testing::{at, frame, standard_normal};
+    use crate::egomotion::{EgomotionConfig, Tracker};
+    use crate::stereo::StereoCamera;
+    use rand_chacha::ChaCha8Rng;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn odometry_noise_weighs_a_disagreement_by_both_covariances() {
+        // 0.3 m further than odometry's 5 m: beyond a visual σ of 1 cm and
+        // odometry's 7 cm, within a visual σ of 0.5 m. A 2° turn odometry
+        // did not see is beyond its 0.5° over 5 m.
+        let noise = OdometryNoise::default();
+        let odometric = Pose2::new(5.0, 0.0, 0.0);
+        let sharp = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-6));
+        let vague = Matrix3::from_diagonal(&Vector3::new(0.25, 0.25, 1e-6));
+        let motion = |forward: f64, yaw_deg: f64| PlanarMotion { forward, left: 0.0, yaw: yaw_deg.to_radians() };
+        assert!(noise.consistent(&motion(5.0, 0.0), &sharp, &odometric, 5.0));
+        assert!(!noise.consistent(&motion(5.3, 0.0), &sharp, &odometric, 5.0));
+        assert!(noise.consistent(&motion(5.3, 0.0), &vague, &odometric, 5.0));
+        assert!(!noise.consistent(&motion(5.0, 2.0), &sharp, &odometric, 5.0));
+    }
+
+    #[test]
+    fn fusing_odometry_resolves_what_far_landmarks_leave_open() {
+        // Landmarks 30 m ahead fix where they lie in bearing, so the visual
+        // motion can slide sideways by s and turn by −s/30 m at little cost:
+        // its covariance is stretched along that line. Here it has slid
+        // 0.3 m. Odometry is 2 cm off sideways and 0.3° in heading. Fused,
+        // the sideways motion comes from odometry and the heading from the
+        // landmarks' bearings: better than either alone, whether odometry's
+        // sideways motion alone is taken or all of it.
+        let noise = OdometryNoise::default();
+        let lever = 30.0;
+        let slide = Vector3::new(0.0, 1.0, -1.0 / lever).normalize();
+        let visual = slide * slide.transpose() * 0.5 + Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1e-8));
+        let seen = PlanarMotion { forward: 5.0, left: 0.3, yaw: -0.3 / lever };
+        let odometric = Pose2::new(5.0, 0.02, 0.3f64.to_radians());
+        for fusion in [OdometryFusion::Sideways, OdometryFusion::Full] {
+            let (fused, covariance) = noise.fuse(fusion, &seen, &visual, &odometric, 5.0).unwrap();
+            assert!(fused.left.abs() < 0.03, "{fusion:?}: {fused:?}");
+            // Odometry's 2 cm sideways over the 30 m lever: 0.04°.
+            assert!(fused.yaw.abs() < 0.2 * odometric.theta, "{fusion:?}: {fused:?}");
+            assert!(covariance[(1, 1)] < noise.covariance(5.0)[(1, 1)], "{fusion:?}: {covariance}");
+            // Sideways and heading both gain; forward only from all of it.
+            assert!(covariance[(1, 1)] < visual[(1, 1)] && covariance[(2, 2)] < visual[(2, 2)], "{covariance}");
+            assert!(covariance[(0, 0)] <= visual[(0, 0)] + 1e-12, "{fusion:?}: {covariance}");
+        }
+        assert_eq!(noise.fuse(OdometryFusion::Off, &seen, &visual, &odometric, 5.0), None);
+        // Sideways only, a forward distance odometry has 2 % long stays the
+        // visual one.
+        let long = Pose2::new(5.1, 0.02, 0.3f64.to_radians());
+        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0).unwrap();
+        assert!((fused.forward - 5.0).abs() < 1e-3, "{fused:?}");
+        // Across ±π the two headings are 0.02 rad apart, not 2π.
+        let back = PlanarMotion { forward: 0.0, left: 0.0, yaw: PI - 0.01 };
+        let (fused, _) = noise
+            .fuse(OdometryFusion::Full, &back, &Matrix3::identity(), &Pose2::new(0.0, 0.0, -PI + 0.01), 0.0)
+            .unwrap();
+        assert!(angle_difference(fused.yaw, PI).abs() < 0.011, "{fused:?}");
+    }
+
+    #[test]
+    fn fusing_odometry_corrects_a_drive_towards_far_landmarks() {
+        // Driving 8 m towards a far wall whose landmarks' ranges are off by
+        // 3 % (σ, fresh in every frame, as stereo's are); odometry is exact.
+        // The fused pose is nearer the truth sideways than the purely visual
+        // one.
+        use rand::SeedableRng;
+        let camera = StereoCamera::default();
+        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
+        let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+        let seen = |k: u32| {
+            let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
+            let mut observations = frame(&far, pose(k), &camera);
+            for o in &mut observations {
+                let scale = 1.0 + 0.03 * standard_normal(&mut rng);
+                o.point_cam = o.point_cam.map(|v: f64| v * scale);
+            }
+            observations
+        };
+        let end_error = |odometry_fusion| {
+            let config = EgomotionConfig { odometry_fusion, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
+            for k in 0..=32u32 {
+                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen(k)), &pose(k));
+            }
+            assert_eq!(tracker.state().failures, 0);
+            tracker.state().pose.unwrap().y.abs()
+        };
+        let visual = end_error(OdometryFusion::Off);
+        for fusion in [OdometryFusion::Sideways, OdometryFusion::Full] {
+            let fused = end_error(fusion);
+            assert!(fused < 0.25 * visual, "{fusion:?}: {fused} m sideways, visual {visual} m");
+        }
+    }
+}

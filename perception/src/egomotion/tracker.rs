@@ -1,0 +1,701 @@
+//! The keyframe tracker: integrates egomotion over a run, frame by frame,
+//! against a bank of keyframes, and bridges failed frames by odometry.
+
+use super::config::{EgomotionConfig, EstimatorKind};
+use super::matching::match_frames;
+use super::rigid::Rigid;
+use super::simple2d::Simple2d;
+use super::step::{MotionPhase, Pair, PlanarMotion};
+use crate::error_model::{CvTable, MODEL_STEP_M};
+use crate::fusion::fuse_cv;
+use crate::stereo::StereoCamera;
+use nalgebra::Matrix3;
+use rand_chacha::ChaCha8Rng;
+use ubf_core::{angle_difference, CameraMount, Command, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
+
+/// A reference frame new frames are matched against.
+#[derive(Clone, Debug)]
+struct Keyframe {
+    landmarks: Vec<LandmarkObservation>,
+    /// The frame's number.
+    number: u64,
+    time: f64,
+    /// Egomotion's pose of the robot when it was taken.
+    pose: Pose2,
+    /// The odometric pose then: how far the robot has since driven and
+    /// turned, to keep keyframes apart and retire them.
+    odometry: Pose2,
+    /// Odometry bridges chained into its pose since the start: an anchor
+    /// with fewer rests on more vision.
+    bridges: u32,
+    /// The covariance of its pose (x, y, heading) from the visual estimates
+    /// chained into it.
+    covariance: Matrix3<f64>,
+    /// Where the camera looked on the robot (a pan-tilt unit's measured
+    /// angles), to lift its landmarks into the robot frame.
+    mount: CameraMount,
+}
+
+/// Where the camera looked in the world by the robot's `odometry`: its
+/// heading turned by the mount's pan.
+fn view_heading(odometry: &Pose2, mount: &CameraMount) -> f64 {
+    odometry.theta + mount.pan_deg.to_radians()
+}
+
+/// The covariance of `pose ∘ motion`, to first order, from the covariances
+/// of the two (independent) parts.
+fn composed_covariance(
+    pose: &Pose2,
+    pose_cov: &Matrix3<f64>,
+    motion: &PlanarMotion,
+    motion_cov: &Matrix3<f64>,
+) -> Matrix3<f64> {
+    let (s, c) = pose.theta.sin_cos();
+    let (f, l) = (motion.forward, motion.left);
+    let j_pose = Matrix3::new(1.0, 0.0, -s * f - c * l, 0.0, 1.0, c * f - s * l, 0.0, 0.0, 1.0);
+    let j_motion = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    j_pose * pose_cov * j_pose.transpose() + j_motion * motion_cov * j_motion.transpose()
+}
+
+/// Integrates egomotion over a run: each new stereo frame is matched against
+/// a bank of keyframes taken from distinct viewpoints.
+///
+/// With the rigid estimator, the keyframe tried first is the one whose pose
+/// is the most certain (the fewest chained estimates, then the oldest):
+/// driving straight, a frame is matched to a keyframe metres back instead of
+/// to the frame before it, so a far landmark's depth error does not enter
+/// step after step; after a physical scan, the frame at the chosen heading is
+/// matched to the keyframe taken before the sweep, so the sweep costs one
+/// rotation estimate. The newest keyframe's match is taken instead when it
+/// predicts a smaller error (see `best_estimate`). A keyframe is
+/// retired once the robot has driven `keyframe_range_m` from it (or, with
+/// the bank full, the farthest one makes room), never for elapsed time: a
+/// person standing in front of the camera for a minute loses nothing.
+///
+/// When no keyframe matches, the pose is carried across by odometry and the
+/// stretch is counted as an outage (its duration and distance are in the
+/// state). A later frame that matches a keyframe from before the outage
+/// replaces the odometry bridge with a visual estimate.
+pub struct Tracker {
+    config: EgomotionConfig,
+    camera: StereoCamera,
+    table: CvTable,
+    rng: ChaCha8Rng,
+    keyframes: Vec<Keyframe>,
+    /// The newest frame taken in: its number, and the odometric pose then.
+    newest: (u64, Pose2),
+    /// The covariance of the visual pose (x, y, heading).
+    covariance: Matrix3<f64>,
+    /// When the latest frame matched (or the first was taken), s.
+    last_match: f64,
+    /// When the current outage began, if one is under way.
+    outage_since: Option<f64>,
+    /// What the robot was commanded to do since the newest frame.
+    phase: MotionPhase,
+    /// The same, up to the newest frame: what the next step is told.
+    commanded: MotionPhase,
+    state: EgomotionState,
+    matches: Vec<(usize, usize)>,
+    pairs: Vec<Pair>,
+}
+
+/// The result of matching a frame against one keyframe.
+struct Estimate {
+    motion: PlanarMotion,
+    landmarks: usize,
+    step_cv: Option<f64>,
+    /// The motion's covariance, where the estimator gives one.
+    covariance: Option<Matrix3<f64>>,
+}
+
+impl Tracker {
+    /// A tracker for `camera`, starting at `start`, drawing RANSAC samples
+    /// from `seed`.
+    pub fn new(config: EgomotionConfig, camera: StereoCamera, start: Pose2, seed: u64) -> Self {
+        let table = CvTable::for_camera(config.model, &camera, MODEL_STEP_M, 100.0);
+        Tracker {
+            config,
+            camera,
+            table,
+            rng: ubf_core::seeds::rng(seed, ubf_core::seeds::Stream::Egomotion),
+            keyframes: Vec::new(),
+            newest: (0, Pose2::default()),
+            covariance: Matrix3::zeros(),
+            last_match: 0.0,
+            outage_since: None,
+            phase: MotionPhase::Still,
+            commanded: MotionPhase::Still,
+            state: EgomotionState { pose: Some(start), ..EgomotionState::default() },
+            matches: Vec::new(),
+            pairs: Vec::new(),
+        }
+    }
+
+    /// What egomotion has made of the frames so far.
+    pub fn state(&self) -> EgomotionState {
+        self.state
+    }
+
+    /// The covariance of the latest pose (x, y, heading) as the estimator's
+    /// own information puts it: the anchor keyframe's chained estimates and
+    /// the latest match to it.
+    pub fn pose_covariance(&self) -> Matrix3<f64> {
+        self.covariance
+    }
+
+    /// Where the robot is now by egomotion, if it navigates by it
+    /// (`navigate`) and a frame has been taken in: the pose at the newest
+    /// frame, carried on by what `odometry` (the odometric pose now) says
+    /// the robot did since. Frames come a few times a second; a controller
+    /// ticking faster steers by this rather than by a pose that stands
+    /// still between frames.
+    pub fn navigation_pose(&self, odometry: &Pose2) -> Option<Pose2> {
+        if !self.config.navigate || self.newest.0 == 0 {
+            return None;
+        }
+        Some(self.state.pose?.compose(&odometry.relative_to(&self.newest.1)))
+    }
+
+    /// The error model's look-up table the tracker weighs landmarks with.
+    pub fn table(&self) -> &CvTable {
+        &self.table
+    }
+
+    /// Takes note of a command sent to the robot: the simplified estimator
+    /// reads the motion type from the commanded phase.
+    pub fn commanded(&mut self, command: &Command) {
+        self.commanded = self.commanded.and(command);
+    }
+
+    /// Keyframes in the bank now.
+    pub fn keyframes(&self) -> usize {
+        self.keyframes.len()
+    }
+
+    /// Takes in `frame` if it is new: matches it against the keyframes,
+    /// best anchored first, and sets the pose from the best match. A
+    /// frame no keyframe matches is a failure: the pose is carried on by
+    /// odometry and an outage is counted.
+    ///
+    /// `odometry` is the robot's odometric pose when the frame was taken. It
+    /// measures how far each step drove (to weigh the step's CV in the
+    /// journey CV, eq. 7 per metre), keeps keyframes apart, and bridges
+    /// outages; it never enters a visual estimate.
+    pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
+        if frame.number == 0 || frame.number == self.newest.0 {
+            return;
+        }
+        let previous_odometry = std::mem::replace(&mut self.newest, (frame.number, *odometry)).1;
+        // The commands between the last frame and this one.
+        self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
+        let Some(pose) = self.state.pose else { return };
+        if self.keyframes.is_empty() {
+            self.last_match = frame.time;
+            self.add_keyframe(frame, pose, *odometry, 0);
+            return;
+        }
+        self.keyframes.retain(|k| k.odometry.distance_to(odometry.x, odometry.y) <= self.config.keyframe_range_m);
+        let driven = previous_odometry.distance_to(odometry.x, odometry.y);
+        self.state.steps += 1;
+        match self.best_estimate(frame, odometry) {
+            Some((anchor, estimate)) => {
+                let keyframe = &self.keyframes[anchor];
+                let pose = keyframe.pose.compose(&estimate.motion.as_pose());
+                // What a replay needs to see why a frame landed where it did
+                // (the fields are only evaluated with debug logging on).
+                tracing::debug!(
+                    frame = frame.number,
+                    anchor_time = keyframe.time,
+                    landmarks = estimate.landmarks,
+                    visual = ?(estimate.motion.forward, estimate.motion.left, estimate.motion.yaw.to_degrees()),
+                    odometric = ?{
+                        let o = odometry.relative_to(&keyframe.odometry);
+                        (o.x, o.y, o.theta.to_degrees())
+                    },
+                    sigma = ?estimate.covariance.map(|c| (c[(0, 0)].sqrt(), c[(1, 1)].sqrt(), c[(2, 2)].sqrt().to_degrees())),
+                    "egomotion matched"
+                );
+                let bridges = keyframe.bridges;
+                if let Some(motion_cov) = &estimate.covariance {
+                    self.covariance =
+                        composed_covariance(&keyframe.pose, &keyframe.covariance, &estimate.motion, motion_cov);
+                }
+                self.state.pose = Some(pose);
+                self.state.last_step_cv = estimate.step_cv;
+                self.state.journey_cv += estimate.step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
+                self.state.bridging = false;
+                self.state.anchor_frame = Some(keyframe.number);
+                self.last_match = frame.time;
+                if let Some(since) = self.outage_since.take() {
+                    self.state.outage_s += frame.time - since;
+                }
+                if self.frame_to_frame() || self.distinct(odometry, &self.mount_of(frame)) {
+                    self.add_keyframe(frame, pose, *odometry, bridges);
+                }
+            }
+            None => {
+                // Carry the pose on by what odometry says the robot did
+                // since the last frame, and say so.
+                let pose = pose.compose(&odometry.relative_to(&previous_odometry));
+                self.state.pose = Some(pose);
+                self.state.failures += 1;
+                self.state.last_step_cv = None;
+                self.state.bridging = true;
+                self.state.anchor_frame = None;
+                self.state.outage_m += driven;
+                if self.outage_since.is_none() {
+                    self.outage_since = Some(self.last_match);
+                    self.state.outages += 1;
+                }
+                // A frame nothing matches, from a new viewpoint, anchors the
+                // frames after it (through the odometry bridge) once the old
+                // keyframes are out of sight.
+                if frame.landmarks.len() >= 3 && self.distinct(odometry, &self.mount_of(frame)) {
+                    let bridges = self.keyframes.iter().map(|k| k.bridges).min().unwrap_or_default();
+                    self.add_keyframe(frame, pose, *odometry, bridges + 1);
+                }
+            }
+        }
+    }
+
+    /// Whether the estimator must work frame to frame: the simplified one
+    /// reads each step as either a turn or a translation (thesis §4.4.7), so
+    /// it is given the newest keyframe first and every matched frame becomes
+    /// one; the bank still bridges failed frames without losing motion.
+    fn frame_to_frame(&self) -> bool {
+        matches!(self.config.estimator, EstimatorKind::Simple2d(_))
+    }
+
+    /// Whether a frame taken at `odometry` is far enough from every
+    /// keyframe, in position or heading, to be one.
+    fn distinct(&self, odometry: &Pose2, mount: &CameraMount) -> bool {
+        let (spacing, turn) = (self.config.keyframe_spacing_m, self.config.keyframe_spacing_deg.to_radians());
+        let view = view_heading(odometry, mount);
+        self.keyframes.iter().all(|k| {
+            k.odometry.distance_to(odometry.x, odometry.y) >= spacing
+                || angle_difference(view, view_heading(&k.odometry, &k.mount)).abs() >= turn
+        })
+    }
+
+    fn add_keyframe(&mut self, frame: &StereoFrame, pose: Pose2, odometry: Pose2, bridges: u32) {
+        if self.keyframes.len() >= self.config.keyframes {
+            // Make room by retiring the keyframe farthest from here.
+            let farthest = self
+                .keyframes
+                .iter()
+                .enumerate()
+                .max_by(|a, b| {
+                    let d = |k: &Keyframe| k.odometry.distance_to(odometry.x, odometry.y);
+                    d(a.1).total_cmp(&d(b.1))
+                })
+                .map(|(i, _)| i);
+            if let Some(i) = farthest {
+                self.keyframes.remove(i);
+            }
+        }
+        self.keyframes.push(Keyframe {
+            landmarks: frame.landmarks.clone(),
+            number: frame.number,
+            time: frame.time,
+            pose,
+            odometry,
+            bridges,
+            covariance: self.covariance,
+            mount: self.mount_of(frame),
+        });
+    }
+
+    /// The mount `frame` was taken with: its calibration's (on a pan-tilt
+    /// unit, the measured angles then), else the tracker's camera's.
+    fn mount_of(&self, frame: &StereoFrame) -> CameraMount {
+        frame.calibration.map_or(self.camera.mount, |c| c.mount)
+    }
+
+    /// The anchor and the match to it: the first good match (at least
+    /// `good_match_landmarks`) against the keyframes facing close enough to
+    /// share the view, fewest odometry bridges first, then the smallest
+    /// pose covariance (the fewest chained estimates); failing a good match,
+    /// the match with the most landmarks. The simplified estimator, which
+    /// works frame to frame, tries the newest first.
+    ///
+    /// A far anchor spares the chain of short steps, but it shares only the
+    /// landmarks still in view, mostly distant ones whose depth is poor, and
+    /// a wrong consensus among them can put the frame metres off (where no
+    /// odometry gate catches it, as on a replayed recording). So the newest
+    /// keyframe is matched too, and the anchor is the one predicting the
+    /// smaller error: the keyframe's pose covariance carried through the
+    /// match's (the estimator's inverse information), position variance plus
+    /// heading variance over the keyframe reach, where a heading error
+    /// becomes a position error.
+    fn best_estimate(&mut self, frame: &StereoFrame, odometry: &Pose2) -> Option<(usize, Estimate)> {
+        let fov = self.camera.horizontal_fov();
+        let view = view_heading(odometry, &self.mount_of(frame));
+        let mut order: Vec<usize> = (0..self.keyframes.len())
+            .filter(|&i| {
+                let k = &self.keyframes[i];
+                angle_difference(view, view_heading(&k.odometry, &k.mount)).abs() < fov
+            })
+            .collect();
+        let newest = order.iter().copied().max_by(|&a, &b| self.keyframes[a].time.total_cmp(&self.keyframes[b].time));
+        if self.frame_to_frame() {
+            order.sort_by(|&a, &b| self.keyframes[b].time.total_cmp(&self.keyframes[a].time));
+        } else {
+            let spread = |k: &Keyframe| self.predicted_error(&k.covariance);
+            order.sort_by(|&a, &b| {
+                let (ka, kb) = (&self.keyframes[a], &self.keyframes[b]);
+                ka.bridges.cmp(&kb.bridges).then(spread(ka).total_cmp(&spread(kb))).then(ka.time.total_cmp(&kb.time))
+            });
+        }
+        let mut best: Option<(usize, Estimate)> = None;
+        for &i in &order {
+            let Some(estimate) = self.estimate_from(i, frame, odometry) else { continue };
+            if estimate.landmarks >= self.config.good_match_landmarks {
+                best = Some((i, estimate));
+                break;
+            }
+            if best.as_ref().is_none_or(|(_, b)| estimate.landmarks > b.landmarks) {
+                best = Some((i, estimate));
+            }
+        }
+        let (Some((anchor, far)), Some(newest)) = (&best, newest) else { return best };
+        if *anchor == newest {
+            return best;
+        }
+        let Some(near) = self.estimate_from(newest, frame, odometry) else { return best };
+        if near.landmarks < self.config.good_match_landmarks {
+            return best;
+        }
+        let (Some(far_cov), Some(near_cov)) = (far.covariance, near.covariance) else { return best };
+        let (kf, kn) = (&self.keyframes[*anchor], &self.keyframes[newest]);
+        let far_error = self.predicted_error(&composed_covariance(&kf.pose, &kf.covariance, &far.motion, &far_cov));
+        let near_error = self.predicted_error(&composed_covariance(&kn.pose, &kn.covariance, &near.motion, &near_cov));
+        if near_error < far_error {
+            Some((newest, near))
+        } else {
+            best
+        }
+    }
+
+    /// The error a pose with covariance `c` (x, y, heading) predicts: its
+    /// position variance plus its heading variance over the keyframe reach,
+    /// where a heading error becomes a position error, m².
+    fn predicted_error(&self, c: &Matrix3<f64>) -> f64 {
+        let reach = self.config.keyframe_range_m;
+        c[(0, 0)] + c[(1, 1)] + reach * reach * c[(2, 2)]
+    }
+
+    /// The motion from keyframe `index` to `frame`, if the estimator finds
+    /// one.
+    fn estimate_from(&mut self, index: usize, frame: &StereoFrame, odometry: &Pose2) -> Option<Estimate> {
+        let keyframe = &self.keyframes[index];
+        match_frames(&keyframe.landmarks, &frame.landmarks, &self.config.matching, &mut self.matches);
+        // Each frame's landmarks are lifted by the mount it was taken with,
+        // so a pan of the camera between them is not read as a turn of the
+        // robot.
+        let (mount_before, mount_after) = (keyframe.mount, self.mount_of(frame));
+        let fixed = mount_before.looks_ahead() && mount_after.looks_ahead();
+        let ahead = CameraMount::ahead(self.camera.mount.forward, self.camera.mount.left, self.camera.mount.height);
+        self.pairs.clear();
+        for &(i, j) in &self.matches {
+            let (before, after) = (keyframe.landmarks[i].point_cam, frame.landmarks[j].point_cam);
+            let cv = self.table.cv(after[0], after[1], after[2]);
+            self.pairs.push(match self.config.estimator {
+                EstimatorKind::Simple2d(_) if fixed => Pair { before, after, cv },
+                // The simplified estimator reads motion in the frame of a
+                // camera looking straight ahead.
+                EstimatorKind::Simple2d(_) => Pair {
+                    before: ahead.robot_to_cam(mount_before.cam_to_robot(before)),
+                    after: ahead.robot_to_cam(mount_after.cam_to_robot(after)),
+                    cv,
+                },
+                // The rigid estimator works in the robot frame.
+                EstimatorKind::Rigid(_) => {
+                    Pair { before: mount_before.cam_to_robot(before), after: mount_after.cam_to_robot(after), cv }
+                }
+            });
+        }
+        let dt = (frame.time - keyframe.time).max(1e-6);
+        let max_step = self.config.max_speed * dt * 1.5 + 0.02;
+        let (mut motion, landmarks, mut covariance) = match &self.config.estimator {
+            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase)
+                .map(|(motion, landmarks)| (motion, landmarks, None)),
+            EstimatorKind::Rigid(c) => {
+                let turned = odometry.relative_to(&keyframe.odometry).theta;
+                Rigid::estimate(c, &self.camera, &self.pairs, max_step, turned, &mut self.rng)
+                    .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance)))
+            }
+        }?;
+        // Frames that share landmarks cannot have looked further apart than
+        // the view is wide, nor can the robot have turned faster than it
+        // turns (§4.4.6).
+        let max_turn = self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians();
+        let looked = motion.yaw + (mount_after.pan_deg - mount_before.pan_deg).to_radians();
+        if motion.yaw.abs() > max_turn || looked.abs() > self.camera.horizontal_fov() {
+            return None;
+        }
+        // Far landmarks fix a bearing well and a range poorly, so a wrong
+        // consensus among them can shift the motion along the line of sight
+        // by metres; such a motion disagrees with odometry by far more than
+        // odometry ever errs over a keyframe's reach.
+        if let Some(gate) = &self.config.odometry_gate {
+            let odometric = odometry.relative_to(&keyframe.odometry);
+            let driven = odometric.x.hypot(odometric.y);
+            let off = (motion.forward - odometric.x).hypot(motion.left - odometric.y);
+            let turned = angle_difference(motion.yaw, odometric.theta).abs();
+            if off > gate.metres + gate.share * driven
+                || turned > (gate.degrees + gate.degrees_per_m * driven).to_radians()
+            {
+                return None;
+            }
+            // Far landmarks with a few gross mismatches among them can agree
+            // on a motion decimetres off whose covariance claims centimetres.
+            if let (Some(noise), Some(visual)) = (&gate.noise, &covariance) {
+                if !noise.consistent(&motion, visual, &odometric, driven) {
+                    return None;
+                }
+                if let Some((fused, fused_covariance)) =
+                    noise.fuse(self.config.odometry_fusion, &motion, visual, &odometric, driven)
+                {
+                    (motion, covariance) = (fused, Some(fused_covariance));
+                }
+            }
+        }
+        Some(Estimate { motion, landmarks, step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)), covariance })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::egomotion::testing::{at, disturbed, frame, landmarks};
+    use crate::egomotion::OdometryGate;
+
+    #[test]
+    fn a_camera_panning_on_a_robot_driving_straight_is_not_read_as_a_turn() {
+        // The robot drives 6 m straight down the corridor while a pan-tilt
+        // unit sweeps the pair between 60° left and right; each frame's
+        // calibration carries the unit's angle at the frame.
+        let corridor: Vec<[f64; 3]> = (0..40)
+            .map(|i| [-4.0 + 1.1 * i as f64, if i % 2 == 0 { 2.0 } else { -2.0 }, 0.4 + 0.04 * i as f64])
+            .collect();
+        let sweep = |k: usize| 60f64.to_radians() * (k as f64 * std::f64::consts::TAU / 16.0).sin();
+        let run = |told: &dyn Fn(usize) -> f64| {
+            let fixed = StereoCamera::default();
+            let mut tracker = Tracker::new(EgomotionConfig::default(), fixed, Pose2::default(), 1);
+            for k in 0..25 {
+                let pose = Pose2::new(0.25 * k as f64, 0.0, 0.0);
+                let looking = StereoCamera { mount: fixed.mount.aimed(sweep(k), 0.0), ..fixed };
+                let calibration = StereoCamera { mount: fixed.mount.aimed(told(k), 0.0), ..fixed };
+                let f = StereoFrame {
+                    number: k as u64 + 1,
+                    time: k as f64 * 0.5,
+                    landmarks: frame(&corridor, pose, &looking),
+                    calibration: Some(calibration),
+                    images: None,
+                };
+                tracker.update(&f, &pose);
+            }
+            tracker.state()
+        };
+        let measured = run(&sweep);
+        let end = measured.pose.unwrap();
+        assert!(end.distance_to(6.0, 0.0) < 1e-6 && end.theta.abs() < 1e-6, "{measured:?}");
+        assert_eq!(measured.failures, 0, "{measured:?}");
+        // Told the camera looked ahead throughout, the tracker takes the
+        // sweep for turns of the robot, and rejects them or ends far off.
+        let blind = run(&|_| 0.0);
+        let off = blind.pose.unwrap();
+        assert!(blind.failures > 5 || off.theta.abs() > 0.2 || off.distance_to(6.0, 0.0) > 0.5, "{blind:?}");
+    }
+
+    #[test]
+    fn a_failed_step_is_recovered_from_the_kept_reference() {
+        let camera = StereoCamera::default();
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+        let poses = [Pose2::default(), Pose2::new(0.25, 0.0, 0.0)];
+        for (n, pose) in poses.iter().enumerate() {
+            tracker.update(
+                &StereoFrame {
+                    number: n as u64 + 1,
+                    time: n as f64 * 0.5,
+                    landmarks: frame(&landmarks(), *pose, &camera),
+                    calibration: None,
+                    images: None,
+                },
+                pose,
+            );
+        }
+        // Odometry says the robot stood still since: the failed frame is
+        // bridged by no motion.
+        let odometry = poses[1];
+        tracker.update(
+            &StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None, images: None },
+            &odometry,
+        );
+        let s = tracker.state();
+        assert_eq!((s.steps, s.failures), (2, 1));
+        assert!((s.pose.unwrap().x - 0.25).abs() < 1e-6, "a failure moves nothing: {:?}", s.pose);
+        // The same frame twice is not a new step.
+        tracker.update(
+            &StereoFrame { number: 3, time: 1.0, landmarks: Vec::new(), calibration: None, images: None },
+            &odometry,
+        );
+        assert_eq!(tracker.state().steps, 2);
+        // The next good frame, 0.5 m on from the reference, recovers it all.
+        let seen = frame(&landmarks(), Pose2::new(0.75, 0.0, 0.0), &camera);
+        let odometry = Pose2::new(0.7, 0.0, 0.0);
+        tracker
+            .update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None, images: None }, &odometry);
+        assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
+    }
+
+    #[test]
+    fn a_long_blackout_loses_no_motion_and_is_counted() {
+        // Something covers the camera for 30 s while the robot drives 2 m
+        // and turns; odometry, which bridges the gap, is 2 % short (within
+        // what the odometry gate expects of it). The first frame after it
+        // matches a keyframe from before it, so the visual estimate replaces
+        // the bridge.
+        let camera = StereoCamera::default();
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+        let start = Pose2::default();
+        tracker.update(&at(1, 0.0, frame(&landmarks(), start, &camera)), &start);
+        let end = Pose2::new(2.0, 0.1, 0.1);
+        for k in 0..60u32 {
+            let share = f64::from(k + 1) / 61.0;
+            let odometry = Pose2::new(0.98 * end.x * share, 0.98 * end.y * share, end.theta * share);
+            tracker.update(&at(u64::from(k) + 2, 0.5 * f64::from(k + 1), Vec::new()), &odometry);
+            assert!(tracker.state().bridging);
+        }
+        let s = tracker.state();
+        assert_eq!((s.outages, s.failures), (1, 60));
+        assert!((s.outage_m - 0.98 * end.x.hypot(end.y) * 60.0 / 61.0).abs() < 1e-9, "{s:?}");
+        // On odometry the pose is 2 % short…
+        assert!((s.pose.unwrap().x - 0.98 * end.x * 60.0 / 61.0).abs() < 1e-9);
+        // …until the camera sees again.
+        tracker.update(&at(62, 30.5, frame(&landmarks(), end, &camera)), &Pose2::new(0.98 * end.x, 0.98 * end.y, 0.1));
+        let s = tracker.state();
+        let pose = s.pose.unwrap();
+        assert!(pose.distance_to(end.x, end.y) < 1e-6 && (pose.theta - end.theta).abs() < 1e-6, "{pose:?}");
+        assert!(!s.bridging);
+        assert_eq!(s.outages, 1);
+        assert!((s.outage_s - 30.5).abs() < 1e-9, "from the last match to the next: {}", s.outage_s);
+    }
+
+    #[test]
+    fn a_scan_and_back_costs_one_estimate() {
+        // The robot turns on the spot to +40°, to −40° and back to 0°,
+        // 10° a frame; the noise is the same in every frame of a pose. The
+        // last frame is matched against the keyframe from before the sweep,
+        // so its pose is the one a direct match of the two gives, and the
+        // sweep's own estimates leave no trace.
+        let camera = StereoCamera::default();
+        let wall: Vec<[f64; 3]> = (0..40)
+            .map(|i| {
+                let a = f64::from(i) * 9f64.to_radians();
+                [2.0 + 8.0 * a.cos(), 8.0 * a.sin(), 1.0]
+            })
+            .collect();
+        let seen = |pose: Pose2, k: u64| disturbed(frame(&wall, pose, &camera), k, 0.05);
+        let mut headings: Vec<f64> = (0..=4).chain((-4..4).rev()).chain(-3..=0).map(|d| f64::from(d) * 10.0).collect();
+        headings.dedup();
+        let mut sweeping = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 5);
+        for (n, h) in headings.iter().enumerate() {
+            let pose = Pose2::new(0.0, 0.0, h.to_radians());
+            sweeping.update(&at(n as u64 + 1, 0.5 * n as f64, seen(pose, h.to_bits())), &pose);
+        }
+        let end = Pose2::default();
+        let mut direct = Tracker::new(EgomotionConfig::default(), camera, end, 5);
+        direct.update(&at(1, 0.0, seen(end, 0f64.to_bits())), &end);
+        direct.update(&at(2, 0.5, seen(end, 0f64.to_bits())), &end);
+        let (a, b) = (sweeping.state().pose.unwrap(), direct.state().pose.unwrap());
+        assert!(a.distance_to(b.x, b.y) < 1e-9 && (a.theta - b.theta).abs() < 1e-9, "{a:?} vs {b:?}");
+        assert_eq!(sweeping.state().failures, 0);
+    }
+
+    #[test]
+    fn driving_straight_matches_keyframes_metres_back() {
+        // Chaining frame to frame adds every step's depth error; matching
+        // against the keyframe 8 m back gives the error of one estimate:
+        // exactly what a direct match of the first and last frames gives.
+        let camera = StereoCamera::default();
+        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
+        let seen = |k: u32| {
+            let pose = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+            disturbed(frame(&far, pose, &camera), u64::from(k), 0.1)
+        };
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
+        for k in 0..=32u32 {
+            let odometry = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+            tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen(k)), &odometry);
+        }
+        let mut direct = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
+        direct.update(&at(1, 0.0, seen(0)), &Pose2::default());
+        direct.update(&at(2, 16.0, seen(32)), &Pose2::new(8.0, 0.0, 0.0));
+        let (a, b) = (tracker.state().pose.unwrap(), direct.state().pose.unwrap());
+        assert!(a.distance_to(b.x, b.y) < 1e-9 && (a.theta - b.theta).abs() < 1e-9, "{a:?} vs {b:?}");
+        assert!(tracker.keyframes() > 1, "new keyframes are still taken as the robot moves on");
+    }
+
+    #[test]
+    fn a_motion_odometry_cannot_explain_is_rejected() {
+        // Odometry says 0.25 m; the frames say 3 m (a wrong consensus):
+        // rejected, and bridged by odometry. Without the gate, accepted.
+        let camera = StereoCamera::default();
+        let seen = |x| frame(&landmarks(), Pose2::new(x, 0.0, 0.0), &camera);
+        for (gate, expected) in [(Some(OdometryGate::default()), 0.25), (None, 3.0)] {
+            let config = EgomotionConfig { odometry_gate: gate, max_speed: 10.0, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+            tracker.update(&at(1, 0.0, seen(0.0)), &Pose2::default());
+            tracker.update(&at(2, 0.5, seen(3.0)), &Pose2::new(0.25, 0.0, 0.0));
+            let s = tracker.state();
+            assert!((s.pose.unwrap().x - expected).abs() < 1e-6, "{gate:?}: {s:?}");
+            assert_eq!(s.failures, u32::from(gate.is_some()));
+        }
+    }
+
+    #[test]
+    fn a_navigating_tracker_carries_its_pose_on_by_odometry_between_frames() {
+        let camera = StereoCamera::default();
+        let start = Pose2::new(1.0, 2.0, 0.0);
+        let seen = |pose: Pose2| frame(&landmarks(), pose, &camera);
+        for navigate in [false, true] {
+            let config = EgomotionConfig { navigate, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, start, 0);
+            assert_eq!(tracker.navigation_pose(&start), None, "no frame yet");
+            // Odometry starts elsewhere and reads 2 % short: egomotion's
+            // pose at the frame is the truth, and the 0.3 m since the frame
+            // comes from odometry.
+            let odometry = Pose2::new(0.0, 0.0, 0.0);
+            tracker.update(&at(1, 0.0, seen(start)), &odometry);
+            let moved = Pose2::new(0.98 * 0.25, 0.0, 0.0);
+            tracker.update(&at(2, 0.5, seen(Pose2::new(1.25, 2.0, 0.0))), &moved);
+            assert_eq!(tracker.state().failures, 0);
+            let now = tracker.navigation_pose(&Pose2::new(moved.x + 0.3, 0.0, 0.0));
+            if navigate {
+                let now = now.unwrap();
+                assert!(now.distance_to(1.55, 2.0) < 1e-6 && now.theta.abs() < 1e-9, "{now:?}");
+            } else {
+                assert_eq!(now, None);
+            }
+        }
+    }
+
+    #[test]
+    fn a_heading_error_becomes_a_position_error_along_the_motion() {
+        // A pose known exactly but for its heading (σ 0.01 rad), facing +y,
+        // then an exact 10 m step forward: the error lands across the step
+        // (along x), 0.1 m σ, and the heading's variance carries over.
+        let pose = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+        let pose_cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(0.0, 0.0, 1e-4));
+        let motion = PlanarMotion { forward: 10.0, left: 0.0, yaw: 0.0 };
+        let c = composed_covariance(&pose, &pose_cov, &motion, &Matrix3::zeros());
+        assert!((c[(0, 0)] - 1e-2).abs() < 1e-12 && c[(1, 1)].abs() < 1e-12, "{c}");
+        assert!((c[(2, 2)] - 1e-4).abs() < 1e-12);
+        // The step's own covariance, given along the step, is turned into
+        // the world frame.
+        let motion_cov = Matrix3::from_diagonal(&nalgebra::Vector3::new(4e-2, 1e-2, 0.0));
+        let c = composed_covariance(&pose, &Matrix3::zeros(), &motion, &motion_cov);
+        assert!((c[(1, 1)] - 4e-2).abs() < 1e-12 && (c[(0, 0)] - 1e-2).abs() < 1e-12, "{c}");
+    }
+}
