@@ -3,6 +3,7 @@
 
 use super::matching::MatchConfig;
 use super::odometry::{OdometryFusion, OdometryGate};
+use super::step::StepEstimator;
 use crate::error_model::ErrorModelKind;
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
@@ -74,6 +75,16 @@ pub enum EstimatorKind {
     Simple2d(#[serde(default)] Simple2dConfig),
     /// Weighted Kabsch inside RANSAC.
     Rigid(#[serde(default)] RigidConfig),
+}
+
+impl EstimatorKind {
+    /// The estimator these settings choose.
+    pub(super) fn estimator(&self) -> &dyn StepEstimator {
+        match self {
+            EstimatorKind::Simple2d(config) => config,
+            EstimatorKind::Rigid(config) => config,
+        }
+    }
 }
 
 impl Default for EstimatorKind {

@@ -3,7 +3,7 @@
 //! each landmark's stereo covariance.
 
 use super::config::RigidConfig;
-use super::step::{Pair, PlanarMotion};
+use super::step::{Mounts, Pair, PlanarMotion, StepEstimator, StepInput, StepMotion};
 use crate::stereo::StereoCamera;
 use nalgebra::{Matrix2, Matrix3, Vector2};
 use rand::seq::index::sample;
@@ -190,6 +190,26 @@ impl Rigid {
             inliers.len(),
             covariance,
         ))
+    }
+}
+
+/// The settings are all the rigid estimator's state, so they carry the
+/// trait.
+impl StepEstimator for RigidConfig {
+    /// It is given the keyframe whose pose is the most certain first: a
+    /// match metres back adds one estimate's error, not one per frame.
+    fn frame_to_frame(&self) -> bool {
+        false
+    }
+
+    /// It works in the robot frame.
+    fn pair(&self, before: [f64; 3], after: [f64; 3], mounts: &Mounts, cv: f64) -> Pair {
+        Pair { before: mounts.before.cam_to_robot(before), after: mounts.after.cam_to_robot(after), cv }
+    }
+
+    fn estimate(&self, pairs: &[Pair], input: StepInput<'_>) -> Option<StepMotion> {
+        Rigid::estimate(self, input.camera, pairs, input.max_step_m, input.turned_rad, input.rng)
+            .map(|(motion, landmarks, covariance)| StepMotion { motion, landmarks, covariance: Some(covariance) })
     }
 }
 

@@ -2,7 +2,7 @@
 //! votes for a translation or a rotation.
 
 use super::config::Simple2dConfig;
-use super::step::{MotionPhase, Pair, PlanarMotion};
+use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepEstimator, StepInput, StepMotion};
 use crate::fusion::{fuse_cv, weighted_mean, weighted_median};
 use crate::stereo::StereoCamera;
 
@@ -98,6 +98,35 @@ impl Simple2d {
             _ => PlanarMotion::default(),
         };
         Some((motion, voters))
+    }
+}
+
+/// The settings are all the simplified estimator's state, so they carry
+/// the trait.
+impl StepEstimator for Simple2dConfig {
+    /// It reads each step as either a turn or a translation (thesis
+    /// §4.4.7), so it is given the newest keyframe first and every matched
+    /// frame becomes one; the bank still bridges failed frames without
+    /// losing motion.
+    fn frame_to_frame(&self) -> bool {
+        true
+    }
+
+    /// It reads motion in the frame of a camera looking straight ahead.
+    fn pair(&self, before: [f64; 3], after: [f64; 3], mounts: &Mounts, cv: f64) -> Pair {
+        if mounts.before.looks_ahead() && mounts.after.looks_ahead() {
+            return Pair { before, after, cv };
+        }
+        Pair {
+            before: mounts.ahead.robot_to_cam(mounts.before.cam_to_robot(before)),
+            after: mounts.ahead.robot_to_cam(mounts.after.cam_to_robot(after)),
+            cv,
+        }
+    }
+
+    fn estimate(&self, pairs: &[Pair], input: StepInput<'_>) -> Option<StepMotion> {
+        Simple2d::estimate(self, input.camera, pairs, input.max_step_m, input.phase)
+            .map(|(motion, landmarks)| StepMotion { motion, landmarks, covariance: None })
     }
 }
 

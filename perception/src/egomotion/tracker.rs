@@ -1,11 +1,9 @@
 //! The keyframe tracker: integrates egomotion over a run, frame by frame,
 //! against a bank of keyframes, and bridges failed frames by odometry.
 
-use super::config::{EgomotionConfig, EstimatorKind};
+use super::config::EgomotionConfig;
 use super::matching::match_frames;
-use super::rigid::Rigid;
-use super::simple2d::Simple2d;
-use super::step::{MotionPhase, Pair, PlanarMotion};
+use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion};
 use crate::error_model::{CvTable, MODEL_STEP_M};
 use crate::fusion::fuse_cv;
 use crate::stereo::StereoCamera;
@@ -258,12 +256,11 @@ impl Tracker {
         }
     }
 
-    /// Whether the estimator must work frame to frame: the simplified one
-    /// reads each step as either a turn or a translation (thesis §4.4.7), so
-    /// it is given the newest keyframe first and every matched frame becomes
-    /// one; the bank still bridges failed frames without losing motion.
+    /// Whether the estimator must work frame to frame (the simplified one
+    /// does): it is given the newest keyframe first and every matched frame
+    /// becomes one.
     fn frame_to_frame(&self) -> bool {
-        matches!(self.config.estimator, EstimatorKind::Simple2d(_))
+        self.config.estimator.estimator().frame_to_frame()
     }
 
     /// Whether a frame taken at `odometry` is far enough from every
@@ -387,49 +384,37 @@ impl Tracker {
     /// The motion from keyframe `index` to `frame`, if the estimator finds
     /// one.
     fn estimate_from(&mut self, index: usize, frame: &StereoFrame, odometry: &Pose2) -> Option<Estimate> {
+        let estimator = self.config.estimator.estimator();
         let keyframe = &self.keyframes[index];
         match_frames(&keyframe.landmarks, &frame.landmarks, &self.config.matching, &mut self.matches);
         // Each frame's landmarks are lifted by the mount it was taken with,
         // so a pan of the camera between them is not read as a turn of the
         // robot.
-        let (mount_before, mount_after) = (keyframe.mount, self.mount_of(frame));
-        let fixed = mount_before.looks_ahead() && mount_after.looks_ahead();
-        let ahead = CameraMount::ahead(self.camera.mount.forward, self.camera.mount.left, self.camera.mount.height);
+        let mounts = Mounts {
+            before: keyframe.mount,
+            after: self.mount_of(frame),
+            ahead: CameraMount::ahead(self.camera.mount.forward, self.camera.mount.left, self.camera.mount.height),
+        };
         self.pairs.clear();
         for &(i, j) in &self.matches {
             let (before, after) = (keyframe.landmarks[i].point_cam, frame.landmarks[j].point_cam);
             let cv = self.table.cv(after[0], after[1], after[2]);
-            self.pairs.push(match self.config.estimator {
-                EstimatorKind::Simple2d(_) if fixed => Pair { before, after, cv },
-                // The simplified estimator reads motion in the frame of a
-                // camera looking straight ahead.
-                EstimatorKind::Simple2d(_) => Pair {
-                    before: ahead.robot_to_cam(mount_before.cam_to_robot(before)),
-                    after: ahead.robot_to_cam(mount_after.cam_to_robot(after)),
-                    cv,
-                },
-                // The rigid estimator works in the robot frame.
-                EstimatorKind::Rigid(_) => {
-                    Pair { before: mount_before.cam_to_robot(before), after: mount_after.cam_to_robot(after), cv }
-                }
-            });
+            self.pairs.push(estimator.pair(before, after, &mounts, cv));
         }
         let dt = (frame.time - keyframe.time).max(1e-6);
-        let max_step = self.config.max_speed * dt * 1.5 + 0.02;
-        let (mut motion, landmarks, mut covariance) = match &self.config.estimator {
-            EstimatorKind::Simple2d(c) => Simple2d::estimate(c, &self.camera, &self.pairs, max_step, self.phase)
-                .map(|(motion, landmarks)| (motion, landmarks, None)),
-            EstimatorKind::Rigid(c) => {
-                let turned = odometry.relative_to(&keyframe.odometry).theta;
-                Rigid::estimate(c, &self.camera, &self.pairs, max_step, turned, &mut self.rng)
-                    .map(|(motion, landmarks, covariance)| (motion, landmarks, Some(covariance)))
-            }
-        }?;
+        let input = StepInput {
+            camera: &self.camera,
+            max_step_m: self.config.max_speed * dt * 1.5 + 0.02,
+            phase: self.phase,
+            turned_rad: odometry.relative_to(&keyframe.odometry).theta,
+            rng: &mut self.rng,
+        };
+        let StepMotion { mut motion, landmarks, mut covariance } = estimator.estimate(&self.pairs, input)?;
         // Frames that share landmarks cannot have looked further apart than
         // the view is wide, nor can the robot have turned faster than it
         // turns (§4.4.6).
         let max_turn = self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians();
-        let looked = motion.yaw + (mount_after.pan_deg - mount_before.pan_deg).to_radians();
+        let looked = motion.yaw + (mounts.after.pan_deg - mounts.before.pan_deg).to_radians();
         if motion.yaw.abs() > max_turn || looked.abs() > self.camera.horizontal_fov() {
             return None;
         }
