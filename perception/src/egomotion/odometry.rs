@@ -49,6 +49,43 @@ pub struct OdometryGate {
     pub noise: Option<OdometryNoise>,
 }
 
+impl OdometryGate {
+    /// The visual `motion` (with `covariance`, where the estimator gives
+    /// one) if odometry's `odometric` motion over the same stretch can
+    /// explain it, combined with odometry's as `fusion` says; `None` if it
+    /// cannot, for a wrong match.
+    pub(super) fn pass(
+        &self,
+        fusion: OdometryFusion,
+        motion: PlanarMotion,
+        covariance: Option<Matrix3<f64>>,
+        odometric: &Pose2,
+    ) -> Option<(PlanarMotion, Option<Matrix3<f64>>)> {
+        // Far landmarks fix a bearing well and a range poorly, so a wrong
+        // consensus among them can shift the motion along the line of sight
+        // by metres; such a motion disagrees with odometry by far more than
+        // odometry ever errs over a keyframe's reach.
+        let driven = odometric.x.hypot(odometric.y);
+        let off = (motion.forward - odometric.x).hypot(motion.left - odometric.y);
+        let turned = angle_difference(motion.yaw, odometric.theta).abs();
+        if off > self.metres + self.share * driven || turned > (self.degrees + self.degrees_per_m * driven).to_radians()
+        {
+            return None;
+        }
+        // Far landmarks with a few gross mismatches among them can agree on
+        // a motion decimetres off whose covariance claims centimetres.
+        if let (Some(noise), Some(visual)) = (&self.noise, &covariance) {
+            if !noise.consistent(&motion, visual, odometric, driven) {
+                return None;
+            }
+            if let Some((fused, fused_covariance)) = noise.fuse(fusion, &motion, visual, odometric, driven) {
+                return Some((fused, Some(fused_covariance)));
+            }
+        }
+        Some((motion, covariance))
+    }
+}
+
 impl Default for OdometryGate {
     fn default() -> Self {
         OdometryGate {
@@ -123,13 +160,7 @@ impl OdometryNoise {
 
     /// Whether a visual `motion` with covariance `visual` (forward, left,
     /// yaw) is consistent with `odometric`, driven over `driven` metres.
-    pub(super) fn consistent(
-        &self,
-        motion: &PlanarMotion,
-        visual: &Matrix3<f64>,
-        odometric: &Pose2,
-        driven: f64,
-    ) -> bool {
+    fn consistent(&self, motion: &PlanarMotion, visual: &Matrix3<f64>, odometric: &Pose2, driven: f64) -> bool {
         let difference = Self::difference(motion, odometric);
         (visual + self.covariance(driven))
             .try_inverse()
@@ -146,7 +177,7 @@ impl OdometryNoise {
     /// slight turn, while odometry's sideways error over a few metres is
     /// centimetres; with the sideways motion pinned, the far bearings fix
     /// the turn.
-    pub(super) fn fuse(
+    fn fuse(
         &self,
         fusion: OdometryFusion,
         motion: &PlanarMotion,
@@ -180,11 +211,28 @@ impl OdometryNoise {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::egomotion::testing::{at, frame, standard_normal};
+    use crate::egomotion::testing::{at, frame, landmarks, standard_normal};
     use crate::egomotion::{EgomotionConfig, Tracker};
     use crate::stereo::StereoCamera;
     use rand_chacha::ChaCha8Rng;
     use std::f64::consts::PI;
+
+    #[test]
+    fn a_motion_odometry_cannot_explain_is_rejected() {
+        // Odometry says 0.25 m; the frames say 3 m (a wrong consensus):
+        // rejected, and bridged by odometry. Without the gate, accepted.
+        let camera = StereoCamera::default();
+        let seen = |x| frame(&landmarks(), Pose2::new(x, 0.0, 0.0), &camera);
+        for (gate, expected) in [(Some(OdometryGate::default()), 0.25), (None, 3.0)] {
+            let config = EgomotionConfig { odometry_gate: gate, max_speed: 10.0, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+            tracker.update(&at(1, 0.0, seen(0.0)), &Pose2::default());
+            tracker.update(&at(2, 0.5, seen(3.0)), &Pose2::new(0.25, 0.0, 0.0));
+            let s = tracker.state();
+            assert!((s.pose.unwrap().x - expected).abs() < 1e-6, "{gate:?}: {s:?}");
+            assert_eq!(s.failures, u32::from(gate.is_some()));
+        }
+    }
 
     #[test]
     fn odometry_noise_weighs_a_disagreement_by_both_covariances() {
