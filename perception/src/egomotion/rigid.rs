@@ -38,10 +38,16 @@ fn kabsch(pairs: &[Pair], weights: &[f64]) -> Option<(f64, Vector2<f64>)> {
     Some((yaw, centre_a - r * centre_b))
 }
 
+/// The rotation by `yaw` on the floor plane.
 fn rotation(yaw: f64) -> Matrix2<f64> {
     let (s, c) = yaw.sin_cos();
     Matrix2::new(c, -s, s, c)
 }
+
+/// A length in image pixels: the pixel noise the estimator assumes, kept
+/// apart from the metres its helpers take beside it.
+#[derive(Clone, Copy, Debug)]
+struct Pixels(f64);
 
 /// The information matrix (inverse covariance) of the residual
 /// `a − (R b + t)` of one landmark seen as `a` before and `b` after a move
@@ -56,7 +62,13 @@ fn rotation(yaw: f64) -> Matrix2<f64> {
 /// taken to lie along the other line, passes for a precise bearing (laying
 /// both ellipses along `a`'s line, as this model once did, left egomotion
 /// 20 % further off after 35 m of straight driving; see the results page).
-fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b: [f64; 3], yaw: f64) -> Matrix2<f64> {
+fn residual_information(
+    camera: &StereoCamera,
+    pixel_sigma: Pixels,
+    a: [f64; 3],
+    b: [f64; 3],
+    yaw: f64,
+) -> Matrix2<f64> {
     let range_a = a[0].hypot(a[1]).max(0.1);
     let range_b = b[0].hypot(b[1]).max(0.1);
     let line_a = Vector2::new(a[0], a[1]) / range_a;
@@ -70,10 +82,10 @@ fn residual_information(camera: &StereoCamera, pixel_sigma: f64, a: [f64; 3], b:
 /// The covariance on the floor plane of a point triangulated `range` m
 /// away along the unit `line`: an ellipse long with the depth error along
 /// the line and thin with the bearing's across it.
-fn sight_covariance(camera: &StereoCamera, pixel_sigma: f64, line: Vector2<f64>, range: f64) -> Matrix2<f64> {
+fn sight_covariance(camera: &StereoCamera, pixel_sigma: Pixels, line: Vector2<f64>, range: f64) -> Matrix2<f64> {
     let normal = Vector2::new(-line[1], line[0]);
-    let along = camera.depth_sigma(range, pixel_sigma).powi(2);
-    let across = range.powi(2) * (pixel_sigma / camera.focal_px).powi(2);
+    let along = camera.depth_sigma(range, pixel_sigma.0).powi(2);
+    let across = range.powi(2) * (pixel_sigma.0 / camera.focal_px).powi(2);
     line * line.transpose() * along + normal * normal.transpose() * across
 }
 
@@ -155,8 +167,10 @@ impl Rigid {
         if pairs.len() < 3 {
             return None;
         }
-        let info: Vec<Matrix2<f64>> =
-            pairs.iter().map(|p| residual_information(camera, config.pixel_sigma, p.before, p.after, turned)).collect();
+        let info: Vec<Matrix2<f64>> = pairs
+            .iter()
+            .map(|p| residual_information(camera, Pixels(config.pixel_sigma), p.before, p.after, turned))
+            .collect();
         let mahalanobis = |yaw: f64, t: &Vector2<f64>, i: usize| {
             let p = &pairs[i];
             let e = Vector2::new(p.before[0], p.before[1]) - (rotation(yaw) * Vector2::new(p.after[0], p.after[1]) + t);
@@ -294,7 +308,7 @@ mod tests {
         // the viewpoints, and the far depth error, tilted by it, passes for
         // a precise bearing.
         let camera = StereoCamera::default();
-        let pixel_sigma = 0.3;
+        let pixel_sigma = Pixels(0.3);
         let motion = Pose2::new(10.0, 0.5, 3f64.to_radians());
         let landmark = (40.0, 8.0);
         let mut rng = ChaCha8Rng::seed_from_u64(11);
@@ -304,9 +318,9 @@ mod tests {
             let (x, y) = (seen.x, seen.y);
             let exact = camera.project(camera.mount.robot_to_cam([x, y, camera.mount.height])).unwrap();
             let noisy = StereoPixels {
-                u_left: exact.u_left + pixel_sigma * gaussian(),
-                u_right: exact.u_right + pixel_sigma * gaussian(),
-                v: exact.v + pixel_sigma * gaussian(),
+                u_left: exact.u_left + pixel_sigma.0 * gaussian(),
+                u_right: exact.u_right + pixel_sigma.0 * gaussian(),
+                v: exact.v + pixel_sigma.0 * gaussian(),
             };
             camera.mount.cam_to_robot(camera.triangulate(&noisy).unwrap())
         };
@@ -373,12 +387,12 @@ mod tests {
             if unpulled {
                 let info: Vec<Matrix2<f64>> = pairs
                     .iter()
-                    .map(|p| residual_information(&camera, config.pixel_sigma, p.before, p.after, turned))
+                    .map(|p| residual_information(&camera, Pixels(config.pixel_sigma), p.before, p.after, turned))
                     .collect();
                 let mut t = Vector2::new(motion.forward, motion.left);
                 let (_, _, cost) = Rigid::normal_equations(&pairs, &info, yaw, t);
-                let pull =
-                    yaw_pull(&camera, config.pixel_sigma, &pairs, &info, turned) * cost / (2 * pairs.len() - 3) as f64;
+                let pull = yaw_pull(&camera, Pixels(config.pixel_sigma), &pairs, &info, turned) * cost
+                    / (2 * pairs.len() - 3) as f64;
                 for _ in 0..8 {
                     let (h, mut g, _) = Rigid::normal_equations(&pairs, &info, yaw, t);
                     g[2] -= pull;
@@ -400,7 +414,7 @@ mod tests {
     /// residual `a − (R b + t)` puts the noisy `b` in the yaw's Jacobian and
     /// `b`'s depth noise in the residual; where a landmark's two lines of
     /// sight differ, the two correlate.
-    fn yaw_pull(camera: &StereoCamera, pixel_sigma: f64, pairs: &[Pair], info: &[Matrix2<f64>], turned: f64) -> f64 {
+    fn yaw_pull(camera: &StereoCamera, pixel_sigma: Pixels, pairs: &[Pair], info: &[Matrix2<f64>], turned: f64) -> f64 {
         let generator = Matrix2::new(0.0, -1.0, 1.0, 0.0);
         let turn = rotation(turned);
         pairs
