@@ -2,19 +2,22 @@
 //! stereo egomotion is least uncertain.
 
 mod config;
+mod prediction;
 mod progress;
+mod zigzag;
 
 pub use config::{ActionAidingConfig, DecisionObjective, Steer, Technique};
+pub use prediction::PredictionCheck;
 
 use crate::clearance::{echo_points, free_distance};
 use crate::decision::{best_heading, best_look, DecisionRules, Objective};
 use crate::tracking::TrackingList;
+use prediction::Predictions;
 use progress::ProgressWatch;
-use rand::Rng;
-use rand_chacha::ChaCha8Rng;
 use ubf_core::{angle_difference, wrap_angle, Action, Behavior, BuildContext, Pose2, State};
 use ubf_perception::error_model::{CvTable, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
+use zigzag::ZigZag;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Phase {
@@ -45,48 +48,25 @@ enum Phase {
 /// safe.
 pub struct ActionAiding {
     config: ActionAidingConfig,
-    rng: ChaCha8Rng,
     phase: Phase,
     camera: Option<(StereoCamera, CvTable)>,
     list: TrackingList,
     last_frame: u64,
-    /// The path's start and direction (start to goal), for the zig-zag.
-    path: Option<((f64, f64), f64)>,
-    zig_side: f64,
-    zig_limit: f64,
+    zigzag: ZigZag,
     positions: Vec<[f64; 3]>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
     watch: ProgressWatch,
-    /// Landmarks the last evaluated heading was predicted to keep in view,
-    /// and how many the camera delivered at the end of the step taken.
-    predicted: Option<usize>,
-    seen: Option<usize>,
-    check: PredictionCheck,
+    predictions: Predictions,
     /// Camera steering: where the camera is to look (world), once chosen.
     look: Option<f64>,
 }
 
-/// How the tracking list's predictions compare with what the camera then
-/// sees: the landmarks the chosen heading was predicted to keep in view,
-/// against the landmarks in the last frame of the step taken along it.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PredictionCheck {
-    /// Steps compared.
-    pub steps: u64,
-    /// Mean landmarks predicted in view.
-    pub mean_predicted: f64,
-    /// Mean landmarks the camera delivered.
-    pub mean_seen: f64,
-}
-
-impl PredictionCheck {
-    fn add(&mut self, predicted: usize, seen: usize) {
-        let n = self.steps as f64;
-        self.mean_predicted = (self.mean_predicted * n + predicted as f64) / (n + 1.0);
-        self.mean_seen = (self.mean_seen * n + seen as f64) / (n + 1.0);
-        self.steps += 1;
-    }
+/// Whether the strip along the world `heading` from `pose` is clear of
+/// `echoes` as far as `config` asks.
+fn strip_clear(config: &ActionAidingConfig, echoes: &[(f64, f64)], pose: &Pose2, heading: f64) -> bool {
+    config.clearance_m <= 0.0
+        || free_distance(echoes, angle_difference(heading, pose.theta), config.path_half_width) >= config.clearance_m
 }
 
 impl ActionAiding {
@@ -96,21 +76,16 @@ impl ActionAiding {
         let list = TrackingList::new(config.tracking);
         ActionAiding {
             config,
-            rng: ctx.rng(),
+            zigzag: ZigZag::new(ctx.rng()),
             phase: Phase::Decide,
             camera: None,
             list,
             last_frame: 0,
-            path: None,
-            zig_side: 1.0,
-            zig_limit: 0.0,
             positions: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
             watch: ProgressWatch::new(),
-            predicted: None,
-            seen: None,
-            check: PredictionCheck::default(),
+            predictions: Predictions::default(),
             look: None,
         }
     }
@@ -123,7 +98,7 @@ impl ActionAiding {
     /// How the evaluative decisions' predicted landmark counts compared
     /// with what the camera then saw.
     pub fn prediction_check(&self) -> PredictionCheck {
-        self.check
+        self.predictions.check
     }
 
     fn rules(&self, camera: &StereoCamera) -> DecisionRules {
@@ -145,9 +120,7 @@ impl ActionAiding {
 
     /// Whether the strip along the world `heading` is clear far enough.
     fn clear(&self, pose: &Pose2, heading: f64) -> bool {
-        self.config.clearance_m <= 0.0
-            || free_distance(&self.echoes, angle_difference(heading, pose.theta), self.config.path_half_width)
-                >= self.config.clearance_m
+        strip_clear(&self.config, &self.echoes, pose, heading)
     }
 
     /// The permitted headings around `centre`, centre first so that ties
@@ -192,8 +165,7 @@ impl ActionAiding {
         let objective = self.objective(facing, centre, remaining_m);
         let candidates = self.candidates(pose, centre);
         let decision = best_heading(table, &rules, &self.positions, (pose.x, pose.y), candidates, &objective);
-        self.predicted = decision.map(|d| d.landmarks);
-        self.seen = None;
+        self.predictions.predict(decision.map(|d| d.landmarks));
         decision.map_or(centre, |d| d.heading)
     }
 
@@ -236,21 +208,6 @@ impl ActionAiding {
             .map_or(course, |d| d.heading)
     }
 
-    fn zigzag(&mut self, pose: &Pose2, goal: (f64, f64)) -> f64 {
-        let (start, direction) = *self.path.get_or_insert(((pose.x, pose.y), (goal.1 - pose.y).atan2(goal.0 - pose.x)));
-        if self.zig_limit == 0.0 {
-            self.zig_limit = self.config.zigzag_max_offset_m * self.rng.random_range(0.5..=1.0);
-        }
-        let (s, c) = direction.sin_cos();
-        let offset = -(pose.x - start.0) * s + (pose.y - start.1) * c;
-        let leg = direction + self.zig_side * self.config.zigzag_angle_deg.to_radians();
-        if offset * self.zig_side >= self.zig_limit || !self.clear(pose, leg) {
-            self.zig_side = -self.zig_side;
-            self.zig_limit = self.config.zigzag_max_offset_m * self.rng.random_range(0.5..=1.0);
-        }
-        direction + self.zig_side * self.config.zigzag_angle_deg.to_radians()
-    }
-
     fn turn_towards(&self, pose: &Pose2, heading: f64) -> f64 {
         let max = self.config.max_turn_deg.to_radians();
         (self.config.turn_gain * angle_difference(heading, pose.theta)).clamp(-max, max)
@@ -284,7 +241,7 @@ impl Behavior for ActionAiding {
         self.phase = Phase::Decide;
         self.list.clear();
         self.look = None;
-        self.path = None;
+        self.zigzag.restart();
         self.last_frame = 0;
         self.decisions = 0;
     }
@@ -316,7 +273,7 @@ impl ActionAiding {
                     self.list.observe(&frame.landmarks, calibration, &pose);
                 }
                 if matches!(self.phase, Phase::Step { .. }) {
-                    self.seen = Some(frame.landmarks.len());
+                    self.predictions.saw(frame.landmarks.len());
                 }
                 if steering_camera {
                     // Where the robot is headed: the step's heading, or
@@ -340,9 +297,7 @@ impl ActionAiding {
             match self.phase {
                 Phase::Decide => {
                     self.decisions += 1;
-                    if let (Some(predicted), Some(seen)) = (self.predicted.take(), self.seen.take()) {
-                        self.check.add(predicted, seen);
-                    }
+                    self.predictions.settle();
                     if self.config.technique == Technique::Tracking {
                         self.list.prune(&pose);
                     }
@@ -360,7 +315,13 @@ impl ActionAiding {
                     }
                     let heading = match technique {
                         Technique::None => to_goal,
-                        Technique::ZigZag => self.zigzag(&pose, (goal.x, goal.y)),
+                        Technique::ZigZag => {
+                            let (config, echoes) = (&self.config, &self.echoes);
+                            let (angle, max_offset) =
+                                (config.zigzag_angle_deg.to_radians(), config.zigzag_max_offset_m);
+                            let clear = |leg| strip_clear(config, echoes, &pose, leg);
+                            self.zigzag.heading(&pose, (goal.x, goal.y), angle, max_offset, clear)
+                        }
                         Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
                         Technique::Scan => {
                             // Sweep the allowable headings: within the
