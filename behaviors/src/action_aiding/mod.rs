@@ -1,7 +1,12 @@
 //! Action aiding (thesis chapter 3): steer so that landmarks fall where
 //! stereo egomotion is least uncertain.
+//!
+//! The behaviour is a machine of phases (`Phase`: decide, scan, turn,
+//! step, approach), each carrying what it needs; `ActionAiding::next` is
+//! the one place a phase hands over to the next.
 
 mod config;
+mod phase;
 mod prediction;
 mod progress;
 mod zigzag;
@@ -12,32 +17,13 @@ pub use prediction::PredictionCheck;
 use crate::clearance::{echo_points, free_distance};
 use crate::decision::{best_heading, best_look, DecisionRules, Objective};
 use crate::tracking::TrackingList;
+use phase::Phase;
 use prediction::Predictions;
 use progress::ProgressWatch;
 use ubf_core::{angle_difference, wrap_angle, Action, Behavior, BuildContext, Pose2, State};
 use ubf_perception::error_model::{CvTable, MODEL_STEP_M};
 use ubf_perception::StereoCamera;
 use zigzag::ZigZag;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Phase {
-    /// Choose the next heading now.
-    Decide,
-    /// Physical scan: turning to the left edge, then the right edge of the
-    /// permitted headings (world angles), looking on the way; `from` is the
-    /// heading before the sweep, which egomotion measures the chosen
-    /// heading against.
-    Scan { edges: [f64; 2], leg: usize, centre: f64, from: f64 },
-    /// Turning on the spot to the chosen heading.
-    Turn { heading: f64 },
-    /// Driving one step along the heading.
-    Step { heading: f64, from: (f64, f64) },
-    /// The last stretch: steering at the goal every tick, as a go-to does,
-    /// until it is reached. A fixed heading would pass a goal that odometry
-    /// or a nudge from collision avoidance put off the line, and turning
-    /// back to it on the spot beside a wall can be blocked both ways.
-    Approach,
-}
 
 /// The action-aiding behaviour: drives to the goal in steps of `step_m`,
 /// choosing each step's heading by its technique, and votes more when the
@@ -56,10 +42,33 @@ pub struct ActionAiding {
     positions: Vec<[f64; 3]>,
     echoes: Vec<(f64, f64)>,
     decisions: u64,
-    watch: ProgressWatch,
     predictions: Predictions,
     /// Camera steering: where the camera is to look (world), once chosen.
     look: Option<f64>,
+}
+
+/// What every phase reads of the tick.
+struct Tick {
+    /// The robot's pose.
+    pose: Pose2,
+    /// Where the goal is.
+    goal: (f64, f64),
+    /// The goal's bearing from the robot.
+    to_goal: f64,
+    /// The distance to the goal, m.
+    distance: f64,
+    /// The state's time, s.
+    time: f64,
+    /// The vote the behaviour's actions carry.
+    vote: f64,
+}
+
+/// What a pass of the phase machine makes of the tick.
+enum Pass {
+    /// Send the action, staying in the phase (its watch updated).
+    Act(Phase, Action),
+    /// Hand over to the phase, within the tick.
+    Hand(Phase),
 }
 
 /// Whether the strip along the world `heading` from `pose` is clear of
@@ -84,7 +93,6 @@ impl ActionAiding {
             positions: Vec::new(),
             echoes: Vec::new(),
             decisions: 0,
-            watch: ProgressWatch::new(),
             predictions: Predictions::default(),
             look: None,
         }
@@ -276,13 +284,7 @@ impl ActionAiding {
                     self.predictions.saw(frame.landmarks.len());
                 }
                 if steering_camera {
-                    // Where the robot is headed: the step's heading, or
-                    // the goal on the last stretch.
-                    let course = match self.phase {
-                        Phase::Turn { heading } | Phase::Step { heading, .. } => heading,
-                        Phase::Approach => to_goal,
-                        Phase::Decide | Phase::Scan { .. } => pose.theta,
-                    };
+                    let course = self.phase.course(to_goal, pose.theta);
                     self.list.prune(&pose);
                     self.refresh_positions();
                     self.look = Some(self.choose_look(&pose, course, distance));
@@ -290,143 +292,145 @@ impl ActionAiding {
             }
         }
         echo_points(state, &mut self.echoes);
-        let vote = self.vote(state);
+        let tick = Tick { pose, goal: (goal.x, goal.y), to_goal, distance, time: state.time, vote: self.vote(state) };
         // Three passes at most: a finished phase hands over within the tick
         // (a step to the decision, the decision to a turn or a scan).
         for _ in 0..3 {
-            match self.phase {
-                Phase::Decide => {
-                    self.decisions += 1;
-                    self.predictions.settle();
-                    if self.config.technique == Technique::Tracking {
-                        self.list.prune(&pose);
-                    }
-                    let technique = self.robot_technique();
-                    // The last stretch is straight at the goal: a zig-zag leg
-                    // would pass it by a lateral offset.
-                    let final_approach = match technique {
-                        Technique::ZigZag => 2.0 * self.config.zigzag_max_offset_m,
-                        _ => self.config.step_m,
-                    };
-                    if distance <= final_approach {
-                        self.phase = Phase::Approach;
-                        self.watch = ProgressWatch::new();
-                        continue;
-                    }
-                    let heading = match technique {
-                        Technique::None => to_goal,
-                        Technique::ZigZag => {
-                            let (config, echoes) = (&self.config, &self.echoes);
-                            let (angle, max_offset) =
-                                (config.zigzag_angle_deg.to_radians(), config.zigzag_max_offset_m);
-                            let clear = |leg| strip_clear(config, echoes, &pose, leg);
-                            self.zigzag.heading(&pose, (goal.x, goal.y), angle, max_offset, clear)
-                        }
-                        Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
-                        Technique::Scan => {
-                            // Sweep the allowable headings: within the
-                            // angle limits and clear of walls.
-                            let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
-                            let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
-                            self.list.clear();
-                            self.phase = Phase::Scan {
-                                edges: [to_goal + high, to_goal + low],
-                                leg: 0,
-                                centre: to_goal,
-                                from: pose.theta,
-                            };
-                            self.watch = ProgressWatch::new();
-                            continue;
-                        }
-                    };
-                    self.phase = Phase::Turn { heading };
-                    self.watch = ProgressWatch::new();
+            let phase = std::mem::replace(&mut self.phase, Phase::Decide);
+            match self.next(phase, &tick) {
+                Pass::Act(phase, action) => {
+                    self.phase = phase;
+                    return action;
                 }
-                Phase::Scan { edges, leg, centre, from } => {
-                    let error = angle_difference(edges[leg], pose.theta).abs();
-                    // A leg that cannot be finished is cut short: the scan
-                    // has seen what it could.
-                    if error > self.config.heading_tolerance_deg.to_radians() && !self.watch.stuck(state.time, error) {
-                        let rate = self.config.scan_rate_deg.to_radians();
-                        let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
-                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
-                    }
-                    self.watch = ProgressWatch::new();
-                    if leg == 0 {
-                        self.phase = Phase::Scan { edges, leg: 1, centre, from };
-                    } else {
-                        let heading = self.evaluate(&pose, from, centre, distance);
-                        self.phase = Phase::Turn { heading };
-                    }
-                }
-                Phase::Turn { heading } => {
-                    let error = angle_difference(heading, pose.theta);
-                    if error.abs() > self.config.heading_tolerance_deg.to_radians() {
-                        // Stuck the short way round: less than a quarter
-                        // turn from the heading, steer while driving, as a
-                        // go-to beside collision avoidance does (a full
-                        // revolution to close a few degrees would fail every
-                        // frame on the way); further, try the long way, and
-                        // stuck that way too, steer while driving.
-                        if self.watch.stuck(state.time, self.watch.angle_left(error)) {
-                            if self.watch.long_way.is_some() || error.abs() < std::f64::consts::FRAC_PI_2 {
-                                self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
-                                self.watch = ProgressWatch::new();
-                                continue;
-                            }
-                            self.watch.long_way = Some(-error.signum());
-                        }
-                        let w = self
-                            .watch
-                            .long_way_rate(error, self.config.max_turn_deg.to_radians())
-                            .unwrap_or_else(|| self.turn_towards(&pose, heading));
-                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
-                    }
-                    self.phase = Phase::Step { heading, from: (pose.x, pose.y) };
-                    self.watch = ProgressWatch::new();
-                }
-                Phase::Step { heading, from } => {
-                    let left = 1.0 - pose.distance_to(from.0, from.1) / self.config.step_m;
-                    // A step that gets nowhere is over: decide again from
-                    // where the robot is.
-                    if left <= 0.0 || self.watch.stuck(state.time, left) {
-                        self.phase = Phase::Decide;
-                        continue;
-                    }
-                    return Action::with_vote(vote)
-                        .velocity(self.config.speed)
-                        .rot_velocity(self.turn_towards(&pose, heading));
-                }
-                Phase::Approach => {
-                    let error = angle_difference(to_goal, pose.theta);
-                    // Progress is turning towards the goal or closing on it
-                    // (a step's length counting as a radian). Blocked (by
-                    // collision avoidance turning the other way at a wall,
-                    // say), go the long way round, which turns away from
-                    // the obstacle too; blocked that way, the short way.
-                    let remaining = self.watch.angle_left(error) + distance / self.config.step_m;
-                    if self.watch.stuck(state.time, remaining) {
-                        self.watch.long_way = match self.watch.long_way {
-                            None => Some(-error.signum()),
-                            Some(_) => None,
-                        };
-                    }
-                    if let Some(w) = self.watch.long_way_rate(error, self.config.max_turn_deg.to_radians()) {
-                        return Action::with_vote(vote).velocity(0.0).rot_velocity(w);
-                    }
-                    // Facing away from the goal, turn on the spot; near it,
-                    // slow in proportion to the distance, so that the turn
-                    // rate always outpaces the goal's bearing and the robot
-                    // cannot orbit it.
-                    let alignment = error.cos().max(0.0);
-                    let ramp = (distance / self.config.step_m).min(1.0);
-                    return Action::with_vote(vote)
-                        .velocity(self.config.speed * alignment * ramp)
-                        .rot_velocity(self.turn_towards(&pose, to_goal));
-                }
+                Pass::Hand(phase) => self.phase = phase,
             }
         }
-        Action::with_vote(vote).velocity(0.0).rot_velocity(0.0)
+        Action::with_vote(tick.vote).velocity(0.0).rot_velocity(0.0)
+    }
+
+    /// One pass of the phase machine, and the only place a phase changes:
+    /// what `phase` does with this tick, or the phase it hands over to.
+    fn next(&mut self, phase: Phase, tick: &Tick) -> Pass {
+        let Tick { pose, goal, to_goal, distance, time, vote } = *tick;
+        let tolerance = self.config.heading_tolerance_deg.to_radians();
+        match phase {
+            Phase::Decide => {
+                self.decisions += 1;
+                self.predictions.settle();
+                if self.config.technique == Technique::Tracking {
+                    self.list.prune(&pose);
+                }
+                let technique = self.robot_technique();
+                // The last stretch is straight at the goal: a zig-zag leg
+                // would pass it by a lateral offset.
+                let final_approach = match technique {
+                    Technique::ZigZag => 2.0 * self.config.zigzag_max_offset_m,
+                    _ => self.config.step_m,
+                };
+                if distance <= final_approach {
+                    return Pass::Hand(Phase::approach());
+                }
+                let heading = match technique {
+                    Technique::None => to_goal,
+                    Technique::ZigZag => {
+                        let (config, echoes) = (&self.config, &self.echoes);
+                        let (angle, max_offset) = (config.zigzag_angle_deg.to_radians(), config.zigzag_max_offset_m);
+                        self.zigzag
+                            .heading(&pose, goal, angle, max_offset, |leg| strip_clear(config, echoes, &pose, leg))
+                    }
+                    Technique::Tracking => self.evaluate(&pose, pose.theta, to_goal, distance),
+                    Technique::Scan => {
+                        // Sweep the allowable headings: within the angle
+                        // limits and clear of walls.
+                        let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
+                        let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
+                        self.list.clear();
+                        return Pass::Hand(Phase::scan([to_goal + high, to_goal + low], to_goal, pose.theta));
+                    }
+                };
+                Pass::Hand(Phase::turn(heading))
+            }
+            Phase::Scan { edges, leg, centre, from, mut watch } => {
+                let error = angle_difference(edges[leg], pose.theta).abs();
+                // A leg that cannot be finished is cut short: the scan has
+                // seen what it could.
+                if error > tolerance && !watch.stuck(time, error) {
+                    let rate = self.config.scan_rate_deg.to_radians();
+                    let w = self.turn_towards(&pose, edges[leg]).clamp(-rate, rate);
+                    let phase = Phase::Scan { edges, leg, centre, from, watch };
+                    return Pass::Act(phase, Action::with_vote(vote).velocity(0.0).rot_velocity(w));
+                }
+                if leg == 0 {
+                    Pass::Hand(Phase::Scan { edges, leg: 1, centre, from, watch: ProgressWatch::new() })
+                } else {
+                    Pass::Hand(Phase::turn(self.evaluate(&pose, from, centre, distance)))
+                }
+            }
+            Phase::Turn { heading, mut watch } => {
+                let error = angle_difference(heading, pose.theta);
+                if error.abs() > tolerance {
+                    // Stuck the short way round: less than a quarter turn
+                    // from the heading, steer while driving, as a go-to
+                    // beside collision avoidance does (a full revolution to
+                    // close a few degrees would fail every frame on the
+                    // way); further, try the long way, and stuck that way
+                    // too, steer while driving.
+                    if watch.stuck(time, watch.angle_left(error)) {
+                        if watch.long_way.is_some() || error.abs() < std::f64::consts::FRAC_PI_2 {
+                            return Pass::Hand(Phase::step(heading, (pose.x, pose.y)));
+                        }
+                        watch.long_way = Some(-error.signum());
+                    }
+                    let w = watch
+                        .long_way_rate(error, self.config.max_turn_deg.to_radians())
+                        .unwrap_or_else(|| self.turn_towards(&pose, heading));
+                    let phase = Phase::Turn { heading, watch };
+                    return Pass::Act(phase, Action::with_vote(vote).velocity(0.0).rot_velocity(w));
+                }
+                Pass::Hand(Phase::step(heading, (pose.x, pose.y)))
+            }
+            Phase::Step { heading, from, mut watch } => {
+                let left = 1.0 - pose.distance_to(from.0, from.1) / self.config.step_m;
+                // A step that gets nowhere is over: decide again from where
+                // the robot is.
+                if left <= 0.0 || watch.stuck(time, left) {
+                    return Pass::Hand(Phase::Decide);
+                }
+                let action =
+                    Action::with_vote(vote).velocity(self.config.speed).rot_velocity(self.turn_towards(&pose, heading));
+                Pass::Act(Phase::Step { heading, from, watch }, action)
+            }
+            Phase::Approach { mut watch } => {
+                let error = angle_difference(to_goal, pose.theta);
+                // Progress is turning towards the goal or closing on it (a
+                // step's length counting as a radian). Blocked (by
+                // collision avoidance turning the other way at a wall,
+                // say), go the long way round, which turns away from the
+                // obstacle too; blocked that way, the short way.
+                let remaining = watch.angle_left(error) + distance / self.config.step_m;
+                if watch.stuck(time, remaining) {
+                    watch.long_way = match watch.long_way {
+                        None => Some(-error.signum()),
+                        Some(_) => None,
+                    };
+                }
+                let action = match watch.long_way_rate(error, self.config.max_turn_deg.to_radians()) {
+                    Some(w) => Action::with_vote(vote).velocity(0.0).rot_velocity(w),
+                    None => {
+                        // Facing away from the goal, turn on the spot; near
+                        // it, slow in proportion to the distance, so that
+                        // the turn rate always outpaces the goal's bearing
+                        // and the robot cannot orbit it.
+                        let alignment = error.cos().max(0.0);
+                        let ramp = (distance / self.config.step_m).min(1.0);
+                        Action::with_vote(vote)
+                            .velocity(self.config.speed * alignment * ramp)
+                            .rot_velocity(self.turn_towards(&pose, to_goal))
+                    }
+                };
+                Pass::Act(Phase::Approach { watch }, action)
+            }
+        }
     }
 }
 
