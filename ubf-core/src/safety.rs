@@ -6,7 +6,7 @@
 //! `sensor_age`), not by the wall, so the same policy runs, and is tested,
 //! on the simulator's clock and on a real robot's.
 
-use crate::{Command, Robot, RobotError, RobotWrapper, State, Wraps};
+use crate::{Command, Pose2, Robot, RobotError, RobotWrapper, State, Wraps};
 use serde::Deserialize;
 
 /// When to hold the robot still, whatever the behaviours want.
@@ -80,28 +80,88 @@ pub struct SafetyGuard<R: Robot> {
     /// A stall or bump latched: when the condition was last seen clear
     /// (`None` while it persists).
     contact: Option<Option<f64>>,
+    /// The latest contact, latched or released: not to be driven into
+    /// again until the robot has moved away from it.
+    touched: Option<Contact>,
+    /// The pose sensed this tick.
+    pose: Pose2,
+    /// The translational speed last commanded, m/s: which way the robot
+    /// was pushing when a wheel stalled.
+    last_velocity: f64,
+}
+
+/// Where the robot touched something, and which way it was pushing.
+#[derive(Clone, Copy, Debug)]
+struct Contact {
+    at: Pose2,
+    /// 1 pushing forward, −1 backing.
+    pushing: f64,
+}
+
+/// Within this angle of the way it pushed when it touched, a motion drives
+/// into the same contact again, rad (60°).
+const INTO_CONTACT: f64 = std::f64::consts::FRAC_PI_3;
+/// Once this far from where it touched, m, the robot is clear of it.
+const CLEAR_OF_CONTACT_M: f64 = 0.5;
+
+impl Contact {
+    /// Whether moving at `velocity` from `pose` drives back into it.
+    fn is_ahead(&self, pose: &Pose2, velocity: f64) -> bool {
+        let way = |heading: f64, sign: f64| if sign < 0.0 { heading + std::f64::consts::PI } else { heading };
+        velocity != 0.0
+            && crate::wrap_angle(way(pose.theta, velocity) - way(self.at.theta, self.pushing)).abs() < INTO_CONTACT
+    }
 }
 
 impl<R: Robot> SafetyGuard<R> {
     /// `inner` under `policy`.
     pub fn new(inner: R, policy: SafetyPolicy) -> Self {
-        SafetyGuard { inner, policy, started: None, hold: None, contact: None }
+        SafetyGuard {
+            inner,
+            policy,
+            started: None,
+            hold: None,
+            contact: None,
+            touched: None,
+            pose: Pose2::default(),
+            last_velocity: 0.0,
+        }
     }
 
-    /// Updates the contact latch from this tick's state.
+    /// Updates the contact latch, and the contact remembered, from this
+    /// tick's state.
     fn latch_contact(&mut self, state: &State) {
         let touching = state.stalled || state.bumpers.any();
+        if let Some(contact) = self.touched.filter(|_| self.contact.is_none()) {
+            if (state.pose.x - contact.at.x).hypot(state.pose.y - contact.at.y) > CLEAR_OF_CONTACT_M {
+                tracing::info!("clear of the contact at ({:.2}, {:.2})", contact.at.x, contact.at.y);
+                self.touched = None;
+            }
+        }
         match (&mut self.contact, touching) {
             (latch, true) => {
                 if latch.is_none() {
                     tracing::warn!(stalled = state.stalled, bumpers = ?state.bumpers, "contact: holding the robot still");
+                    let pushing = if state.bumpers.front {
+                        1.0
+                    } else if state.bumpers.rear {
+                        -1.0
+                    } else if self.last_velocity != 0.0 {
+                        self.last_velocity.signum()
+                    } else {
+                        state.velocity.signum()
+                    };
+                    self.touched = Some(Contact { at: state.pose, pushing });
                 }
                 *latch = Some(None);
             }
             (Some(clear_since), false) => {
                 let since = *clear_since.get_or_insert(state.time);
                 if self.policy.resume_after_s.is_some_and(|hold| state.time - since >= hold) {
-                    tracing::info!("contact clear for {:.1} s: motion allowed again", state.time - since);
+                    tracing::info!(
+                        "contact clear for {:.1} s: motion allowed again, except back into it",
+                        state.time - since
+                    );
                     self.contact = None;
                 }
             }
@@ -133,6 +193,7 @@ impl<R: Robot> RobotWrapper for SafetyGuard<R> {
                 format!("no sensor data in the first {:.2} s", state.time - started)
             }));
         }
+        self.pose = state.pose;
         self.latch_contact(state);
         self.hold = if state.sensor_age > self.policy.stale_after_s {
             Some(Hold::StaleData)
@@ -144,10 +205,28 @@ impl<R: Robot> RobotWrapper for SafetyGuard<R> {
         Ok(())
     }
 
+    /// Sends the command unless motion is held; a released contact still
+    /// holds motion back into it (the robot may turn, or move away).
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {
-        match self.hold {
-            Some(_) => self.inner.act(&Command::Stop),
-            None => self.inner.act(command),
+        if self.hold.is_some() {
+            return self.inner.act(&Command::Stop);
+        }
+        match *command {
+            Command::Drive { velocity, turn } if self.touched.is_some_and(|c| c.is_ahead(&self.pose, velocity)) => {
+                if self.hold.replace(Hold::Contact).is_none() && self.last_velocity != 0.0 {
+                    tracing::warn!("not driving back into the contact at ({:.2}, {:.2})", self.pose.x, self.pose.y);
+                }
+                self.last_velocity = 0.0;
+                self.inner.act(&Command::Drive { velocity: 0.0, turn })
+            }
+            Command::Drive { velocity, .. } => {
+                self.last_velocity = velocity;
+                self.inner.act(command)
+            }
+            Command::Stop => {
+                self.last_velocity = 0.0;
+                self.inner.act(command)
+            }
         }
     }
 
@@ -207,7 +286,9 @@ mod tests {
         assert_eq!(tick(&mut guard, 0.2, 0.0).unwrap(), Command::Stop);
         assert_eq!(tick(&mut guard, 2.1, 0.0).unwrap(), Command::Stop);
         assert_eq!(guard.hold(), Some(Hold::Contact));
-        assert_eq!(tick(&mut guard, 2.2, 0.0).unwrap(), GO, "clear for 2 s");
+        // Clear for 2 s: released, though not forward, into the contact
+        // (see below).
+        assert_eq!(tick(&mut guard, 2.2, 0.0).unwrap(), Command::Drive { velocity: 0.0, turn: Turn::Rate(0.0) });
         // A bumper, with no hold time: held for good.
         let forever = SafetyPolicy { resume_after_s: None, ..SafetyPolicy::default() };
         let mut guard = SafetyGuard::new(NullRobot::default(), forever);
@@ -215,5 +296,30 @@ mod tests {
         assert_eq!(tick(&mut guard, 0.0, 0.0).unwrap(), Command::Stop);
         guard.inner_mut().reported.bumpers.front = false;
         assert_eq!(tick(&mut guard, 1000.0, 0.0).unwrap(), Command::Stop);
+    }
+
+    #[test]
+    fn a_released_contact_is_not_driven_into_again() {
+        let mut guard = SafetyGuard::new(NullRobot::default(), SafetyPolicy::default());
+        assert_eq!(tick(&mut guard, 0.0, 0.0).unwrap(), GO);
+        guard.inner_mut().reported.stalled = true;
+        assert_eq!(tick(&mut guard, 0.1, 0.0).unwrap(), Command::Stop);
+        guard.inner_mut().reported.stalled = false;
+        assert_eq!(tick(&mut guard, 0.2, 0.0).unwrap(), Command::Stop);
+        // Released, but forward is where the wall is: it may only turn.
+        let turn_only = Command::Drive { velocity: 0.0, turn: Turn::Rate(0.0) };
+        assert_eq!(tick(&mut guard, 2.3, 0.0).unwrap(), turn_only);
+        assert_eq!(guard.hold(), Some(Hold::Contact));
+        let backing = Command::Drive { velocity: -0.2, turn: Turn::Rate(0.0) };
+        let mut state = State { time: 2.35, ..State::default() };
+        guard.sense(&mut state).unwrap();
+        guard.act(&backing).unwrap();
+        assert_eq!(guard.inner().last_command, backing, "backing away is allowed");
+        // Turned 90°: forward no longer points at the contact.
+        guard.inner_mut().reported.pose.theta = std::f64::consts::FRAC_PI_2;
+        assert_eq!(tick(&mut guard, 2.4, 0.0).unwrap(), GO);
+        // Turned back, but half a metre away: clear of it.
+        guard.inner_mut().reported.pose = crate::Pose2::new(-0.6, 0.0, 0.0);
+        assert_eq!(tick(&mut guard, 2.5, 0.0).unwrap(), GO);
     }
 }
