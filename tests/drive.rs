@@ -525,6 +525,20 @@ fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
 }
 
 #[test]
+fn a_released_contact_is_not_driven_into_again() {
+    // Its goal beyond the wall of a 4 m room and half a second's hold
+    // after a stall: the latch used to release the robot straight back
+    // into the wall, stalling again every couple of seconds.
+    let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 12.0, safety: (resume_after_s: Some(0.5)),";
+    let (drive, line, dir) = drive_on(&["--listen", "127.0.0.1:0", "--room", "4x4"], extra, GO_ONLY);
+    assert!(drive.status.success(), "{}", String::from_utf8_lossy(&drive.stderr));
+    let stalled = field(&line, "stalled_cycles").unwrap();
+    assert!((1.0..=5.0).contains(&stalled), "stalled for {stalled} SIP cycles: {line}");
+    let log = std::fs::read_to_string(dir.path().join("log.csv")).unwrap();
+    assert!(log.lines().last().unwrap().contains(",contact,"), "still held off the wall at the end: {log}");
+}
+
+#[test]
 fn a_robot_that_gets_nowhere_is_stopped_and_the_drive_gives_up() {
     // Pressed against the wall of a 4 m room, its goal beyond: without a
     // progress check the drive would hold it there until the time limit.
@@ -573,6 +587,23 @@ fn a_killed_drive_keeps_its_log_up_to_the_last_second() {
     // loaded machine's late ticks.
     let after = rows();
     assert!(after >= before + 25, "{before} rows, then {after} after 4 s");
+    // The MCAP log beside it opens in the MCAP project's own reader, which
+    // needs a footer at the end of the file, and holds the same ticks less
+    // at most the last second's.
+    let check = Command::new("python3")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mcap-check.py"))
+        .arg("--cut-short")
+        .arg(log.with_extension("mcap"))
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&check.stdout);
+    assert!(check.status.success(), "{said}{}", String::from_utf8_lossy(&check.stderr));
+    let poses: usize = said
+        .lines()
+        .find(|l| l.starts_with("| /pose/odometry |"))
+        .and_then(|l| l.trim_end_matches(" |").rsplit("| ").next()?.parse().ok())
+        .unwrap_or_else(|| panic!("{said}"));
+    assert!(poses + 12 >= after, "{poses} poses in the MCAP log against {after} rows in the CSV one");
 }
 
 #[test]

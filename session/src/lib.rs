@@ -30,6 +30,7 @@ pub mod ros2_publish;
 pub mod ros2_view;
 pub mod run;
 pub mod scenario;
+pub mod sealed_file;
 pub mod simulate;
 pub mod sweep;
 pub mod trajectory;

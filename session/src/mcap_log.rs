@@ -27,13 +27,12 @@
 //! - `/collision` (`ubf.Collision`): where the robot touched something;
 //! - `/report` (`ubf.Report`): the run's report, at the end.
 
+use crate::sealed_file::SealedFile;
 use mcap::records::MessageHeader;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use std::collections::BTreeMap;
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use ubf_core::{Pose2, State, TickRecord, TickSink, TreeLayout};
 
@@ -169,7 +168,7 @@ fn report_schema() -> Vec<u8> {
 
 /// A run log being written: a [`TickSink`] that the controller feeds.
 pub struct McapLog {
-    writer: mcap::Writer<BufWriter<File>>,
+    writer: mcap::Writer<SealedFile>,
     path: PathBuf,
     channels: BTreeMap<&'static str, u16>,
     sequence: u32,
@@ -271,9 +270,9 @@ impl McapLog {
 
     fn open(path: &Path) -> Result<McapLog, LogError> {
         let fail = |e: &dyn std::fmt::Display| LogError { path: path.to_owned(), message: e.to_string() };
-        let file = File::create(path).map_err(|e| fail(&e))?;
+        let file = SealedFile::create(path).map_err(|e| fail(&e))?;
         let options = mcap::WriteOptions::new().profile("").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
-        let mut writer = options.create(BufWriter::new(file)).map_err(|e| fail(&e))?;
+        let mut writer = options.create(file).map_err(|e| fail(&e))?;
         let mut channels = BTreeMap::new();
         let no_metadata = BTreeMap::new();
         let pose =

@@ -13,10 +13,9 @@
 
 use crate::mcap_log::LogError;
 use crate::ros2_view::{topics, Ros2View, Shown};
+use crate::sealed_file::SealedFile;
 use mcap::records::MessageHeader;
 use std::collections::BTreeMap;
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use ubf_core::{TickRecord, TickSink, TreeLayout};
 use ubf_robots::ros2::msg::{to_cdr, RosMessage, StringMessage};
@@ -52,7 +51,7 @@ struct Channel {
 
 /// A rosbag2 directory being written: a [`TickSink`].
 pub struct Ros2Log {
-    writer: mcap::Writer<BufWriter<File>>,
+    writer: mcap::Writer<SealedFile>,
     dir: PathBuf,
     file_name: String,
     view: Ros2View,
@@ -94,9 +93,9 @@ impl Ros2Log {
         std::fs::create_dir_all(dir).map_err(|e| fail(&e))?;
         let stem = dir.file_name().map_or_else(|| "ubf".into(), |s| s.to_string_lossy().into_owned());
         let file_name = format!("{stem}_0.mcap");
-        let file = File::create(dir.join(&file_name)).map_err(|e| fail(&e))?;
+        let file = SealedFile::create(&dir.join(&file_name)).map_err(|e| fail(&e))?;
         let options = mcap::WriteOptions::new().profile("ros2").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
-        let writer = options.create(BufWriter::new(file)).map_err(|e| fail(&e))?;
+        let writer = options.create(file).map_err(|e| fail(&e))?;
         Ok(Ros2Log {
             writer,
             dir: dir.to_owned(),
