@@ -12,7 +12,8 @@ message's JSON does not parse or does not validate against its channel's
 JSON Schema, if a schema describes no fields, if an image is not a PNG, or
 if a topic the log must hold is missing: a check of our writer by a reader
 and a validator we did not write. A drive's log (its /run names a drive)
-has no true pose; with --cut-short, the log of a process that was killed
+has no true pose and must carry its start's UTC time (metadata
+`ubf.wall_clock`); with --cut-short, the log of a process that was killed
 need not have its /report.
 """
 import base64
@@ -74,6 +75,12 @@ def main():
     for topic in sorted(counts):
         name, encoding, message_encoding = schemas[topic]
         print(f"| {topic} | {name} | {encoding} | {message_encoding} | {counts[topic]} |")
+    if drive:
+        with open(args[0], "rb") as f:
+            clock = {m.name: m.metadata for m in make_reader(f).iter_metadata()}.get("ubf.wall_clock")
+        if not clock:
+            sys.exit("a drive's log must say when it started: no ubf.wall_clock metadata")
+        print(f"started at {clock['utc_start']} (UTC)")
     required = REQUIRED_DRIVE if drive else REQUIRED
     missing = [t for t in required if t not in counts and not (cut_short and t == "/report")]
     if missing:

@@ -910,3 +910,47 @@ fn the_pose_survives_three_link_cuts_while_moving() {
     eprintln!("after three cuts the pose is {miss:.4} m off");
     assert!(miss <= 0.02, "believes ({bx:.3}, {by:.3}), is at ({x:.3}, {y:.3}): {miss:.3} m off; {stderr}");
 }
+
+/// `scripts/mcap-check.py ARGS`: the MCAP project's own Python reader on a
+/// log; its output, or a panic with it if the check failed.
+fn mcap_check(args: &[&std::ffi::OsStr]) -> String {
+    let check = Command::new("python3")
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/mcap-check.py"))
+        .args(args)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&check.stdout).into_owned();
+    assert!(check.status.success(), "{said}{}", String::from_utf8_lossy(&check.stderr));
+    said
+}
+
+#[test]
+fn a_drive_that_ends_cleanly_leaves_its_report_and_its_start_in_utc() {
+    let extra = "until_goal: true, goal: (x: 1.0, y: 0.0), max_time_s: 30.0,";
+    let (drive, _, dir) = drive_on(&["--listen", "127.0.0.1:0"], extra, GO_ONLY);
+    assert!(drive.status.success(), "{}", String::from_utf8_lossy(&drive.stderr));
+    let mcap = dir.path().join("log.mcap");
+    let said = mcap_check(&[mcap.as_os_str()]);
+    assert!(said.contains("the run ended: goal_reached") && said.contains("started at 20"), "{said}");
+    let replay = Command::new(env!("CARGO_BIN_EXE_ubf")).arg("replay").arg(&mcap).output().unwrap();
+    let shown = String::from_utf8_lossy(&replay.stdout);
+    assert!(shown.contains("ended           goal_reached"), "{shown}{}", String::from_utf8_lossy(&replay.stderr));
+}
+
+#[test]
+fn a_drive_log_stops_taking_images_at_its_cap() {
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 12);
+    let (mut emulator, address, _) = emulator();
+    let extra = r#"max_time_s: 8.0, log_images: true, log_max_mb: 1.0,
+        camera: (source: Directory("frames"), stereo: (focal_px: 554.3)),"#;
+    let (out, _) = drive_through_shell(dir.path(), &address, extra, "");
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("it takes no more images"), "{stderr}");
+    let size = std::fs::metadata(dir.path().join("l.mcap")).unwrap().len();
+    assert!(size < 2_000_000, "the log holds {size} bytes");
+    let said = mcap_check(&[dir.path().join("l.mcap").as_os_str()]);
+    assert!(said.contains("the run ended: time_limit"), "{said}");
+}

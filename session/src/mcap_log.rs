@@ -182,6 +182,8 @@ pub struct McapLog {
     collisions: u32,
     /// Whether stereo pairs are logged.
     images: bool,
+    /// Message bytes written so far (before compression).
+    logged_bytes: u64,
 }
 
 /// Seconds of controller time between closed chunks.
@@ -257,9 +259,43 @@ impl McapLog {
     /// Creates (or replaces) the log at `path`, declares its topics and
     /// writes what the run is: its world, goal and the scene Foxglove draws.
     pub fn create(path: &Path, run: &RunMessage, world: &WorldMessage) -> Result<McapLog, LogError> {
-        let mut log = McapLog::open(path)?;
+        let mut log = McapLog::open(path, ("ubf.Report", report_schema()))?;
         log.describe(run, world)?;
         Ok(log)
+    }
+
+    /// Creates the log of a session on a real robot at `path`: no world,
+    /// a `/report` of the `ubf.DriveReport` kind ([`McapLog::write_report`]),
+    /// and, in a metadata record `ubf.wall_clock`, the UTC time at which
+    /// the log's time 0 was (`utc_start`, RFC 3339, and
+    /// `unix_time_ns`), to within a tick.
+    pub fn create_for_drive<T: JsonSchema>(path: &Path, run: &RunMessage) -> Result<McapLog, LogError> {
+        let mut log = McapLog::open(path, ("ubf.DriveReport", json_schema::<T>()))?;
+        let now = time::OffsetDateTime::now_utc();
+        let utc = now.format(&time::format_description::well_known::Rfc3339).map_err(|e| log.fail(&e))?;
+        let metadata = mcap::records::Metadata {
+            name: "ubf.wall_clock".into(),
+            metadata: BTreeMap::from([
+                ("utc_start".to_owned(), utc),
+                ("unix_time_ns".to_owned(), now.unix_timestamp_nanos().to_string()),
+            ]),
+        };
+        log.writer.write_metadata(&metadata).map_err(|e| log.fail(&e))?;
+        log.describe(run, &WorldMessage::default())?;
+        Ok(log)
+    }
+
+    /// Writes `report` on `/report` at `time` and flushes, so that it is
+    /// in the file whatever happens next.
+    pub fn write_report(&mut self, time: f64, report: &impl Serialize) -> Result<(), LogError> {
+        self.write("/report", time, report)?;
+        self.writer.flush().map_err(|e| self.fail(&e))
+    }
+
+    /// Message bytes logged so far, before compression: what a cap on the
+    /// log's size counts.
+    pub fn logged_bytes(&self) -> u64 {
+        self.logged_bytes
     }
 
     /// Logs each stereo frame's pair of images (PNG, about 0.2 MB a pair
@@ -268,7 +304,9 @@ impl McapLog {
         self.images = images;
     }
 
-    fn open(path: &Path) -> Result<McapLog, LogError> {
+    /// Opens the log with its channels, `/report`'s schema named and given
+    /// by `report`.
+    fn open(path: &Path, report: (&str, Vec<u8>)) -> Result<McapLog, LogError> {
         let fail = |e: &dyn std::fmt::Display| LogError { path: path.to_owned(), message: e.to_string() };
         let file = SealedFile::create(path).map_err(|e| fail(&e))?;
         let options = mcap::WriteOptions::new().profile("").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
@@ -301,7 +339,7 @@ impl McapLog {
             ("/run", "ubf.Run", json_schema::<RunMessage>()),
             ("/tree", "ubf.Tick", json_schema::<TickMessage>()),
             ("/collision", "ubf.Collision", json_schema::<CollisionMessage>()),
-            ("/report", "ubf.Report", report_schema()),
+            ("/report", report.0, report.1),
         ] {
             let schema = writer.add_schema(name, "jsonschema", &schema).map_err(|e| fail(&e))?;
             let id = writer.add_channel(schema, topic, "json", &no_metadata).map_err(|e| fail(&e))?;
@@ -317,6 +355,7 @@ impl McapLog {
             layout: TreeLayout::default(),
             collisions: 0,
             images: false,
+            logged_bytes: 0,
         })
     }
 
@@ -327,6 +366,7 @@ impl McapLog {
     /// Writes one message on `topic` at controller time `time`.
     fn write(&mut self, topic: &'static str, time: f64, message: &impl Serialize) -> Result<(), LogError> {
         let data = serde_json::to_vec(message).expect("messages always serialise");
+        self.logged_bytes += data.len() as u64;
         let channel_id = self.channels[topic];
         self.sequence += 1;
         let header =

@@ -92,7 +92,7 @@ pub struct RunReport {
 /// A pose's JSON form, for the report's schema.
 #[derive(schemars::JsonSchema)]
 #[allow(dead_code)]
-struct PoseSchema {
+pub(crate) struct PoseSchema {
     /// m.
     x: f64,
     /// m.

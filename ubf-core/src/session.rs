@@ -43,6 +43,22 @@ pub enum SessionEnd {
 }
 
 impl SessionEnd {
+    /// The ending's name as logs give it (`goal_reached`, `time_limit`,
+    /// `no_progress`, `interrupted`, `done`, `link_lost`, `failed`), and
+    /// what failed, if something did.
+    pub fn describe(&self) -> (&'static str, Option<String>) {
+        match self {
+            SessionEnd::GoalReached => ("goal_reached", None),
+            SessionEnd::TimeLimit => ("time_limit", None),
+            SessionEnd::NoProgress => ("no_progress", None),
+            SessionEnd::Interrupted => ("interrupted", None),
+            SessionEnd::Done => ("done", None),
+            SessionEnd::Failed(ControllerError::Robot(e)) if e.is_link_loss() => ("link_lost", Some(e.to_string())),
+            SessionEnd::Failed(e) => ("failed", Some(e.to_string())),
+            SessionEnd::Panicked(why) => ("failed", Some(format!("internal error: {why}"))),
+        }
+    }
+
     /// The behaviour's panic, if that is what ended the session.
     pub fn behavior_panic(&self) -> Option<&BehaviorPanic> {
         match self {

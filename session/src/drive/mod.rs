@@ -9,29 +9,29 @@
 
 mod camera;
 mod dry_run;
+mod log;
 pub mod robot_file;
 mod status;
 
 pub use camera::CameraError;
 pub use dry_run::dry_run;
+pub use log::DriveReport;
 pub use robot_file::{
     CameraSourceChoice, DriveCamera, DriveConfig, ModelChoice, OnLinkLoss, RectifyFiles, RectifyFilesError,
     RobotFileError, ROS2_CONNECTION,
 };
 pub use status::Status;
 
-use crate::ros2_log::{LogFormat, Ros2Log};
 use crate::ros2_view::Shown;
-use crate::trajectory::{Columns, TrajectoryWriter};
 use status::StatusLine;
 use std::ops::ControlFlow;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use ubf_core::{
-    BackgroundSink, BuildContext, Controller, ControllerError, Ends, Pose2, Robot, RobotError, SafetyGuard, Session,
-    SessionEnd, TracingSink, WallClock,
+    BuildContext, Controller, ControllerError, Ends, Pose2, Robot, RobotError, SafetyGuard, Session, SessionEnd,
+    TracingSink, WallClock,
 };
 use ubf_robots::arcos::client::{ArcosRobot, EmergencyStop};
 use ubf_robots::arcos::link;
@@ -149,26 +149,6 @@ pub struct DriveOutcome {
     pub pose: Option<Pose2>,
 }
 
-/// The first of `base`, `stem.2.ext`, `stem.3.ext`, … that does not exist,
-/// created: a new session (or a new drive) never overwrites a log.
-fn create_fresh_log(base: &Path) -> std::io::Result<(std::fs::File, PathBuf)> {
-    let stem = base.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
-    let ext = base.extension().map_or_else(|| "csv".into(), |s| s.to_string_lossy().into_owned());
-    for n in 1..10_000u32 {
-        let path = if n == 1 { base.to_owned() } else { base.with_file_name(format!("{stem}.{n}.{ext}")) };
-        match std::fs::OpenOptions::new().write(true).create_new(true).open(&path) {
-            Ok(file) => return Ok((file, path)),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(e),
-        }
-    }
-    Err(std::io::Error::other(format!("{}: 10 000 logs already; move some away", base.display())))
-}
-
-/// Records a log writer may fall behind by before records are dropped: 25 s
-/// of ticks at 10 Hz.
-const LOG_QUEUE: usize = 256;
-
 /// Runs the tree against the robot until `stop` is set (or the time limit),
 /// reconnecting after a lost link if configured, with the world frame (and
 /// so the goal) carried over from the last pose. Every tick goes to the
@@ -230,8 +210,9 @@ fn drive_sessions(
         if status != Status::Off {
             controller.add_sink(Box::new(StatusLine::new(status)));
         }
-        let attached =
-            attach_logs(&mut controller, config, model, logs).and_then(|()| attach_ros2(&mut controller, config));
+        let ending = log::SessionEnding::default();
+        let attached = log::attach_logs(&mut controller, config, model, logs, &ending)
+            .and_then(|()| attach_ros2(&mut controller, config));
         let ends = Ends {
             at_goal: config.until_goal,
             progress: config.progress,
@@ -243,6 +224,8 @@ fn drive_sessions(
             Ok(()) => session.run(stop, |_| ControlFlow::Continue(())),
             Err(_) => SessionEnd::Done,
         };
+        let (end, failure) = ended.describe();
+        ending.set(end, failure);
         // Whatever happened: stop the robot, close the session and flush
         // the logs.
         let (mut controller, shutdown) = session.finish();
@@ -275,65 +258,6 @@ fn drive_sessions(
     }
 }
 
-/// Attaches the session's logs, each written on a thread of its own (a
-/// slow disk must not delay a tick, and a failed log must not stop the
-/// robot), and adds their paths to `logs`. The CSV log is the one a session
-/// cannot do without; the MCAP log beside it is left out, with a warning, if
-/// it cannot be made.
-fn attach_logs<R: Robot>(
-    controller: &mut Controller<R>,
-    config: &DriveConfig,
-    model: &RobotModel,
-    logs: &mut Vec<PathBuf>,
-) -> Result<(), DriveError> {
-    let (file, path) =
-        create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
-    eprintln!("logging to {}", path.display());
-    logs.push(path.clone());
-    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan: false });
-    let sink =
-        BackgroundSink::spawn(format!("CSV log {}", path.display()), csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
-    controller.add_sink(Box::new(sink));
-    let Some((mut mcap, mcap_path)) = open_session_mcap(&path, model, controller.state().pose, config.goal) else {
-        return Ok(());
-    };
-    mcap.log_images(config.log_images);
-    match BackgroundSink::spawn(format!("MCAP log {}", mcap_path.display()), mcap, LOG_QUEUE) {
-        Ok(sink) => {
-            eprintln!("and to {}", mcap_path.display());
-            logs.push(mcap_path);
-            controller.add_sink(Box::new(sink));
-        }
-        Err(e) => tracing::warn!("{e}; this session has only its CSV log"),
-    }
-    if config.log_format == LogFormat::Ros2 {
-        attach_rosbag(controller, config, &path, logs);
-    }
-    Ok(())
-}
-
-/// The session's rosbag2 directory beside its CSV log (`NAME-rosbag2/`),
-/// or a warning if it cannot be made: the CSV log is the one a session
-/// cannot do without.
-fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig, csv: &Path, logs: &mut Vec<PathBuf>) {
-    let stem = csv.file_stem().map_or_else(|| "drive-log".into(), |s| s.to_string_lossy().into_owned());
-    let dir = csv.with_file_name(format!("{stem}-rosbag2"));
-    let epoch_s = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-    let opened = Ros2Log::create(&dir, Shown { robot: true, images: config.log_images, tree: true }, epoch_s)
-        .map_err(|e| e.to_string())
-        .and_then(|bag| {
-            BackgroundSink::spawn(format!("rosbag2 log {}", dir.display()), bag, LOG_QUEUE).map_err(|e| e.to_string())
-        });
-    match opened {
-        Ok(sink) => {
-            eprintln!("and to {}", dir.display());
-            logs.push(dir);
-            controller.add_sink(Box::new(sink));
-        }
-        Err(e) => tracing::warn!("{e}; this session has no rosbag2 log"),
-    }
-}
-
 /// Publishes the session on ROS 2 where asked, and always for a ROS 2
 /// robot: its tree and goal, and for another robot its pose and sensors
 /// too (a ROS 2 robot's driver publishes those).
@@ -348,40 +272,6 @@ fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -
         .map_err(|e| DriveError::Ros2(e.to_string()))?;
     controller.add_sink(Box::new(publisher));
     Ok(())
-}
-
-/// The session's MCAP log beside its CSV one (same name, `.mcap`), or
-/// `None` with a warning if it cannot be made: the CSV log is the one a
-/// session cannot do without.
-fn open_session_mcap(
-    csv: &Path,
-    model: &RobotModel,
-    pose: Pose2,
-    goal: Option<ubf_core::Goal>,
-) -> Option<(crate::mcap_log::McapLog, PathBuf)> {
-    let path = csv.with_extension("mcap");
-    if path.exists() {
-        tracing::warn!("{} exists; this session has only its CSV log", path.display());
-        return None;
-    }
-    let run = crate::mcap_log::RunMessage {
-        scenario: format!("drive ({})", model.name),
-        seed: 0,
-        start: [pose.x, pose.y, pose.theta],
-        outline: model.footprint.corners().map(|(x, y)| {
-            let (wx, wy) = pose.transform_point(x, y);
-            [wx, wy]
-        }),
-        goal: goal.map(|g| [g.x, g.y, g.tolerance]),
-    };
-    let opened = crate::mcap_log::McapLog::create(&path, &run, &crate::mcap_log::WorldMessage::default());
-    match opened {
-        Ok(log) => Some((log, path)),
-        Err(e) => {
-            tracing::warn!("{e}; this session has only its CSV log");
-            None
-        }
-    }
 }
 
 /// A robot reached for a session, motors on.

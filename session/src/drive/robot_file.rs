@@ -154,6 +154,12 @@ pub struct DriveConfig {
     /// (PNG, about 0.2 MB a 640 × 480 pair).
     #[serde(default)]
     pub log_images: bool,
+    /// Megabytes at which a session's MCAP log stops taking images; at
+    /// twice this it stops taking anything but its report (the CSV log, a
+    /// few kilobytes a minute, goes on), so a long drive cannot fill the
+    /// disk.
+    #[serde(default = "DriveConfig::default_log_max_mb", deserialize_with = "log_max_mb")]
+    pub log_max_mb: f64,
     /// What to do when the robot stops answering.
     #[serde(default)]
     pub on_link_loss: OnLinkLoss,
@@ -225,6 +231,11 @@ fn drive_period_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Erro
     ubf_core::config::number_in(d, 0.01..=1.0, "from 0.01 to 1 s")
 }
 
+/// A cap on a log, MB: 1 MB to 1 TB.
+fn log_max_mb<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, 1.0..=1e6, "from 1 to 1000000 MB")
+}
+
 /// The margin on the stop wait: up to 10 s.
 fn stop_wait_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     ubf_core::config::number_in(d, 0.0..=10.0, "from 0 to 10 s")
@@ -282,6 +293,9 @@ impl DriveConfig {
     }
     fn default_period() -> f64 {
         0.1
+    }
+    fn default_log_max_mb() -> f64 {
+        2000.0
     }
     fn default_log() -> PathBuf {
         PathBuf::from("drive-log.csv")
