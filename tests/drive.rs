@@ -507,6 +507,9 @@ fn a_second_interrupt_forces_the_exit_after_stop() {
     emulator.kill().unwrap();
     assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out either way: {line}");
     assert_eq!(status.code(), Some(130), "{status:?}");
+    // Exiting at once leaves the MCAP log readable up to its last second.
+    let said = mcap_check(&["--cut-short".as_ref(), dir.path().join("log.mcap").as_os_str()]);
+    assert!(said.contains("| /pose/odometry |"), "{said}");
 }
 
 #[test]
