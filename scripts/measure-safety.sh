@@ -2,13 +2,16 @@
 # Measures the stop chain of `ubf drive` against the emulated Powerbot, as
 # docs/deploy.md reports it: time from the last SIP to the last motion
 # command and to STOP, when the link is declared lost, time from SIGTERM to
-# exit (STOP, standstill, ENABLE 0, CLOSE), and rows lost on SIGKILL.
+# exit (STOP, standstill, ENABLE 0, CLOSE), time from SIGTERM to the STOP
+# that ends the motion (over four times RUNS signals, at random points of
+# the tick), and rows lost on SIGKILL.
 #
-#   scripts/measure-safety.sh [RUNS]      (default 5; needs a release build)
+#   scripts/measure-safety.sh [RUNS]      (default 5; needs a release build,
+#                                          or UBF=path/to/ubf)
 set -euo pipefail
 runs=${1:-5}
 here=$(cd "$(dirname "$0")/.." && pwd)
-ubf="$here/target/release/ubf"
+ubf="${UBF:-$here/target/release/ubf}"
 [ -x "$ubf" ] || { echo "build first: cargo build --release" >&2; exit 2; }
 work=$(mktemp -d)
 trap 'pkill -f "$ubf emulate-powerbot --listen 127.0.0.1:0" 2>/dev/null || true; rm -rf "$work"' EXIT
@@ -39,6 +42,7 @@ field() { grep -o "$1=[^ ]*" "$work/emu.txt" | tail -1 | cut -d= -f2; }
 median() { sort -g | awk '{a[NR]=$1} END {m=(NR%2)?a[(NR+1)/2]:(a[NR/2]+a[NR/2+1])/2; printf "%.3f (max %.3f)", m, a[NR]}'; }
 
 : > "$work/motion"; : > "$work/stop"; : > "$work/lost"; : > "$work/term"; : > "$work/wait"; : > "$work/killed"
+: > "$work/term-stop"
 for run in $(seq "$runs"); do
     # Stale data: SIPs stop 3 s in, commands still reach the robot.
     start_emulator --silence 3:5
@@ -60,6 +64,18 @@ for run in $(seq "$runs"); do
     echo "$t1 - $t0" | bc -l >> "$work/term"
     field stop_to_disable_s >> "$work/wait"
 
+    # SIGTERM → the STOP that ends the motion, at four random points of a tick.
+    for _ in 1 2 3 4; do
+        start_emulator
+        robot_file "$work/term-stop-$run.csv" ""
+        "$ubf" drive "$work/robot.ron" 2> /dev/null &
+        drive=$!
+        sleep "2.$((RANDOM % 100))"
+        t0=$(date +%s.%N); kill -TERM "$drive"; wait "$drive" || true
+        sleep 0.3; kill "$emu_pid"; wait "$emu_pid" 2>/dev/null || true
+        echo "$(field motion_stopped_at) - $t0" | bc -l >> "$work/term-stop"
+    done
+
     # SIGKILL 4.5 s in: rows on disk against ticks run.
     start_emulator
     robot_file "$work/kill-$run.csv" ""
@@ -77,6 +93,7 @@ echo "| --- | --- |"
 echo "| last SIP → last motion command received | $(median < "$work/motion") |"
 echo "| last SIP → first STOP received | $(median < "$work/stop") |"
 echo "| last SIP → link declared lost | $(median < "$work/lost") |"
+echo "| SIGTERM → the STOP that ends the motion ($(wc -l < "$work/term-stop") signals) | $(median < "$work/term-stop") |"
 echo "| SIGTERM → process exit (robot at 0.3 m/s) | $(median < "$work/term") |"
 echo "| of which STOP → ENABLE 0 (standstill wait) | $(median < "$work/wait") |"
 echo "| rows lost on SIGKILL, as seconds of ticks | $(median < "$work/killed") |"

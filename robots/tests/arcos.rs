@@ -392,3 +392,22 @@ fn drives_to_a_goal_on_heading_commands() {
     let (tx, ty) = (truth.0 / 1000.0, truth.1 / 1000.0);
     assert!((tx - state.pose.x).hypot(ty - state.pose.y) < 0.01, "odometry {:?} vs truth ({tx}, {ty})", state.pose);
 }
+
+#[test]
+fn a_halt_from_another_thread_stops_the_robot_and_holds_it() {
+    // What the first Ctrl-C does while the control loop is mid-tick: STOP
+    // at once, and the loop's motion commands go out as STOP from then on.
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let mut robot = emulator.connect();
+    let mut state = State::default();
+    let go = Command::Drive { velocity: 0.4, turn: Turn::Rate(0.0) };
+    drive(&mut robot, go, 1.5, &mut state);
+    assert!(state.velocity > 0.3, "{}", state.velocity);
+    let emergency = robot.emergency_stop().unwrap();
+    std::thread::spawn(move || emergency.halt().unwrap()).join().unwrap();
+    drive(&mut robot, go, 2.0, &mut state);
+    assert!(state.velocity.abs() < 0.01, "still driving at {} m/s after the halt", state.velocity);
+    robot.shutdown().unwrap();
+    let report = emulator.finish();
+    assert!(report.closed && report.motion_stopped_at.is_some());
+}

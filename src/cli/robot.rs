@@ -196,7 +196,7 @@ fn emulator_report(report: &EmulatorReport) -> String {
     format!(
         "client gone: {} commands, closed {}, pose ({:.3}, {:.3}) m; sips={} motion_before_first_sip={} \
          last_motion_after_silence_s={} stop_after_silence_s={} stop_to_disable_s={} speed_at_disable_mm_s={} \
-         speed_limits={limits} stalled_cycles={} host_baud={}",
+         motion_stopped_at={} speed_limits={limits} stalled_cycles={} host_baud={}",
         report.commands,
         report.closed,
         report.pose.0 / 1000.0,
@@ -207,6 +207,7 @@ fn emulator_report(report: &EmulatorReport) -> String {
         show(report.stop_after_silence_s),
         show(report.stop_to_disable_s),
         show(report.speed_at_disable),
+        report.motion_stopped_at.map_or("-".to_owned(), |t| format!("{t:.4}")),
         report.stalled_cycles,
         report.host_baud.map_or("-".to_owned(), |b| b.to_string()),
     )

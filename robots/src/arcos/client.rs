@@ -105,16 +105,38 @@ struct Latest {
     ended: bool,
 }
 
-/// What a second Ctrl-C needs to stop the robot while the control loop is
-/// stuck: its own handle on the link.
+/// What a signal handler needs to stop the robot while the control loop is
+/// busy or stuck: its own handle on the link, and the session's halt.
 pub struct EmergencyStop {
     link: Mutex<Box<dyn Link>>,
+    halt: Arc<Halt>,
+}
+
+/// A session told to stop moving from outside its control loop: once set,
+/// every motion command goes out as STOP. The lock orders the loop's
+/// commands and the halt's STOP on the link, so no command the loop had
+/// under way can follow the STOP.
+#[derive(Default)]
+struct Halt {
+    lock: Mutex<()>,
+    halted: AtomicBool,
 }
 
 impl EmergencyStop {
+    /// Sends STOP now, from whatever thread, and holds the robot still:
+    /// the control loop's motion commands go out as STOP from here on,
+    /// while it runs its orderly stop. The first Ctrl-C or SIGTERM.
+    pub fn halt(&self) -> Result<(), RobotError> {
+        let _order = self.halt.lock.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        self.halt.halted.store(true, Ordering::SeqCst);
+        let mut link = self.link.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        send(link.as_mut(), ClientCommand::Stop)
+    }
+
     /// Sends STOP, ENABLE 0 and CLOSE at once, without waiting for
     /// standstill: for when the orderly stop has not happened in time.
     pub fn stop_now(&self) -> Result<(), RobotError> {
+        self.halt.halted.store(true, Ordering::SeqCst);
         let mut link = self.link.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         for command in [ClientCommand::Stop, ClientCommand::Enable(false), ClientCommand::Close] {
             send(link.as_mut(), command)?;
@@ -147,6 +169,8 @@ pub struct ArcosRobot {
     /// The rotational speed limit last sent (SETRV), °/s.
     rot_limit_sent: u16,
     standstill_wait: Duration,
+    /// Set from outside the control loop ([`EmergencyStop::halt`]).
+    halt: Arc<Halt>,
     /// The decelerations this session set, if any: mm/s² and °/s².
     decelerations_set: Option<(f64, f64)>,
     closed: bool,
@@ -347,6 +371,7 @@ impl ArcosRobot {
             rot_limit_sent,
             standstill_wait: options.standstill_wait,
             decelerations_set,
+            halt: Arc::default(),
             closed: false,
         })
     }
@@ -364,7 +389,7 @@ impl ArcosRobot {
     /// A handle that can stop the robot from another thread (a second
     /// Ctrl-C) even while this one is busy.
     pub fn emergency_stop(&self) -> Result<EmergencyStop, RobotError> {
-        Ok(EmergencyStop { link: Mutex::new(self.link.try_clone_link()?) })
+        Ok(EmergencyStop { link: Mutex::new(self.link.try_clone_link()?), halt: Arc::clone(&self.halt) })
     }
 
     fn send(&mut self, command: ClientCommand) -> Result<(), RobotError> {
@@ -540,6 +565,9 @@ impl Robot for ArcosRobot {
     }
 
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {
+        let halt = Arc::clone(&self.halt);
+        let _order = halt.lock.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let command = if halt.halted.load(Ordering::SeqCst) { &Command::Stop } else { command };
         let limits = self.limits();
         match *command {
             Command::Stop => self.send(ClientCommand::Stop),

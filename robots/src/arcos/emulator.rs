@@ -132,6 +132,10 @@ pub struct EmulatorReport {
     pub stop_to_disable_s: Option<f64>,
     /// The translational speed when ENABLE 0 arrived, mm/s.
     pub speed_at_disable: Option<f64>,
+    /// When the STOP that ended the session's last motion arrived: the
+    /// first STOP after a motion command, as seconds since the Unix epoch
+    /// (for timing a stop against an outside event, such as a signal).
+    pub motion_stopped_at: Option<f64>,
     /// SIPs sent.
     pub sips: u64,
     /// SIP cycles in which a wheel was stalled.
@@ -372,6 +376,8 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
     let mut opened_at = Instant::now();
     let mut last_sip_sent: Option<Instant> = None;
     let mut last_stop: Option<Instant> = None;
+    // A motion command came after the last STOP.
+    let mut moving = false;
     let mut buffer = [0u8; 256];
     let within = |window: Option<(Duration, Duration)>, opened_at: Instant| {
         window.is_some_and(|(after, span)| {
@@ -445,6 +451,7 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
                 }
                 (Phase::Open, c) => {
                     if is_motion(&c) {
+                        moving = true;
                         if report.sips == 0 {
                             report.motion_before_first_sip += 1;
                         }
@@ -456,6 +463,12 @@ pub fn serve(mut link: Box<dyn Link>, config: &EmulatorConfig, stop: &Arc<Atomic
                     match c {
                         ClientCommand::Stop => {
                             last_stop = Some(Instant::now());
+                            if std::mem::take(&mut moving) {
+                                report.motion_stopped_at = std::time::SystemTime::now()
+                                    .duration_since(std::time::UNIX_EPOCH)
+                                    .ok()
+                                    .map(|d| d.as_secs_f64());
+                            }
                             if silent(opened_at) && report.stop_after_silence_s.is_none() {
                                 report.stop_after_silence_s = last_sip_sent.map(|t| t.elapsed().as_secs_f64());
                             }

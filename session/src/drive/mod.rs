@@ -90,22 +90,29 @@ pub enum DriveError {
     Output(std::io::Error),
 }
 
-/// What a second Ctrl-C or SIGTERM runs before the process exits: the
-/// robot's emergency stop, while a session is open.
-static ON_SECOND_INTERRUPT: Mutex<Option<EmergencyStop>> = Mutex::new(None);
+/// What Ctrl-C or SIGTERM reaches the robot with, while a session is open:
+/// its emergency stop.
+static ON_INTERRUPT: Mutex<Option<EmergencyStop>> = Mutex::new(None);
 
-/// Set by Ctrl-C or SIGTERM. A second one does not wait for the orderly
-/// stop: it sends STOP, ENABLE 0 and CLOSE on the open session, if any, and
-/// exits with status 130.
+/// Set by Ctrl-C or SIGTERM, which also sends STOP at once on the open
+/// session, if any (the control loop may be in the middle of a tick), and
+/// holds it still while the loop runs the orderly stop. A second one does
+/// not wait for that: it sends STOP, ENABLE 0 and CLOSE and exits with
+/// status 130.
 pub fn install_stop_flag() -> Arc<AtomicBool> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     // A second handler cannot be installed; then only the time limit stops.
     let _ = ctrlc::set_handler(move || {
         if !flag.swap(true, Ordering::SeqCst) {
+            if let Ok(guard) = ON_INTERRUPT.try_lock() {
+                if let Some(emergency) = guard.as_ref() {
+                    let _ = emergency.halt();
+                }
+            }
             return;
         }
-        if let Ok(guard) = ON_SECOND_INTERRUPT.try_lock() {
+        if let Ok(guard) = ON_INTERRUPT.try_lock() {
             if let Some(emergency) = guard.as_ref() {
                 let _ = emergency.stop_now();
             }
@@ -116,9 +123,9 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
     stop
 }
 
-/// Registers (or clears) what a second interrupt stops.
-fn arm_second_interrupt(emergency: Option<EmergencyStop>) {
-    *ON_SECOND_INTERRUPT.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = emergency;
+/// Registers (or clears) what an interrupt stops.
+fn arm_interrupt(emergency: Option<EmergencyStop>) {
+    *ON_INTERRUPT.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = emergency;
 }
 
 /// How a drive ended.
@@ -192,13 +199,13 @@ fn drive_sessions(
             }
         };
         eprintln!("connected to {name}");
-        arm_second_interrupt(emergency);
+        arm_interrupt(emergency);
         // From here the motors are on: every path out goes through shutdown
         // (a robot dropped on the way out shuts itself down).
         let robot = match config.equip(robot, camera, pose) {
             Ok(robot) => SafetyGuard::new(robot, config.safety),
             Err(e) => {
-                arm_second_interrupt(None);
+                arm_interrupt(None);
                 return Err(e.into());
             }
         };
@@ -234,7 +241,7 @@ fn drive_sessions(
         if let Err(e) = shutdown {
             tracing::warn!("shutting down: {e}");
         }
-        arm_second_interrupt(None);
+        arm_interrupt(None);
         attached?;
         match ended {
             SessionEnd::Interrupted => return Ok(DriveEnd::Interrupted),
