@@ -957,3 +957,96 @@ fn a_drive_log_stops_taking_images_at_its_cap() {
     let said = mcap_check(&[dir.path().join("l.mcap").as_os_str()]);
     assert!(said.contains("the run ended: time_limit"), "{said}");
 }
+
+#[test]
+fn a_drive_tells_systemd_it_is_ready_alive_and_stopping() {
+    // systemd's side of Type=notify: a datagram socket named by
+    // NOTIFY_SOCKET, with a 0.4 s watchdog.
+    let dir = tempfile::tempdir().unwrap();
+    let socket_path = dir.path().join("notify");
+    let socket = std::os::unix::net::UnixDatagram::bind(&socket_path).unwrap();
+    socket.set_read_timeout(Some(Duration::from_millis(100))).unwrap();
+    // Read as systemd does, while the drive runs: its queue holds ten.
+    let listener = std::thread::spawn(move || {
+        let (mut said, mut buffer) = (Vec::new(), [0u8; 512]);
+        let deadline = std::time::Instant::now() + Duration::from_secs(30);
+        while !said.iter().any(|s: &String| s.contains("STOPPING=1")) && std::time::Instant::now() < deadline {
+            if let Ok(n) = socket.recv(&mut buffer) {
+                said.push(String::from_utf8_lossy(&buffer[..n]).into_owned());
+            }
+        }
+        said
+    });
+    let (mut emulator, address, _) = emulator();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, robot_file(&address, &dir.path().join("l.csv"), "max_time_s: 3.0,", GO_ONLY)).unwrap();
+    // systemd names the process the watchdog is for: the shell's pid,
+    // which `exec` hands on to the drive.
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg("WATCHDOG_PID=$$ exec \"$0\" drive \"$1\"")
+        .arg(env!("CARGO_BIN_EXE_ubf"))
+        .arg(&file)
+        .env("NOTIFY_SOCKET", &socket_path)
+        .env("WATCHDOG_USEC", "400000")
+        .output()
+        .unwrap();
+    emulator.kill().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = listener.join().unwrap();
+    let position = |what: &str| said.iter().position(|s| s.lines().any(|l| l == what));
+    let ready = position("READY=1").expect("READY=1 was sent");
+    let pets = said.iter().filter(|s| s.lines().any(|l| l == "WATCHDOG=1")).count();
+    // Three seconds of ticks at two pets per 0.4 s: about fifteen.
+    assert!(pets >= 8, "{pets} watchdog pets: {said:?}");
+    assert!(position("STOPPING=1").is_some_and(|stopping| stopping > ready), "{said:?}");
+}
+
+#[test]
+fn a_restarted_drive_resumes_in_the_saved_world_frame() {
+    // A first drive reaches its goal 1 m ahead and keeps its pose; the
+    // second, as a service restarted would be, finds the pose file and
+    // knows it is there already: its goal is not re-based to where the
+    // robot stands.
+    let dir = tempfile::tempdir().unwrap();
+    let pose_file = dir.path().join("pose.ron");
+    let extra =
+        format!("until_goal: true, goal: (x: 1.0, y: 0.0), max_time_s: 30.0, pose_file: \"{}\",", pose_file.display());
+    let (first, line, _) = drive_on(&["--listen", "127.0.0.1:0"], &extra, GO_ONLY);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let travelled: f64 = line.split("pose (").nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    assert!(travelled > 0.75, "the first drive went to its goal (within its 0.2 m): {line}");
+    assert!(pose_file.exists());
+    let (second, line, _) = drive_on(&["--listen", "127.0.0.1:0"], &extra, GO_ONLY);
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(second.status.success() && stderr.contains("resuming in the world frame of"), "{stderr}");
+    let travelled: f64 = line.split("pose (").nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    assert!(travelled.abs() < 0.05, "the second drive went {travelled} m toward a goal it stood at: {line}");
+}
+
+#[test]
+fn a_drive_never_waits_for_systemd_to_read() {
+    // A notification socket nobody reads fills after ten datagrams; the
+    // tick loop must go on (a blocking send hung it after two seconds).
+    let dir = tempfile::tempdir().unwrap();
+    let socket_path = dir.path().join("notify");
+    let _unread = std::os::unix::net::UnixDatagram::bind(&socket_path).unwrap();
+    let (mut emulator, address, _) = emulator();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, robot_file(&address, &dir.path().join("l.csv"), "max_time_s: 3.0,", GO_ONLY)).unwrap();
+    let mut drive = Command::new("sh")
+        .arg("-c")
+        .arg("WATCHDOG_PID=$$ exec \"$0\" drive \"$1\" 2>/dev/null")
+        .arg(env!("CARGO_BIN_EXE_ubf"))
+        .arg(&file)
+        .env("NOTIFY_SOCKET", &socket_path)
+        .env("WATCHDOG_USEC", "100000")
+        .spawn()
+        .unwrap();
+    let status = wait_for(&mut drive, 20.0);
+    if status.is_none() {
+        let _ = drive.kill();
+    }
+    emulator.kill().unwrap();
+    assert!(status.is_some_and(|s| s.success()), "{status:?}");
+}

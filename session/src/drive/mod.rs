@@ -10,12 +10,15 @@
 mod camera;
 mod dry_run;
 mod log;
+mod pose_file;
 pub mod robot_file;
+mod service;
 mod status;
 
 pub use camera::CameraError;
 pub use dry_run::dry_run;
 pub use log::DriveReport;
+pub use pose_file::PoseFileError;
 pub use robot_file::{
     CameraSourceChoice, DriveCamera, DriveConfig, ModelChoice, OnLinkLoss, RectifyFiles, RectifyFilesError,
     RobotFileError, ROS2_CONNECTION,
@@ -85,6 +88,9 @@ pub enum DriveError {
          `ros2 topic echo /odom` to watch it"
     )]
     NoDryRun,
+    /// The pose file could not be read, or written.
+    #[error(transparent)]
+    PoseFile(#[from] PoseFileError),
     /// The dry run's report could not be written.
     #[error("writing: {0}")]
     Output(std::io::Error),
@@ -165,6 +171,7 @@ pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool, status
     let mut logs = Vec::new();
     let mut pose = None;
     let end = drive_sessions(config, model, stop, status, &mut logs, &mut pose);
+    service::stopping();
     DriveOutcome { end, logs, pose }
 }
 
@@ -179,6 +186,18 @@ fn drive_sessions(
     let started = Instant::now();
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
     let mut pose = Pose2::default();
+    if let Some(file) = &config.pose_file {
+        if let Some(saved) = pose_file::read(file)? {
+            eprintln!(
+                "resuming in the world frame of {}: the robot at ({:.3}, {:.3}) m, {:.1}°",
+                file.display(),
+                saved.x,
+                saved.y,
+                saved.theta.to_degrees()
+            );
+            pose = saved;
+        }
+    }
     loop {
         if stop.load(Ordering::SeqCst) {
             return Ok(DriveEnd::Interrupted);
@@ -199,6 +218,7 @@ fn drive_sessions(
             }
         };
         eprintln!("connected to {name}");
+        service::ready();
         arm_interrupt(emergency);
         // From here the motors are on: every path out goes through shutdown
         // (a robot dropped on the way out shuts itself down).
@@ -214,6 +234,16 @@ fn drive_sessions(
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
         controller.add_sink(Box::new(TracingSink));
+        if let Some(watchdog) = service::Watchdog::for_session() {
+            controller.add_sink(Box::new(watchdog));
+        }
+        if let Some(file) = &config.pose_file {
+            let sink = pose_file::PoseFileSink::new(file.clone());
+            match ubf_core::BackgroundSink::spawn(format!("pose file {}", file.display()), sink, 4) {
+                Ok(sink) => controller.add_sink(Box::new(sink)),
+                Err(e) => tracing::warn!("pose file {}: {e}", file.display()),
+            }
+        }
         if status != Status::Off {
             controller.add_sink(Box::new(StatusLine::new(status)));
         }
@@ -233,11 +263,17 @@ fn drive_sessions(
         };
         let (end, failure) = ended.describe();
         ending.set(end, failure);
+        service::stop_sequence();
         // Whatever happened: stop the robot, close the session and flush
         // the logs.
         let (mut controller, shutdown) = session.finish();
         pose = controller.settled_pose();
         *settled = Some(pose);
+        if let Some(file) = &config.pose_file {
+            if let Err(e) = pose_file::write(file, &pose) {
+                tracing::warn!("pose file {}: {e}", file.display());
+            }
+        }
         if let Err(e) = shutdown {
             tracing::warn!("shutting down: {e}");
         }

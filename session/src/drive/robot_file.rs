@@ -196,6 +196,13 @@ pub struct DriveConfig {
     /// motors are switched off, s.
     #[serde(default = "DriveConfig::default_stop_wait", deserialize_with = "stop_wait_s")]
     pub stop_wait_s: f64,
+    /// Where the drive keeps the robot's pose in its world frame (once a
+    /// second and at the end of each session, atomically). A drive that
+    /// finds the file resumes in that frame, as after a reconnect: a
+    /// service restarted after a crash keeps its goal in place. Remove the
+    /// file to start a new frame where the robot stands.
+    #[serde(default)]
+    pub pose_file: Option<PathBuf>,
     /// Stop by itself after this long, s (unset: run until stopped).
     #[serde(default, deserialize_with = "ubf_core::config::optional_duration_s")]
     pub max_time_s: Option<f64>,
