@@ -59,14 +59,15 @@ impl SealedFile {
     }
 
     /// Writes what is pending at the end of the file, followed by `end`.
+    /// A write that fails (a full disk) leaves what is pending pending.
     fn write_pending(&mut self, end: &[u8]) -> io::Result<()> {
-        let mut bytes = std::mem::take(&mut self.pending);
-        let length = bytes.len();
-        bytes.extend_from_slice(end);
-        self.file.write_all_at(&bytes, self.written)?;
+        let length = self.pending.len();
+        self.pending.extend_from_slice(end);
+        let written = self.file.write_all_at(&self.pending, self.written);
+        self.pending.truncate(length);
+        written?;
         self.written += length as u64;
-        bytes.clear();
-        self.pending = bytes;
+        self.pending.clear();
         self.cursor = 0;
         Ok(())
     }
@@ -131,6 +132,18 @@ impl Drop for SealedFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_failed_write_is_an_error_and_the_file_stays_usable() {
+        // Every write to /dev/full fails as a full disk's does.
+        let Ok(mut file) = SealedFile::create(Path::new("/dev/full")) else { return };
+        file.write_all(b"a record").unwrap();
+        assert!(file.flush().is_err());
+        // It used to lose track of what was pending and panic here.
+        file.write_all(b"and another").unwrap();
+        assert!(file.flush().is_err());
+        assert_eq!(file.pending, b"a recordand another");
+    }
 
     /// Messages on one channel, a flush after each; `finish` or not.
     fn write_log(path: &Path, messages: u64, finish: bool) {
