@@ -6,7 +6,8 @@
 //! - [`scenario`]: the scenario file format and its loader, whose errors
 //!   name the file, line and column; [`run`]: a scenario run headless on
 //!   the simulator, and its [`report`];
-//! - [`sweep`]: many runs in parallel, summarised;
+//! - [`sweep`]: many runs in parallel, summarised, written through
+//!   [`atomic`] so that a stopped sweep leaves no half-written file;
 //! - [`frames`]: rendered stereo pairs recorded, and recordings replayed
 //!   through the feature pipeline;
 //! - [`drive`]: a robot file driving a real robot (ARCOS or ROS 2);
@@ -19,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod atomic;
 pub mod drive;
 pub mod frames;
 pub mod mcap_log;

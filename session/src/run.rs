@@ -305,8 +305,9 @@ impl EndPointWitness {
     }
 }
 
-/// Writes a report as pretty JSON.
+/// Writes a report as pretty JSON, atomically ([`crate::atomic::write`]):
+/// the file is whole or absent.
 pub fn write_report(report: &RunReport, path: &Path) -> Result<(), RunError> {
     let text = serde_json::to_string_pretty(report).expect("a report always serialises");
-    std::fs::write(path, text + "\n").map_err(output_error(path))
+    crate::atomic::write(path, (text + "\n").as_bytes()).map_err(output_error(path))
 }
