@@ -118,12 +118,17 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
             }
             return;
         }
+        let mut robot = false;
         if let Ok(guard) = ON_INTERRUPT.try_lock() {
             if let Some(emergency) = guard.as_ref() {
                 let _ = emergency.stop_now();
+                robot = true;
             }
         }
-        eprintln!("interrupted twice: robot sent STOP, ENABLE 0, CLOSE; exiting now");
+        match robot {
+            true => eprintln!("interrupted twice: robot sent STOP, ENABLE 0, CLOSE; exiting now"),
+            false => eprintln!("interrupted twice: exiting now"),
+        }
         std::process::exit(130);
     });
     stop
