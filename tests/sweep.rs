@@ -197,3 +197,337 @@ fn layout_seeds_are_refused_where_nothing_can_be_redrawn() {
     }
     assert!(!Path::new(env!("CARGO_MANIFEST_DIR")).join("unused").exists());
 }
+
+/// Every file under `dir` by its path in `dir`, with each report's
+/// `wall_time_s` line (the one thing two runs of a seed differ in) blanked.
+fn tree(dir: &Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, files: &mut std::collections::BTreeMap<std::path::PathBuf, Vec<u8>>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(root, &path, files);
+                continue;
+            }
+            let mut bytes = std::fs::read(&path).unwrap();
+            if path.file_name().unwrap() == "report.json" {
+                let text = String::from_utf8(bytes).unwrap();
+                let kept: Vec<&str> = text.lines().filter(|l| !l.trim_start().starts_with("\"wall_time_s\"")).collect();
+                assert!(kept.len() + 1 == text.lines().count(), "{}: one wall time", path.display());
+                bytes = kept.join("\n").into_bytes();
+            }
+            files.insert(path.strip_prefix(root).unwrap().to_owned(), bytes);
+        }
+    }
+    let mut files = std::collections::BTreeMap::new();
+    walk(dir, dir, &mut files);
+    files
+}
+
+/// Asserts `a` and `b` hold the same files with the same bytes (reports'
+/// wall times aside).
+fn assert_same_tree(a: &Path, b: &Path) {
+    let (x, y) = (tree(a), tree(b));
+    assert_eq!(x.keys().collect::<Vec<_>>(), y.keys().collect::<Vec<_>>(), "the same files");
+    for (path, bytes) in &x {
+        assert!(*bytes == y[path], "{} differs", path.display());
+    }
+}
+
+/// The finished runs' folders (`LABEL/seed-N`) under `out`.
+fn seed_folders(out: &Path) -> Vec<std::path::PathBuf> {
+    let Ok(labels) = std::fs::read_dir(out) else { return Vec::new() };
+    let mut found = Vec::new();
+    for label in labels.flatten().filter(|e| e.path().is_dir()) {
+        for seed in std::fs::read_dir(label.path()).into_iter().flatten().flatten() {
+            if seed.file_name().to_string_lossy().starts_with("seed-") {
+                found.push(seed.path());
+            }
+        }
+    }
+    found
+}
+
+/// The test sweep with trajectories (eight runs of about a second each
+/// unoptimised) into `out`, started and sent `signal` once two runs have
+/// finished; its output once it has ended.
+fn interrupted_sweep(out: &Path, signal: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--jobs",
+        "1",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let child = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(&args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while seed_folders(out).len() < 2 && started.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let sent = Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
+    assert!(sent.success());
+    child.wait_with_output().unwrap()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn an_interrupted_sweep_resumes_to_the_bytes_of_an_uninterrupted_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("interrupted");
+    let stopped = interrupted_sweep(&out, "-INT", &[]);
+    assert_eq!(stopped.status.code(), Some(130), "{}", text(&stopped.stderr));
+    assert!(text(&stopped.stderr).contains("--resume"), "{}", text(&stopped.stderr));
+    // Stopped midway, with nothing half-done: no summary, and every run's
+    // folder whole.
+    let finished = seed_folders(&out);
+    assert!((2..8).contains(&finished.len()), "{finished:?}");
+    assert!(!out.join("summary.json").exists() && !out.join("summary.csv").exists());
+    for folder in &finished {
+        for file in ["report.json", "trajectory.csv", "run.mcap", "plot.png"] {
+            assert!(folder.join(file).is_file(), "{}: no {file}", folder.display());
+        }
+    }
+    // Resuming with other seeds is another sweep: refused, nothing touched.
+    let other = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..5",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+    ]);
+    assert_eq!(other.status.code(), Some(2), "{}", text(&other.stderr));
+    assert_eq!(seed_folders(&out).len(), finished.len());
+    let resumed = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--jobs",
+        "2",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+    ]);
+    assert!(resumed.status.success(), "{}", text(&resumed.stderr));
+    let fresh = dir.path().join("fresh");
+    let whole = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--trajectories",
+        "--out",
+        fresh.to_str().unwrap(),
+    ]);
+    assert!(whole.status.success(), "{}", text(&whole.stderr));
+    assert_same_tree(&out, &fresh);
+    // A finished sweep resumed again runs nothing and changes nothing.
+    let again = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+    ]);
+    assert!(again.status.success(), "{}", text(&again.stderr));
+    assert_same_tree(&out, &fresh);
+}
+
+#[test]
+fn a_sweep_stopped_by_sigterm_can_be_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let stopped = interrupted_sweep(&out, "-TERM", &[]);
+    assert_eq!(stopped.status.code(), Some(130), "{}", text(&stopped.stderr));
+    let replaced = ubf(&[
+        "sweep",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..2",
+        "--out",
+        out.to_str().unwrap(),
+        "--overwrite",
+    ]);
+    assert!(replaced.status.success(), "{}", text(&replaced.stderr));
+    assert!(!out.join("corridor-box").exists() && out.join("summary.json").is_file());
+}
+
+#[test]
+fn a_killed_sweep_leaves_only_whole_runs_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("killed");
+    let killed = interrupted_sweep(&out, "-KILL", &[]);
+    assert_eq!(killed.status.code(), None, "killed by a signal");
+    // A run's folder appears only whole, with its report.
+    let finished = seed_folders(&out);
+    assert!(!finished.is_empty());
+    for folder in &finished {
+        for file in ["report.json", "trajectory.csv", "run.mcap", "plot.png"] {
+            assert!(folder.join(file).is_file(), "{}: no {file}", folder.display());
+        }
+    }
+    let resumed = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--trajectories",
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+    ]);
+    assert!(resumed.status.success(), "{}", text(&resumed.stderr));
+    let fresh = dir.path().join("fresh");
+    let whole = ubf(&[
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..4",
+        "--trajectories",
+        "--out",
+        fresh.to_str().unwrap(),
+    ]);
+    assert!(whole.status.success(), "{}", text(&whole.stderr));
+    assert_same_tree(&out, &fresh);
+}
+
+/// `ubf` with `args` under a file size limit of `blocks` (of 512 or 1024
+/// bytes, as the shell counts them), its SIGXFSZ ignored so that a write
+/// over the limit fails as a full disk's does. Root ignores a read-only
+/// folder; nobody ignores this limit.
+fn ubf_with_file_limit(blocks: u32, args: &[&str]) -> Output {
+    let script = format!("trap '' XFSZ; ulimit -f {blocks}; exec \"$0\" \"$@\"");
+    Command::new("sh")
+        .arg("-c")
+        .arg(script)
+        .arg(env!("CARGO_BIN_EXE_ubf"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+/// Every file under `dir`, with its length.
+fn files_and_lengths(dir: &Path) -> Vec<(std::path::PathBuf, u64)> {
+    fn walk(dir: &Path, found: &mut Vec<(std::path::PathBuf, u64)>) {
+        for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+            let path = entry.path();
+            match path.is_dir() {
+                true => walk(&path, found),
+                false => found.push((path.clone(), std::fs::metadata(&path).unwrap().len())),
+            }
+        }
+    }
+    let mut found = Vec::new();
+    walk(dir, &mut found);
+    found
+}
+
+#[test]
+fn a_failing_write_ends_the_sweep_naming_the_file_and_leaves_nothing_half_written() {
+    let dir = tempfile::tempdir().unwrap();
+    // Nothing can be written at all: the first file is named, no empty
+    // file is left behind.
+    let out = dir.path().join("nothing");
+    let args = ["sweep", "scenarios/corridor-box.ron", "--seeds", "0..3", "--out", out.to_str().unwrap()];
+    let result = ubf_with_file_limit(0, &args);
+    assert_eq!(result.status.code(), Some(1), "{}", text(&result.stderr));
+    assert!(text(&result.stderr).contains(&out.display().to_string()), "{}", text(&result.stderr));
+    assert!(text(&result.stderr).contains("File too large"), "{}", text(&result.stderr));
+    for (path, length) in files_and_lengths(&out) {
+        assert!(length > 0, "{} is empty", path.display());
+    }
+    // Reports fit, the summary does not: no summary, and none cut short;
+    // the sweep finishes once there is room.
+    let out = dir.path().join("no-room-for-the-summary");
+    let args = [
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "0..3",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let result = ubf_with_file_limit(2, &args);
+    assert_eq!(result.status.code(), Some(1), "{}", text(&result.stderr));
+    assert!(text(&result.stderr).contains("summary.csv: File too large"), "{}", text(&result.stderr));
+    assert!(!out.join("summary.csv").exists() && !out.join("summary.json").exists());
+    let mut resumed = args.to_vec();
+    resumed.push("--resume");
+    let result = ubf(&resumed);
+    assert!(result.status.success(), "{}", text(&result.stderr));
+    assert!(out.join("summary.json").is_file());
+    // A run's log over the limit: the sweep stops at it, named, and leaves
+    // no run's folder without its report.
+    let out = dir.path().join("no-room-for-a-log");
+    let args =
+        ["sweep", "scenarios/corridor-box.ron", "--seeds", "0..3", "--trajectories", "--out", out.to_str().unwrap()];
+    let result = ubf_with_file_limit(200, &args);
+    assert_eq!(result.status.code(), Some(1), "{}", text(&result.stderr));
+    assert!(text(&result.stderr).contains("File too large"), "{}", text(&result.stderr));
+    assert!(!out.join("summary.json").exists());
+    for folder in seed_folders(&out) {
+        assert!(folder.join("report.json").is_file(), "{} has no report", folder.display());
+    }
+    for (path, length) in files_and_lengths(&out) {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(length > 0 && !name.ends_with(".partial"), "{} ({length} bytes) left", path.display());
+    }
+    // A file where the sweep's folder must go.
+    let blocked = dir.path().join("blocked");
+    std::fs::write(&blocked, b"a file").unwrap();
+    let out = blocked.join("out");
+    let result = ubf(&["sweep", "scenarios/corridor-box.ron", "--seeds", "0..2", "--out", out.to_str().unwrap()]);
+    assert_eq!(result.status.code(), Some(1), "{}", text(&result.stderr));
+    assert!(text(&result.stderr).contains(&out.display().to_string()), "{}", text(&result.stderr));
+}
+
+#[test]
+fn a_scenario_whose_name_is_no_folder_name_is_refused_and_nothing_is_written_outside_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let deep = dir.path().join("a/b");
+    std::fs::create_dir_all(&deep).unwrap();
+    let scenario = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/goto-open-floor.ron")).unwrap();
+    for name in ["...ron", "..ron", ".ron", "summary.json.ron"] {
+        let file = deep.join(name);
+        std::fs::write(&file, &scenario).unwrap();
+        let out = deep.join("out");
+        let result = ubf(&["sweep", file.to_str().unwrap(), "--seeds", "1", "--out", out.to_str().unwrap()]);
+        let stderr = text(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{name}: {stderr}");
+        assert!(stderr.contains("rename the file") && stderr.contains(name), "{name}: {stderr}");
+        assert!(!out.exists(), "{name}: nothing written");
+        std::fs::remove_file(&file).unwrap();
+    }
+    let left: Vec<_> = files_and_lengths(dir.path());
+    assert!(left.is_empty(), "{left:?}");
+    assert!(!dir.path().join("a/seed-1").exists() && !deep.join("seed-1").exists());
+}

@@ -226,6 +226,12 @@ enum Command {
         /// so old runs never sit beside a new summary.
         #[arg(long)]
         overwrite: bool,
+        /// Finish a sweep (or shard) that Ctrl-C or SIGTERM stopped in
+        /// `--out`: run only the runs without a finished `seed-N/`, then
+        /// write the summary. The same files, scenarios, seeds and options
+        /// as the interrupted command are required.
+        #[arg(long, conflicts_with = "overwrite")]
+        resume: bool,
         /// Run it even beyond the bounds on runs and on ticks per run.
         #[arg(long)]
         huge: bool,
@@ -666,6 +672,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             shard,
             trajectories,
             overwrite,
+            resume,
             huge,
         } => {
             let (Some(seeds), Some(out)) = (seeds, out) else {
@@ -680,6 +687,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 out: &out,
                 trajectories,
                 overwrite,
+                resume,
                 huge,
             };
             sweep::command(&registry, request)

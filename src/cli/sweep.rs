@@ -2,7 +2,7 @@
 
 use super::{CliError, Exit, Outcome};
 use crate::scenario::Scenario;
-use crate::sweep::{Shard, SweepItem};
+use crate::sweep::{Ended, Shard, SweepError, SweepItem, SweepSettings};
 use std::path::{Path, PathBuf};
 use ubf_core::Registry;
 
@@ -19,13 +19,15 @@ pub(super) struct SweepRequest<'a> {
     pub out: &'a Path,
     pub trajectories: bool,
     pub overwrite: bool,
+    pub resume: bool,
     pub huge: bool,
 }
 
 /// Runs every scenario with every seed (or a shard's share of them) and
-/// summarises; exit code 1 if any run failed.
+/// summarises; exit code 1 if any run failed, 130 if Ctrl-C or SIGTERM
+/// stopped it (`--resume` finishes it).
 pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
-    let SweepRequest { files, seeds, layout_seeds, shard, jobs, out, trajectories, overwrite, huge } = request;
+    let SweepRequest { files, seeds, layout_seeds, shard, jobs, out, trajectories, overwrite, resume, huge } = request;
     let share = shard.map_or(1, |s| s.count);
     let layouts = layout_seeds.map_or(1, <[u64]>::len) as u64;
     let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).saturating_mul(layouts).div_ceil(share);
@@ -37,15 +39,15 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
             files.len()
         )));
     }
-    match shard {
-        None => clear_sweep_output(out, overwrite),
-        Some(shard) => clear_shard_output(out, shard, overwrite),
-    }?;
+    // Every input is read and checked before anything in --out changes.
     let mut items: Vec<SweepItem> = Vec::new();
+    let mut identity = format!("ubf {}", env!("CARGO_PKG_VERSION"));
     for file in files {
         let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
         let scenario = loaded.map_err(CliError::bad_input)?;
-        let stem = file.file_stem().map_or("scenario".into(), |s| s.to_string_lossy().into_owned());
+        let stem = label_of(file).map_err(CliError::bad_input)?;
+        let bytes = std::fs::read(file).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
+        identity.push_str(&format!("; {stem}: {:016x}", fnv1a(&bytes)));
         for (scenario, stem) in in_layouts(scenario, &stem, layout_seeds)
             .map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?
         {
@@ -55,15 +57,31 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
                 label = format!("{stem}_{n}");
                 n += 1;
             }
+            crate::sweep::check_label(&label).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
             items.push(SweepItem { scenario, label });
         }
     }
+    if !resume {
+        match shard {
+            None => clear_sweep_output(out, overwrite),
+            Some(shard) => clear_shard_output(out, shard, overwrite),
+        }?;
+    }
     let jobs = jobs.unwrap_or_else(super::cores);
+    let stop = crate::drive::install_stop_flag();
+    let settings = SweepSettings { jobs, full_outputs: trajectories, stop: &stop, resume, identity: &identity };
     let stopwatch = ubf_core::Stopwatch::start();
+    let refused = |e: SweepError| match e {
+        SweepError::Refused(_) => CliError::bad_input(e),
+        _ => CliError::failed(e),
+    };
     let failed: Vec<(String, u64, String)> = match shard {
         Some(shard) => {
-            let record = crate::sweep::sweep_shard(&items, seeds.clone(), shard, jobs, out, trajectories)
-                .map_err(CliError::failed)?;
+            let record =
+                match crate::sweep::sweep_shard_with(&items, seeds.clone(), shard, &settings, out).map_err(refused)? {
+                    Ended::Done(record) => record,
+                    Ended::Interrupted { done, total } => return Ok(interrupted(done, total)),
+                };
             let total = items.len() * (seeds.end - seeds.start) as usize;
             let runs = (0..total).filter(|&t| shard.takes(t)).count();
             println!(
@@ -80,8 +98,10 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
             record.failed
         }
         None => {
-            let summary =
-                crate::sweep::sweep(&items, seeds.clone(), jobs, out, trajectories).map_err(CliError::failed)?;
+            let summary = match crate::sweep::sweep_with(&items, seeds.clone(), &settings, out).map_err(refused)? {
+                Ended::Done(summary) => summary,
+                Ended::Interrupted { done, total } => return Ok(interrupted(done, total)),
+            };
             let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
             let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
             println!(
@@ -102,6 +122,32 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
         eprintln!("error: {label} seed {seed}: {error}");
     }
     Ok(if failed.is_empty() { Exit::Success } else { Exit::Failure })
+}
+
+/// Says how far an interrupted sweep got and how to finish it.
+fn interrupted(done: usize, total: usize) -> Exit {
+    eprintln!(
+        "interrupted: {done} of {total} runs finished and kept, none half-written, no summary yet; \
+         the same command with --resume runs the other {}",
+        total - done
+    );
+    Exit::Interrupted
+}
+
+/// The label of a scenario file's runs: its name without `.ron`, refused
+/// when it cannot name a folder under `--out` (`...ron` would be `..`).
+fn label_of(file: &Path) -> Result<String, String> {
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    crate::sweep::check_label(&stem).map_err(|e| {
+        format!("{}: its runs are labelled by the file's name without `.ron`, and {e}; rename the file", file.display())
+    })?;
+    Ok(stem)
+}
+
+/// The 64-bit FNV-1a hash of `bytes`: what a resumed sweep checks the
+/// scenario files against (a changed file is another sweep).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &b| (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 /// `scenario` once per layout seed, its random landmarks redrawn from each
@@ -145,11 +191,16 @@ enum OutputError {
     Unreadable { dir: PathBuf, source: std::io::Error },
     #[error(
         "--out {} is not empty: earlier runs would sit beside the new summary. \
-         Choose another directory, or pass --overwrite to replace an earlier sweep's output",
+         Choose another directory, pass --overwrite to replace an earlier sweep's output, or --resume to \
+         finish an interrupted one",
         .0.display()
     )]
     NotEmpty(PathBuf),
-    #[error("--out {} holds no summary.json, so it is not a sweep's output: not deleting it", .0.display())]
+    #[error(
+        "--out {} holds no summary.json (nor an interrupted sweep's .sweep-plan.json), so it is not a sweep's \
+         output: not deleting it",
+        .0.display()
+    )]
     NotASweep(PathBuf),
     #[error("{} exists: this shard has run before. Pass --overwrite to run it again", .0.display())]
     ShardRan(PathBuf),
@@ -171,7 +222,8 @@ impl From<OutputError> for CliError {
 }
 
 /// Makes `out` ready for a sweep: absent or empty, or, with `overwrite`,
-/// an earlier sweep's output (it holds a summary.json), which is removed.
+/// an earlier sweep's output (it holds a summary.json, or the plan an
+/// interrupted sweep leaves), which is removed.
 fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), OutputError> {
     let mut entries = match std::fs::read_dir(out) {
         Ok(entries) => entries,
@@ -184,7 +236,7 @@ fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), OutputError> {
     if !overwrite {
         return Err(OutputError::NotEmpty(out.to_owned()));
     }
-    if !out.join("summary.json").is_file() {
+    if !out.join("summary.json").is_file() && !out.join(".sweep-plan.json").is_file() {
         return Err(OutputError::NotASweep(out.to_owned()));
     }
     std::fs::remove_dir_all(out).map_err(|source| OutputError::Clearing { path: out.to_owned(), source })
