@@ -511,6 +511,60 @@ fn a_failing_write_ends_the_sweep_naming_the_file_and_leaves_nothing_half_writte
 }
 
 #[test]
+fn crafted_shard_records_are_refused_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let shards = dir.path().join("shards");
+    let outside = dir.path().join("escape/seed-0");
+    std::fs::create_dir_all(&shards).unwrap();
+    std::fs::create_dir_all(&outside).unwrap();
+    // A report outside the shard folder that a label `../escape` reaches.
+    let report = r#"{"scenario": "x", "seed": 0, "distance_m": 1.0}"#;
+    std::fs::write(outside.join("report.json"), report).unwrap();
+    let cases = [
+        (r#"{"shard": {"index": 0, "count": 0}, "seeds": [0, 1], "labels": ["a"], "failed": []}"#, "0 ≤ K < N"),
+        (r#"{"shard": {"index": 7, "count": 2}, "seeds": [0, 1], "labels": ["a"], "failed": []}"#, "0 ≤ K < N"),
+        (
+            r#"{"shard": {"index": 0, "count": 4611686018427387904}, "seeds": [0, 1], "labels": ["a"], "failed": []}"#,
+            "missing shards: 1/4611686018427387904",
+        ),
+        (
+            r#"{"shard": {"index": 0, "count": 1}, "seeds": [0, 4611686018427387904], "labels": ["a", "b", "c", "d", "e"], "failed": []}"#,
+            "too many runs",
+        ),
+        (
+            r#"{"shard": {"index": 0, "count": 1}, "seeds": [0, 1099511627776], "labels": ["a"], "failed": []}"#,
+            "a/seed-0/report.json",
+        ),
+        (r#"{"shard": {"index": 0, "count": 1}, "seeds": [5, 2], "labels": ["a"], "failed": []}"#, "hold no seed"),
+        (
+            r#"{"shard": {"index": 0, "count": 1}, "seeds": [0, 1], "labels": ["../escape"], "failed": []}"#,
+            "cannot name a folder",
+        ),
+        (r#"{"shard": {"index": 0, "count": 1}, "seeds": [0, 1], "labels": ["a", "a"], "failed": []}"#, "listed twice"),
+        (
+            r#"{"shard": {"index": 0, "count": 2}, "seeds": [0, 2], "labels": ["a"], "failed": [["a", 1, "no"]]}"#,
+            "not one of this shard's runs",
+        ),
+    ];
+    for (record, says) in cases {
+        let path = shards.join("shard-0-of-1.json");
+        std::fs::write(&path, record).unwrap();
+        let out = dir.path().join("merged");
+        let result = ubf(&["sweep", "merge", shards.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let stderr = text(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{record}: {stderr}");
+        assert!(stderr.contains(says), "{record}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{record}: {stderr}");
+        if !says.starts_with("missing") {
+            assert!(stderr.contains(&shards.display().to_string()), "{record}: names the file: {stderr}");
+        }
+        assert!(!out.exists(), "{record}: nothing written");
+        std::fs::remove_file(&path).unwrap();
+    }
+    assert!(!dir.path().join("summary.json").exists());
+}
+
+#[test]
 fn a_scenario_whose_name_is_no_folder_name_is_refused_and_nothing_is_written_outside_out() {
     let dir = tempfile::tempdir().unwrap();
     let deep = dir.path().join("a/b");

@@ -172,7 +172,9 @@ fn in_layouts(scenario: Scenario, stem: &str, layout_seeds: Option<&[u64]>) -> R
 
 /// Combines shards into the summary one sweep writes.
 pub(super) fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Outcome {
-    let out = out.unwrap_or(&dirs[0]);
+    let Some(out) = out.or(dirs.first().map(PathBuf::as_path)) else {
+        return Err(CliError::bad_input("no shard directories given"));
+    };
     let summary = crate::sweep::merge(dirs, out).map_err(|e| match e {
         crate::sweep::MergeError::Write(_) => CliError::failed(e),
         _ => CliError::bad_input(e),
