@@ -43,7 +43,7 @@ pub struct DecisionRules {
 /// choosing a path changes, fitted to each run's difference from a straight
 /// run of the same route and seed; [`DecisionCosts::levels`] are what
 /// predicts how large a run's error will be.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DecisionCosts {
     /// Translation error σ of a step per unit of its fused CV and metre
@@ -65,16 +65,16 @@ pub struct DecisionCosts {
 
 impl DecisionCosts {
     fn default_step_sigma() -> f64 {
-        STEP_SIGMA_PER_CV
+        DecisionCosts::default().step_sigma_per_cv
     }
     fn default_heading_var() -> f64 {
-        HEADING_VAR_PER_RAD
+        DecisionCosts::default().heading_var_per_rad
     }
     fn default_turn_var() -> f64 {
-        HEADING_VAR_PER_TURN
+        DecisionCosts::default().heading_var_per_turn
     }
     fn default_bridge_var() -> f64 {
-        BRIDGE_HEADING_VAR_PER_M
+        DecisionCosts::default().bridge_heading_var_per_m
     }
 
     /// The predicted end-point variance of a step whose landmarks fuse to
@@ -107,40 +107,67 @@ impl DecisionCosts {
     }
 }
 
-/// Measured by `SEEDS=100..130 lab/scripts/fit-costs.sh` (`ubf model
-/// fit-costs --against` the straight runs, on 360 runs of the thesis routes
-/// with tracking, the scan and the zig-zag; see `docs/results.md`): what a
-/// path's views change in its end point against driving straight. None: the
-/// runs whose steps had the smaller CVs did not end nearer (free in sign,
-/// the least squares put the term below zero).
-const STEP_SIGMA_PER_CV: f64 = 0.0;
-/// As above: 0.22° per √rad turned.
-const HEADING_VAR_PER_RAD: f64 = 1.44e-5;
-/// As above: none for a turn as such.
-const HEADING_VAR_PER_TURN: f64 = 0.0;
-/// Measured directly on the 504 bridged steps of the same runs: 0.19° per
-/// √m, the slip the routes' odometry has. (Fitted at the end point beside
-/// the others, in the differences from straight runs, it comes out 1.10e-5:
-/// the bridge is priced at what of it stays.)
-const BRIDGE_HEADING_VAR_PER_M: f64 = 1.15e-5;
+/// The decision's coefficients as the lab's fit wrote them
+/// (`decision_costs.ron`, beside this file): what choosing a path changes
+/// (`against_straight`), and what predicts an error's size (`levels`).
+#[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedCosts {
+    /// Fitted to each run's difference from a straight run of the same
+    /// route and seed: the decision's defaults.
+    pub against_straight: Fitted,
+    /// Fitted to the end points as they are.
+    pub levels: Fitted,
+}
 
-impl Default for DecisionCosts {
-    fn default() -> Self {
-        DecisionCosts {
-            step_sigma_per_cv: STEP_SIGMA_PER_CV,
-            heading_var_per_rad: HEADING_VAR_PER_RAD,
-            heading_var_per_turn: HEADING_VAR_PER_TURN,
-            bridge_heading_var_per_m: BRIDGE_HEADING_VAR_PER_M,
-        }
+/// Coefficients, and how they were fitted.
+#[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fitted {
+    /// The command that fitted them, on which runs.
+    pub by: String,
+    /// The coefficients.
+    pub costs: DecisionCosts,
+}
+
+/// The file the fit writes, built in.
+const FITTED_COSTS: &str = include_str!("decision_costs.ron");
+
+/// What a file of fitted coefficients says before its data.
+const FITTED_COSTS_HEADER: &str = "// The end-point decision's egomotion error coefficients, as the lab fits\n\
+// them: written by `ubf model fit-costs LOGS --write FILE` (with --against,\n\
+// the `against_straight` part; without, `levels`), read by the decision\n\
+// (behaviors/src/decision.rs); docs/results.md gives the runs. Edit by\n\
+// re-running the fit, not by hand.\n";
+
+impl FittedCosts {
+    /// The coefficients built in (`decision_costs.ron`).
+    pub fn built_in() -> &'static FittedCosts {
+        static FITTED: std::sync::LazyLock<FittedCosts> = std::sync::LazyLock::new(|| {
+            FittedCosts::parse(FITTED_COSTS).expect("decision_costs.ron is a FittedCosts (a test reads it)")
+        });
+        &FITTED
+    }
+
+    /// Reads a file the fit wrote.
+    pub fn parse(text: &str) -> Result<FittedCosts, ubf_core::config::RonError> {
+        ubf_core::config::from_ron(text)
+    }
+
+    /// The file for these coefficients.
+    pub fn to_file(&self) -> String {
+        let config = ron::ser::PrettyConfig::new().struct_names(true);
+        let data = ron::ser::to_string_pretty(self, config).expect("coefficients always serialise");
+        format!("{FITTED_COSTS_HEADER}{data}\n")
     }
 }
 
-/// Measured on the same runs by `ubf model fit-costs out/fit-costs-130`
-/// (without `--against`: the end points as they are); the turns' share per
-/// turn comes out zero there too, and the bridge is measured directly.
-const LEVEL_STEP_SIGMA_PER_CV: f64 = 0.614;
-/// As above.
-const LEVEL_HEADING_VAR_PER_RAD: f64 = 2.19e-5;
+impl Default for DecisionCosts {
+    /// What choosing a path changes, as fitted ([`FittedCosts`]).
+    fn default() -> Self {
+        FittedCosts::built_in().against_straight.costs
+    }
+}
 
 impl DecisionCosts {
     /// The coefficients fitted to the same runs' end points as they are
@@ -150,11 +177,7 @@ impl DecisionCosts {
     /// for reporting beside the actual error, though not which of two paths
     /// through the same place ends nearer.
     pub fn levels() -> Self {
-        DecisionCosts {
-            step_sigma_per_cv: LEVEL_STEP_SIGMA_PER_CV,
-            heading_var_per_rad: LEVEL_HEADING_VAR_PER_RAD,
-            ..DecisionCosts::default()
-        }
+        FittedCosts::built_in().levels.costs
     }
 }
 
@@ -680,6 +703,18 @@ mod tests {
 
     fn headings() -> impl Iterator<Item = f64> {
         (-9..=9).map(|i| f64::from(i) * 5f64.to_radians())
+    }
+
+    #[test]
+    fn the_built_in_coefficients_are_the_fit_and_round_trip_through_their_file() {
+        let fitted = FittedCosts::built_in();
+        let costs = DecisionCosts::default();
+        assert_eq!(costs, fitted.against_straight.costs);
+        assert_eq!((costs.heading_var_per_rad, costs.bridge_heading_var_per_m), (1.44e-5, 1.15e-5));
+        assert_eq!(DecisionCosts::levels().step_sigma_per_cv, 0.614);
+        let text = fitted.to_file();
+        assert!(text.starts_with("// The end-point decision's"), "{text}");
+        assert_eq!(&FittedCosts::parse(&text).unwrap(), fitted);
     }
 
     #[test]

@@ -10,6 +10,8 @@
 #
 #   lab/scripts/fit-costs.sh                 # seeds 100..110, logs in out/fit-costs
 #   SEEDS=200..230 OUT=/tmp/logs lab/scripts/fit-costs.sh
+#   SEEDS=100..130 lab/scripts/fit-costs.sh --write behaviors/src/decision_costs.ron
+#                                            # the decision's coefficients, as built in
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 seeds=${SEEDS:-100..110}

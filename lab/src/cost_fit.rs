@@ -39,7 +39,7 @@
 
 use serde::Serialize;
 use std::path::{Path, PathBuf};
-use ubf_behaviors::decision::{drove_straight, turned, DecisionCosts};
+use ubf_behaviors::decision::{drove_straight, turned, DecisionCosts, Fitted, FittedCosts};
 use ubf_core::{angle_difference, Pose2};
 
 /// Why logs could not be fitted.
@@ -162,6 +162,27 @@ impl CostFit {
                 .unwrap_or(DecisionCosts::default().bridge_heading_var_per_m),
         }
     }
+}
+
+/// Puts `fit` into the decision's coefficients file at `path`, as `ubf
+/// model fit-costs --write` does: its `against_straight` part when the runs
+/// were fitted against straight ones, else its `levels` part, with `by`
+/// (the command) as that part's provenance; the other part stays as the
+/// file had it (as built in, if there is no file yet). The file is written
+/// whole: to a temporary name, then renamed.
+pub fn write_fitted(path: &Path, fit: &CostFit, by: &str) -> Result<(), String> {
+    let mut fitted = match std::fs::read_to_string(path) {
+        Ok(text) => FittedCosts::parse(&text).map_err(|e| format!("{}:{e}", path.display()))?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => FittedCosts::built_in().clone(),
+        Err(e) => return Err(format!("{}: {e}", path.display())),
+    };
+    let part = Fitted { by: by.to_owned(), costs: fit.costs() };
+    if fit.paired > 0 {
+        fitted.against_straight = part;
+    } else {
+        fitted.levels = part;
+    }
+    ubf_session::atomic::write(path, fitted.to_file().as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// One stereo frame as a log records it.
@@ -785,6 +806,14 @@ mod tests {
             (1..=3).map(|seed| write_run(dir.path(), "turning", seed, 0.2 * seed as f64, 0.02 * seed as f64)).collect();
         let fit = fit_costs(&[straight.clone(), turning.clone()].concat(), &straight).unwrap();
         assert_eq!((fit.logs, fit.paired), (6, 3), "{fit:?}");
+        // Written where the decision reads its coefficients: this part
+        // replaced, the other kept.
+        let file = dir.path().join("decision_costs.ron");
+        write_fitted(&file, &fit, "ubf model fit-costs turning --against straight").unwrap();
+        let written = FittedCosts::parse(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        assert_eq!(written.against_straight.costs, fit.costs());
+        assert_eq!(written.against_straight.by, "ubf model fit-costs turning --against straight");
+        assert_eq!(written.levels, FittedCosts::built_in().levels);
         // The straight runs end exactly where they are: what the turning
         // runs' errors differ by is the turns', not the steps'.
         assert_eq!(fit.step_sigma_per_cv, 0.0, "{fit:?}");

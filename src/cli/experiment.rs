@@ -85,7 +85,9 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     use ubf_perception::error_model::{corridor_heights, fit_exponential, FitReport, GeometricModel};
     let args: &CameraArgs = match &action {
         ModelCommand::Fit { camera, .. } | ModelCommand::Heatmap { camera, .. } => camera,
-        ModelCommand::FitCosts { logs, check, against, json } => return fit_costs(logs, *check, against, *json),
+        ModelCommand::FitCosts { logs, check, against, write, json } => {
+            return fit_costs(logs, *check, against, write.as_deref(), *json)
+        }
     };
     if !(args.step.is_finite() && args.step > 0.0) {
         return Err(CliError::bad_input("--step must be a positive number of metres"));
@@ -162,7 +164,13 @@ pub(super) fn model(registry: &Registry, action: ModelCommand) -> Outcome {
     Ok(Exit::Success)
 }
 
-fn fit_costs(logs: &[PathBuf], check: bool, against: &[PathBuf], json: bool) -> Outcome {
+fn fit_costs(
+    logs: &[PathBuf],
+    check: bool,
+    against: &[PathBuf],
+    write: Option<&std::path::Path>,
+    json: bool,
+) -> Outcome {
     use ubf_lab::cost_fit::{find_logs, fit_costs};
     let paths = find_logs(logs).map_err(CliError::bad_input)?;
     let against = find_logs(against).map_err(CliError::bad_input)?;
@@ -172,6 +180,11 @@ fn fit_costs(logs: &[PathBuf], check: bool, against: &[PathBuf], json: bool) -> 
     } else {
         let fit = fit_costs(&paths, &against).map_err(CliError::bad_input)?;
         super::show(&fit, json)?;
+        if let Some(file) = write {
+            let by: Vec<String> = std::env::args().skip(1).collect();
+            ubf_lab::cost_fit::write_fitted(file, &fit, &format!("ubf {}", by.join(" "))).map_err(CliError::failed)?;
+            eprintln!("written to {}", file.display());
+        }
     }
     Ok(Exit::Success)
 }

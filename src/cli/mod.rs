@@ -581,6 +581,12 @@ enum ModelCommand {
         /// separates one route from another.
         #[arg(long, num_args = 1..)]
         against: Vec<PathBuf>,
+        /// Write the fitted coefficients into the decision's coefficients
+        /// file (`behaviors/src/decision_costs.ron`, built into the next
+        /// build): the `against_straight` part with `--against`, `levels`
+        /// without.
+        #[arg(long, value_name = "FILE", conflicts_with = "check")]
+        write: Option<PathBuf>,
         /// Print the fit as JSON.
         #[arg(long)]
         json: bool,
