@@ -19,7 +19,7 @@
 //! same bytes an uninterrupted sweep writes (each report's `wall_time_s`
 //! aside).
 
-use crate::run::{run_until, write_report, EndReason, Outputs, RunError, RunReport};
+use crate::run::{run_until, write_report, EndReason, Outputs, RunError};
 use crate::scenario::Scenario;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -28,47 +28,19 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
+mod merge;
+mod stats;
+
+pub use merge::{merge, MergeError};
+use stats::{numeric_fields, numeric_leaves};
+pub use stats::{stats, t95, FieldStats};
+
 /// One scenario to sweep and the directory name its runs go under.
 pub struct SweepItem {
     /// The scenario.
     pub scenario: Scenario,
     /// Directory name under the sweep's output directory.
     pub label: String,
-}
-
-/// Mean, spread and 95 % confidence interval of one report field.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct FieldStats {
-    /// Runs that reported the field.
-    pub n: usize,
-    /// Mean.
-    pub mean: f64,
-    /// Sample standard deviation (0 for one run).
-    pub sd: f64,
-    /// 95 % confidence interval of the mean; `None` below two runs, where
-    /// it means nothing.
-    pub ci95: Option<[f64; 2]>,
-    /// How the interval was found: `t` (Student's t), or `bootstrap` (the
-    /// percentile bootstrap of the mean) for a field with no negative value
-    /// whose t interval would reach below zero.
-    pub ci95_method: Option<&'static str>,
-}
-
-/// Resamples of the bootstrap interval.
-const BOOTSTRAP_RESAMPLES: usize = 4000;
-
-/// The percentile bootstrap 95 % interval of the mean of `values`, with a
-/// fixed seed so that a summary is reproducible.
-fn bootstrap_ci95(values: &[f64]) -> [f64; 2] {
-    use rand::{Rng, SeedableRng};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
-    let n = values.len();
-    let mut means: Vec<f64> = (0..BOOTSTRAP_RESAMPLES)
-        .map(|_| (0..n).map(|_| values[rng.random_range(0..n)]).sum::<f64>() / n as f64)
-        .collect();
-    means.sort_by(f64::total_cmp);
-    let at = |q: f64| means[((q * (BOOTSTRAP_RESAMPLES - 1) as f64).round() as usize).min(BOOTSTRAP_RESAMPLES - 1)];
-    [at(0.025), at(0.975)]
 }
 
 /// The summary of one scenario's runs.
@@ -202,69 +174,6 @@ pub fn check_label(label: &str) -> Result<(), String> {
 /// The longest label, in bytes: with `@layout` and room to spare, under the
 /// 255 most file systems take.
 const MOST_LABEL_BYTES: usize = 200;
-
-/// The two-sided 95 % quantile of Student's t with `dof` degrees of freedom.
-pub fn t95(dof: usize) -> f64 {
-    const TABLE: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
-        2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
-    ];
-    match dof {
-        0 => f64::NAN,
-        1..=30 => TABLE[dof - 1],
-        _ => {
-            // Cornish–Fisher expansion around the normal quantile; within
-            // 1e-4 of the exact value from 30 degrees of freedom up.
-            let z: f64 = 1.959_964;
-            let v = dof as f64;
-            z + (z.powi(3) + z) / (4.0 * v) + (5.0 * z.powi(5) + 16.0 * z.powi(3) + 3.0 * z) / (96.0 * v * v)
-        }
-    }
-}
-
-/// Mean, standard deviation and confidence interval of `values`.
-pub fn stats(values: &[f64]) -> FieldStats {
-    let n = values.len();
-    let mean = values.iter().sum::<f64>() / n as f64;
-    let sd = if n > 1 { (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt() } else { 0.0 };
-    if n < 2 {
-        return FieldStats { n, mean, sd, ci95: None, ci95_method: None };
-    }
-    let half = t95(n - 1) * sd / (n as f64).sqrt();
-    let (ci95, method) = if mean - half < 0.0 && values.iter().all(|v| *v >= 0.0) {
-        (bootstrap_ci95(values), "bootstrap")
-    } else {
-        ([mean - half, mean + half], "t")
-    };
-    FieldStats { n, mean, sd, ci95: Some(ci95), ci95_method: Some(method) }
-}
-
-/// Every numeric leaf of a report, with dotted names.
-fn numeric_fields(report: &RunReport) -> Vec<(String, f64)> {
-    numeric_leaves(&serde_json::to_value(report).expect("a report always serialises"))
-}
-
-/// Every numeric leaf of a report read as JSON, with dotted names (booleans
-/// as 0 and 1), leaving out `seed` and `wall_time_s`.
-fn numeric_leaves(report: &serde_json::Value) -> Vec<(String, f64)> {
-    fn walk(prefix: &str, value: &serde_json::Value, out: &mut Vec<(String, f64)>) {
-        match value {
-            serde_json::Value::Number(n) => out.extend(n.as_f64().map(|v| (prefix.to_owned(), v))),
-            serde_json::Value::Bool(b) => out.push((prefix.to_owned(), f64::from(u8::from(*b)))),
-            serde_json::Value::Object(map) => {
-                for (key, v) in map {
-                    let name = if prefix.is_empty() { key.clone() } else { format!("{prefix}.{key}") };
-                    walk(&name, v, out);
-                }
-            }
-            _ => {}
-        }
-    }
-    let mut out = Vec::new();
-    walk("", report, &mut out);
-    out.retain(|(name, _)| name != "seed" && name != "wall_time_s");
-    out
-}
 
 /// How a sweep runs, besides what it runs and where it writes.
 #[derive(Clone, Copy, Debug)]
@@ -620,187 +529,6 @@ fn summarise(
     SweepSummary { seeds: [seeds.start, seeds.end], scenarios }
 }
 
-/// Why shards could not be merged.
-#[derive(Debug, thiserror::Error)]
-pub enum MergeError {
-    /// A file could not be read.
-    #[error("{}: {source}", path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// A record or report is not what a shard writes.
-    #[error("{}: {message}", path.display())]
-    Malformed {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong, with the line and column where JSON knows them.
-        message: String,
-    },
-    /// The shards do not make one whole sweep.
-    #[error("{0}")]
-    Incomplete(String),
-    /// The summary could not be written.
-    #[error(transparent)]
-    Write(#[from] SweepError),
-}
-
-/// The largest shard record [`merge`] reads: a record lists its failed
-/// runs, a few hundred bytes each.
-const MOST_RECORD_BYTES: u64 = 256 << 20;
-
-/// The largest run report [`merge`] reads.
-const MOST_REPORT_BYTES: u64 = 1 << 20;
-
-/// The most missing shards an error lists one by one.
-const MOST_MISSING_LISTED: usize = 20;
-
-/// Reads `path` as text, refusing a file larger than `most` bytes before
-/// reading it.
-fn read_bounded(path: &Path, most: u64) -> Result<String, MergeError> {
-    use std::io::Read;
-    let read = |source| MergeError::Read { path: path.to_owned(), source };
-    let file = std::fs::File::open(path).map_err(read)?;
-    let mut text = String::new();
-    file.take(most + 1).read_to_string(&mut text).map_err(read)?;
-    if text.len() as u64 > most {
-        return Err(MergeError::Malformed {
-            path: path.to_owned(),
-            message: format!("larger than the {most} bytes a sweep writes there"),
-        });
-    }
-    Ok(text)
-}
-
-impl ShardRecord {
-    /// What is wrong with a record as read from a file, if anything: a
-    /// shard of none or outside its count, an empty or reversed range of
-    /// seeds, a label that is no safe folder name (`../x`) or given twice,
-    /// a failed run that is not this shard's.
-    fn check(&self) -> Result<(), String> {
-        let Shard { index, count } = self.shard;
-        if count == 0 || index >= count {
-            return Err(format!("shard {index}/{count}: expected K/N with 0 ≤ K < N"));
-        }
-        let [start, end] = self.seeds;
-        if start >= end {
-            return Err(format!("seeds {start}..{end} hold no seed"));
-        }
-        if self.labels.is_empty() {
-            return Err("no scenarios".into());
-        }
-        for (i, label) in self.labels.iter().enumerate() {
-            check_label(label)?;
-            if self.labels[..i].contains(label) {
-                return Err(format!("the label `{label}` is listed twice"));
-            }
-        }
-        let per_item = usize::try_from(end - start).map_err(|_| format!("seeds {start}..{end}: too many"))?;
-        per_item.checked_mul(self.labels.len()).ok_or_else(|| format!("seeds {start}..{end}: too many runs"))?;
-        for (label, seed, _) in &self.failed {
-            let position = self.labels.iter().position(|l| l == label);
-            let task = position.filter(|_| (start..end).contains(seed)).map(|i| i * per_item + (seed - start) as usize);
-            if !task.is_some_and(|task| self.shard.takes(task)) {
-                return Err(format!("failed run {label} seed {seed} is not one of this shard's runs"));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Merges the shards recorded in `dirs` (each holding one or more
-/// `shard-K-of-N.json` and those shards' runs) into the summary one sweep
-/// would have written, and writes `summary.csv` and `summary.json` into
-/// `out`. Refuses shards of different sweeps, a shard twice, a missing
-/// one, and a record that is not what a shard writes (each error names
-/// the file). Reads only under `dirs` and writes only into `out`: labels
-/// are checked ([`check_label`]) before any path is made of them, and no
-/// number read from a file sizes an allocation.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<SweepSummary, MergeError> {
-    let mut records: Vec<(PathBuf, PathBuf, ShardRecord)> = Vec::new();
-    for dir in dirs {
-        let entries = std::fs::read_dir(dir).map_err(|source| MergeError::Read { path: dir.clone(), source })?;
-        let mut names: Vec<PathBuf> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| {
-                p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("shard-") && n.ends_with(".json"))
-            })
-            .collect();
-        names.sort();
-        for path in names {
-            let text = read_bounded(&path, MOST_RECORD_BYTES)?;
-            let malformed = |message: String| MergeError::Malformed { path: path.clone(), message };
-            let record: ShardRecord = serde_json::from_str(&text).map_err(|e| malformed(e.to_string()))?;
-            record.check().map_err(malformed)?;
-            records.push((dir.clone(), path, record));
-        }
-    }
-    let Some((_, _, first)) = records.first() else {
-        let shown: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
-        return Err(MergeError::Incomplete(format!("no shard records (shard-K-of-N.json) in {}", shown.join(", "))));
-    };
-    let (seeds, labels, count) = (first.seeds, first.labels.clone(), first.shard.count);
-    let mut owner: BTreeMap<u64, usize> = BTreeMap::new();
-    for (n, (_, path, record)) in records.iter().enumerate() {
-        if record.seeds != seeds || record.labels != labels || record.shard.count != count {
-            return Err(MergeError::Incomplete(format!(
-                "{}: {} belongs to another sweep (seeds {:?}, scenarios {:?}, {} shards; expected {:?}, {:?}, {count})",
-                path.display(),
-                record.shard.record_name(),
-                record.seeds,
-                record.labels,
-                record.shard.count,
-                seeds,
-                labels
-            )));
-        }
-        if owner.insert(record.shard.index, n).is_some() {
-            return Err(MergeError::Incomplete(format!(
-                "shard {}/{count} is recorded twice ({} again)",
-                record.shard.index,
-                path.display()
-            )));
-        }
-    }
-    // Every index is below the count and none twice: as many records as
-    // shards means none is missing.
-    let missing_count = count - owner.len() as u64;
-    if missing_count > 0 {
-        let listed: Vec<String> = (0..count)
-            .filter(|k| !owner.contains_key(k))
-            .take(MOST_MISSING_LISTED)
-            .map(|k| format!("{k}/{count}"))
-            .collect();
-        let more = missing_count - listed.len() as u64;
-        let more = if more > 0 { format!(" and {more} more") } else { String::new() };
-        return Err(MergeError::Incomplete(format!("missing shards: {}{more}", listed.join(", "))));
-    }
-    let range = seeds[0]..seeds[1];
-    let per_item = (seeds[1] - seeds[0]) as usize;
-    // Read every run's report first, so that a broken one is an error, not
-    // a failed run. No capacity is reserved: the records say how many runs
-    // there are, and only the files read back say it truly.
-    let mut outcomes: Vec<Result<Vec<(String, f64)>, String>> = Vec::new();
-    for task in 0..labels.len() * per_item {
-        let (label, seed) = (&labels[task / per_item], seeds[0] + (task % per_item) as u64);
-        let (dir, _, record) = &records[owner[&(task as u64 % count)]];
-        if let Some((_, _, error)) = record.failed.iter().find(|(l, s, _)| l == label && *s == seed) {
-            outcomes.push(Err(error.clone()));
-            continue;
-        }
-        let path = dir.join(label).join(seed_folder(seed)).join("report.json");
-        let text = read_bounded(&path, MOST_REPORT_BYTES)?;
-        let report: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| MergeError::Malformed { path: path.clone(), message: e.to_string() })?;
-        outcomes.push(Ok(numeric_leaves(&report)));
-    }
-    let summary = summarise(&labels, range, |task| outcomes[task].clone());
-    write_summary(&summary, out)?;
-    Ok(summary)
-}
-
 /// A progress bar on stderr for `len` items called `unit` ("runs",
 /// "pairs"); indicatif hides it when stderr is not a terminal.
 pub fn progress_bar(len: u64, unit: &str) -> ProgressBar {
@@ -946,38 +674,4 @@ fn write_summary(summary: &SweepSummary, out: &Path) -> Result<(), SweepError> {
     let json = serde_json::to_string_pretty(summary).expect("a summary always serialises") + "\n";
     let json_path = out.join("summary.json");
     crate::atomic::write(&json_path, json.as_bytes()).map_err(SweepError::write(&json_path))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn t_quantiles() {
-        assert_eq!(t95(1), 12.706);
-        assert_eq!(t95(29), 2.045);
-        // Exact values: 2.0211 at 40, 1.9840 at 100.
-        assert!((t95(40) - 2.0211).abs() < 2e-4);
-        assert!((t95(100) - 1.9840).abs() < 2e-4);
-    }
-
-    #[test]
-    fn stats_of_a_known_sample() {
-        let s = stats(&[1.0, 2.0, 3.0, 4.0]);
-        assert_eq!(s.mean, 2.5);
-        assert!((s.sd - 1.290_994).abs() < 1e-6);
-        let half = 3.182 * s.sd / 2.0;
-        assert!((s.ci95.unwrap()[1] - (2.5 + half)).abs() < 1e-12);
-        assert_eq!(s.ci95_method, Some("t"));
-        // One run: no interval at all, not a zero-width one.
-        assert_eq!(stats(&[5.0]).ci95, None);
-        // Errors cannot be negative, nor can their interval: three skewed
-        // end-point errors whose t interval reaches −6.7 m.
-        let skewed = stats(&[0.3, 0.5, 24.0]);
-        let [low, high] = skewed.ci95.unwrap();
-        assert_eq!(skewed.ci95_method, Some("bootstrap"));
-        assert!((0.3..=24.0).contains(&low) && low < skewed.mean && skewed.mean < high && high <= 24.0, "{skewed:?}");
-        // A field that can be negative keeps its t interval.
-        assert_eq!(stats(&[-1.0, 0.5, 2.0]).ci95_method, Some("t"));
-    }
 }
