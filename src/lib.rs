@@ -12,6 +12,6 @@ pub mod cli;
 
 pub use ubf_core::Registry;
 pub use ubf_session::{
-    drive, frames, mcap_log, plot, registry, replay, report, ros2_log, ros2_publish, ros2_view, run, scenario, sweep,
-    trajectory, tree,
+    drive, frames, json_topics, live, mcap_log, plot, registry, replay, report, ros2_log, ros2_publish, ros2_view, run,
+    scenario, sweep, trajectory, tree, watch,
 };

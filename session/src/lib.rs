@@ -13,16 +13,20 @@
 //! - [`drive`]: a robot file driving a real robot (ARCOS or ROS 2);
 //! - [`simulate`]: the simulator served as a ROS 2 robot;
 //! - the sinks: [`trajectory`] (CSV), [`mcap_log`] (JSON MCAP for
-//!   Foxglove, read back by [`replay`]), [`ros2_log`] (rosbag2),
+//!   Foxglove, read back by [`replay`]) and [`live`] (the same topics,
+//!   [`json_topics`], served live to Foxglove), [`ros2_log`] (rosbag2),
 //!   [`ros2_publish`] (live ROS 2, through [`ros2_view`]); [`plot`] draws a
 //!   run;
-//! - [`tree`]: a tree as a picture.
+//! - [`tree`]: a tree as a picture; [`watch`]: a tree edited while it
+//!   runs (`--watch`).
 
 #![warn(missing_docs)]
 
 pub mod atomic;
 pub mod drive;
 pub mod frames;
+pub mod json_topics;
+pub mod live;
 pub mod mcap_log;
 pub mod plot;
 pub mod replay;
@@ -37,6 +41,7 @@ pub mod simulate;
 pub mod sweep;
 pub mod trajectory;
 pub mod tree;
+pub mod watch;
 
 pub use ubf_core::Registry;
 

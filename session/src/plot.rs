@@ -2,7 +2,7 @@
 //! figure 31: walls, landmarks, the true and the estimated paths, and the
 //! points where the robot changed its mind.
 
-use crate::mcap_log::WorldMessage;
+use crate::json_topics::WorldMessage;
 use crate::replay::{Decision, ReplayedRun, Timeline};
 use plotters::prelude::*;
 use std::path::Path;

@@ -1,7 +1,8 @@
 //! A run read back from its JSON log: what `ubf replay` prints and the plot
 //! is drawn from.
 
-use crate::mcap_log::{LogError, RunMessage, TickMessage, WorldMessage};
+use crate::json_topics::{RunMessage, TickMessage, WorldMessage};
+use crate::mcap_log::LogError;
 use std::path::Path;
 
 /// The longest record (a chunk, compressed or not) [`read`] accepts: far

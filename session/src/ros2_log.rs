@@ -226,6 +226,11 @@ impl TickSink for Ros2Log {
         self.tick(record).map_err(std::io::Error::other)
     }
 
+    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.view.start(layout);
+        Ok(())
+    }
+
     /// Closes the chunk under way and writes `metadata.yaml` for what is
     /// logged, so that a drive's bag is whole even if nothing closes it;
     /// [`Ros2Log::close`] writes them again with the summary.

@@ -89,6 +89,11 @@ impl TickSink for Ros2Publisher {
         Ok(())
     }
 
+    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.view.start(layout);
+        Ok(())
+    }
+
     /// Publishes the tick. A failure is reported once and never stops the
     /// robot: the ROS 2 view is for watching, not for control.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {

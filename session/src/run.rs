@@ -1,7 +1,8 @@
 //! A scenario run headless on the simulated robot, and what it leaves
 //! behind: `report.json`, `trajectory.csv` and `plot.png`.
 
-use crate::mcap_log::{McapLog, RunMessage, WorldMessage};
+use crate::json_topics::{RunMessage, WorldMessage};
+use crate::mcap_log::McapLog;
 use crate::plot::{self, PlotError};
 pub use crate::report::{EndReason, RunReport};
 use crate::ros2_log::Ros2Log;
@@ -9,6 +10,7 @@ use crate::ros2_publish::background_publisher;
 use crate::ros2_view::Shown;
 use crate::scenario::Scenario;
 use crate::trajectory::{Columns, TrajectoryWriter};
+use std::net::SocketAddr;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -16,7 +18,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use ubf_behaviors::decision::{DecisionCosts, EndPointPredictor};
 use ubf_core::{
     BuildContext, Clock, Controller, ControllerError, Ends, PacedClock, Pose2, Session, SessionEnd, SimClock,
-    Stopwatch, TickRecord, TracingSink, Wraps,
+    Stopwatch, TickRecord, TracingSink, TreeSource, Wraps,
 };
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
@@ -45,6 +47,9 @@ pub enum RunError {
     /// ROS 2 publishing could not start.
     #[error("ROS 2: {0}")]
     Ros2(ubf_core::RobotError),
+    /// The live view could not be served.
+    #[error(transparent)]
+    Live(#[from] crate::live::LiveError),
     /// A bug: the run panicked outside the behaviours (the robot was
     /// stopped and the logs flushed).
     #[error("internal error: {0}")]
@@ -85,8 +90,8 @@ fn unshared<T>(shared: Arc<Mutex<T>>) -> Option<T> {
     Arc::into_inner(shared).map(|inner| inner.into_inner().unwrap_or_else(PoisonError::into_inner))
 }
 
-/// A run watched as it goes: paced at real time, and published on ROS 2.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A run watched as it goes: paced at real time, and published on ROS 2,
+/// served to Foxglove, or both; and its tree changed as it goes.
 pub struct Live {
     /// How many times faster than real time the simulation runs.
     pub speed: f64,
@@ -94,6 +99,11 @@ pub struct Live {
     /// simulated robot's `/tf`, `odom`, `scan` and camera images, and the
     /// tree's `ubf/tick`.
     pub ros2: bool,
+    /// Where to serve the live view ([`crate::live`]), for Foxglove.
+    pub foxglove: Option<SocketAddr>,
+    /// Where new trees come from while the run goes on (`--watch`,
+    /// [`crate::watch`]).
+    pub trees: Option<Box<dyn TreeSource>>,
 }
 
 /// [`run`] with a choice of outputs, paced and published when `live`,
@@ -103,7 +113,7 @@ pub fn run_until(
     scenario: &Scenario,
     seed: u64,
     outputs: Option<Outputs>,
-    live: Option<Live>,
+    mut live: Option<Live>,
     stop: &AtomicBool,
 ) -> Result<RunReport, RunError> {
     let out = outputs.map(|o| o.dir);
@@ -124,7 +134,7 @@ pub fn run_until(
     let world = WorldMessage::of(sim.world());
     let robot = EgomotionRobot::new(sim, tracker);
     let root = scenario.root.build(&BuildContext::new(seed));
-    let clock: Box<dyn Clock> = match live {
+    let clock: Box<dyn Clock> = match &live {
         Some(live) => Box::new(PacedClock::new(scenario.period_s, live.speed)),
         None => Box::new(SimClock::new(scenario.period_s)),
     };
@@ -132,11 +142,22 @@ pub fn run_until(
     controller.set_goal(scenario.goal);
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
-    if live.is_some_and(|l| l.ros2) {
+    if live.as_ref().is_some_and(|l| l.ros2) {
         let publisher =
             background_publisher(Shown { robot: true, images: true, tree: true }, None, "").map_err(RunError::Ros2)?;
         controller.add_sink(Box::new(publisher));
     }
+    // Held until the run ends: dropping it closes the viewers' connections.
+    let _live_server = match live.as_ref().and_then(|l| l.foxglove) {
+        Some(address) => {
+            let server = crate::live::LiveServer::serve(address, ("ubf.Report", crate::json_topics::report_schema()))?;
+            eprintln!("live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)", server.address());
+            let view = server.view(run_message.clone(), world.clone())?;
+            controller.add_sink(Box::new(view));
+            Some(server)
+        }
+        None => None,
+    };
     let log = match outputs {
         Some(Outputs { dir, images, rosbag }) => {
             std::fs::create_dir_all(dir).map_err(output_error(dir))?;
@@ -165,6 +186,9 @@ pub fn run_until(
     let ends =
         Ends { at_goal: true, progress: scenario.progress, max_ticks: Some(scenario.max_ticks()), max_time_s: None };
     let mut session = Session::new(controller, ends);
+    if let Some(trees) = live.as_mut().and_then(|l| l.trees.take()) {
+        session.watch_trees(trees);
+    }
     let mut end_point = EndPointWitness::default();
     let ended = session.run(stop, |record| {
         end_point.observe(record);

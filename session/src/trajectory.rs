@@ -152,6 +152,12 @@ impl TickSink for TrajectoryWriter {
         self.row(record).map_err(|e| self.named(e))
     }
 
+    /// Names the winners by the new tree; the columns stay.
+    fn tree_changed(&mut self, layout: &TreeLayout) -> io::Result<()> {
+        self.layout = layout.clone();
+        Ok(())
+    }
+
     /// Flushes everything to disk.
     fn finish(&mut self) -> io::Result<()> {
         self.out.flush().map_err(|e| self.named(e))

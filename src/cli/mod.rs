@@ -24,6 +24,7 @@ use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_o
 use images::{parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
 use run::{parse_seconds, parse_speed};
+use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use sweep::{parse_jobs, parse_seeds};
@@ -154,6 +155,7 @@ enum SweepAction {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a scenario headless on the simulator and print a summary.
+    #[command(group(clap::ArgGroup::new("paced").args(["ros2", "live", "watch"]).multiple(true)))]
     Run {
         /// The scenario file (RON).
         file: PathBuf,
@@ -184,8 +186,21 @@ enum Command {
         /// paced at real time, for RViz, Foxglove or `ros2 topic echo`.
         #[arg(long)]
         ros2: bool,
-        /// With `--ros2`, run this many times faster than real time.
-        #[arg(long, default_value_t = 1.0, value_parser = parse_speed, requires = "ros2")]
+        /// Serve the run live to Foxglove on this address (e.g.
+        /// `127.0.0.1:8765`; port 0 picks a free one), paced at real time:
+        /// the topics of `run.mcap` on the Foxglove WebSocket protocol.
+        /// Anyone who can reach the address can watch.
+        #[arg(long, value_name = "ADDRESS")]
+        live: Option<SocketAddr>,
+        /// Watch the scenario file: each edit of its tree is checked and
+        /// swapped in at a tick boundary; an edit that fails its check, or
+        /// changes more than the tree, is refused and the running tree goes
+        /// on. Paced at real time, like `--live`.
+        #[arg(long)]
+        watch: bool,
+        /// With `--ros2`, `--live` or `--watch`, run this many times faster
+        /// than real time.
+        #[arg(long, default_value_t = 1.0, value_parser = parse_speed, requires = "paced")]
         speed: f64,
     },
     /// Run every scenario with every seed in parallel and summarise; with
@@ -340,26 +355,8 @@ enum Command {
     Drive {
         /// The robot configuration file (RON).
         file: PathBuf,
-        /// Connect and show the robot's identity, odometry and sonar without
-        /// enabling the motors.
-        #[arg(long)]
-        dry_run: bool,
-        /// Show the live state (link, pose, speeds, winning behaviour, hold)
-        /// on stderr even when it is not a terminal (on a terminal it is
-        /// always shown, on one updating line).
-        #[arg(long)]
-        status: bool,
-        /// End the drive once the robot believes it is at the goal (the
-        /// robot is stopped and the session closed); without it the tree
-        /// holds the robot there until Ctrl-C.
-        #[arg(long)]
-        until_goal: bool,
-        /// Publish the drive on ROS 2 (in `ROS_DOMAIN_ID`): `/tf`, `/odom`,
-        /// `/scan`, `/ubf/tick`, `/ubf/goal`. A ROS 2 robot
-        /// (`connection: "ros2"`) always publishes `/ubf/tick` and
-        /// `/ubf/goal`; its own driver publishes the rest.
-        #[arg(long)]
-        ros2: bool,
+        #[command(flatten)]
+        options: robot::DriveOptions,
     },
     /// Emulate a FLIR PTU pan-tilt head on a TCP port or a pseudo-terminal,
     /// for trying a robot file's `pan_tilt` without the head.
@@ -657,11 +654,12 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     let outcome = match cli.command {
-        Command::Run { file, seed, out, json, huge, log_images, log_format, ros2, speed } => {
-            let live = ros2.then_some(crate::run::Live { speed, ros2 });
+        Command::Run { file, seed, out, json, huge, log_images, log_format, ros2, live, watch, speed } => {
+            let paced = ros2 || live.is_some() || watch;
+            let live = paced.then_some(crate::run::Live { speed, ros2, foxglove: live, trees: None });
             let rosbag = log_format == LogFormat::Ros2;
             let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images, rosbag });
-            run::command(&registry, &file, seed, outputs, json, huge, live)
+            run::command(&registry, &file, seed, outputs, run::RunFlags { json, huge, watch }, live)
         }
         Command::Replay { file, plot } => run::replay(&file, plot),
         Command::Check { files } => inspect::check(&registry, &files),
@@ -700,9 +698,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Model { action } => experiment::model(&registry, action),
         Command::Experiment { which } => experiment::command(&registry, which),
-        Command::Drive { file, dry_run, status, until_goal, ros2 } => {
-            robot::drive(&registry, &file, dry_run, status, until_goal, ros2)
-        }
+        Command::Drive { file, options } => robot::drive(&registry, &file, options),
         Command::Simulate { file, ros2: _, seed, speed, max_time } => {
             run::simulate(&registry, &file, seed, speed, max_time)
         }

@@ -11,19 +11,51 @@ use ubf_robots::arcos::emulator::{EmulatorConfig, EmulatorReport};
 use ubf_robots::arcos::link::Link;
 use ubf_robots::ptu::PtuEmulatorConfig;
 
+/// What `ubf drive` is asked to do besides driving its file.
+#[derive(Debug, clap::Args)]
+pub(super) struct DriveOptions {
+    /// Connect and show the robot's identity, odometry and sonar without
+    /// enabling the motors.
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Show the live state (link, pose, speeds, winning behaviour, hold)
+    /// on stderr even when it is not a terminal (on a terminal it is
+    /// always shown, on one updating line).
+    #[arg(long)]
+    pub status: bool,
+    /// End the drive once the robot believes it is at the goal (the
+    /// robot is stopped and the session closed); without it the tree
+    /// holds the robot there until Ctrl-C.
+    #[arg(long)]
+    pub until_goal: bool,
+    /// Publish the drive on ROS 2 (in `ROS_DOMAIN_ID`): `/tf`, `/odom`,
+    /// `/scan`, `/ubf/tick`, `/ubf/goal`. A ROS 2 robot
+    /// (`connection: "ros2"`) always publishes `/ubf/tick` and
+    /// `/ubf/goal`; its own driver publishes the rest.
+    #[arg(long)]
+    pub ros2: bool,
+    /// Serve the drive live to Foxglove on this address (e.g.
+    /// `127.0.0.1:8765`; port 0 picks a free one): the topics of its
+    /// MCAP log on the Foxglove WebSocket protocol. Anyone who can
+    /// reach the address can watch (but not steer).
+    #[arg(long, value_name = "ADDRESS")]
+    pub live: Option<std::net::SocketAddr>,
+    /// Watch the robot file: each edit of its tree is checked and
+    /// swapped in at a tick boundary; an edit that fails its check, or
+    /// changes more than the tree (the connection, the model, the
+    /// goal…), is refused and the running tree goes on.
+    #[arg(long)]
+    pub watch: bool,
+}
+
 /// Drives the robot (or only looks at it, `dry_run`) until stopped.
-pub(super) fn drive(
-    registry: &Registry,
-    file: &Path,
-    dry_run: bool,
-    status: bool,
-    until_goal: bool,
-    ros2: bool,
-) -> Outcome {
+pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> Outcome {
+    let DriveOptions { dry_run, status, until_goal, ros2, live, watch } = options;
     use crate::drive::{DriveConfig, DriveEnd};
     let (mut config, model) = DriveConfig::load(registry, file).map_err(CliError::bad_input)?;
     config.until_goal |= until_goal;
     config.publish_ros2 |= ros2;
+    config.live = live.or(config.live);
     let stop = crate::drive::install_stop_flag();
     if dry_run {
         crate::drive::dry_run(&config, &model, &stop).map_err(CliError::failed)?;
@@ -35,7 +67,13 @@ pub(super) fn drive(
         (false, true) => crate::drive::Status::Lines,
         (false, false) => crate::drive::Status::Off,
     };
-    let outcome = crate::drive::drive(&config, &model, &stop, status);
+    let trees = watch.then(|| {
+        let registry = registry.clone();
+        let load: crate::watch::LoadTree =
+            Box::new(move |file| Ok(DriveConfig::load(&registry, file).map_err(|e| e.to_string())?.0.root));
+        crate::watch::TreeWatch::new(file, config.root.clone(), ubf_core::BuildContext::new(0), load).shared()
+    });
+    let outcome = crate::drive::drive(&config, &model, &stop, status, trees);
     if let Some(pose) = outcome.pose {
         eprintln!(
             "the robot came to rest at ({:.3}, {:.3}) m, {:.1}° by its odometry, in the frame where it stood when the \

@@ -3,8 +3,20 @@
 use super::{CliError, Exit, Outcome};
 use crate::run::{run_until, EndReason, Live, Outputs};
 use crate::scenario::Scenario;
+use crate::watch::{LoadTree, TreeWatch};
 use std::path::{Path, PathBuf};
-use ubf_core::Registry;
+use ubf_core::{BuildContext, Registry};
+
+/// How `ubf run` reads its file and says what it got.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RunFlags {
+    /// Print the report as JSON.
+    pub json: bool,
+    /// Run beyond the bound on ticks.
+    pub huge: bool,
+    /// Take edits of the tree while running.
+    pub watch: bool,
+}
 
 /// Runs a scenario and prints its report; a run a behaviour ended, or
 /// Ctrl-C, still reports, but does not pass.
@@ -13,13 +25,20 @@ pub(super) fn command(
     file: &Path,
     seed: Option<u64>,
     outputs: Option<Outputs>,
-    json: bool,
-    huge: bool,
-    live: Option<Live>,
+    RunFlags { json, huge, watch }: RunFlags,
+    mut live: Option<Live>,
 ) -> Outcome {
-    let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
-    let scenario = loaded.map_err(CliError::bad_input)?;
+    let load = move |registry: &Registry, file: &Path| match huge {
+        true => Scenario::load_unbounded(registry, file),
+        false => Scenario::load(registry, file),
+    };
+    let scenario = load(registry, file).map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
+    if let Some(live) = live.as_mut().filter(|_| watch) {
+        let registry = registry.clone();
+        let load_tree: LoadTree = Box::new(move |file| Ok(load(&registry, file).map_err(|e| e.to_string())?.root));
+        live.trees = Some(Box::new(TreeWatch::new(file, scenario.root.clone(), BuildContext::new(seed), load_tree)));
+    }
     let stop = crate::drive::install_stop_flag();
     let report = run_until(&scenario, seed, outputs, live, &stop).map_err(|e| CliError::failed_in(file, e))?;
     super::show(&report, json)?;

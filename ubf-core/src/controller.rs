@@ -204,6 +204,24 @@ impl<R: Robot> Controller<R> {
         state.pose
     }
 
+    /// Replaces the tree between two ticks (a file edited while running):
+    /// the next tick asks `root`, and every sink is told the new layout.
+    /// Gives back the tree it replaces.
+    pub fn replace_root(&mut self, root: Box<dyn Behavior>) -> Result<Box<dyn Behavior>, ControllerError> {
+        self.layout = TreeLayout::of(root.as_ref());
+        self.record.nodes = vec![NodeOutcome::default(); self.layout.nodes.len()];
+        self.root_faulted = false;
+        let old = std::mem::replace(&mut self.root, root);
+        // Before the first tick the sinks have not started: they will
+        // start with this layout.
+        if self.ticks > 0 {
+            for sink in &mut self.sinks {
+                sink.tree_changed(&self.layout)?;
+            }
+        }
+        Ok(old)
+    }
+
     /// Gives back the robot and the root behaviour.
     pub fn into_parts(self) -> (R, Box<dyn Behavior>) {
         (self.robot, self.root)

@@ -94,7 +94,7 @@ pub use record::{NodeInfo, NodeOutcome, TickRecord, TreeLayout};
 pub use registry::{BehaviorSpec, BuildContext, Registry};
 pub use robot::{GroundTruth, NullRobot, Robot, RobotError, RobotWrapper, VelocityLimiter, Wraps};
 pub use safety::{Hold, SafetyGuard, SafetyPolicy};
-pub use session::{Ends, Session, SessionEnd};
+pub use session::{Ends, Session, SessionEnd, TreeSource};
 pub use sink::{BackgroundSink, TickSink, TracingSink};
 pub use state::{Bumpers, EgomotionState, Goal, RangeReading, State};
 pub use stereo::{CameraMount, PrincipalPoint, StereoCamera};

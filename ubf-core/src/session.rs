@@ -76,16 +76,32 @@ impl SessionEnd {
     }
 }
 
+/// Where a new tree may come from while a session runs: a file being
+/// edited, say.
+pub trait TreeSource {
+    /// A tree to swap in before the next tick, if there is a new one. It is
+    /// asked before every tick, so it must answer quickly when there is
+    /// none.
+    fn next_tree(&mut self) -> Option<Box<dyn crate::Behavior>>;
+}
+
 /// A controller and what ends its loop.
 pub struct Session<R: Robot> {
     controller: Controller<R>,
     ends: Ends,
+    trees: Option<Box<dyn TreeSource>>,
 }
 
 impl<R: Robot> Session<R> {
     /// A session of `controller` that ends as `ends` say.
     pub fn new(controller: Controller<R>, ends: Ends) -> Self {
-        Session { controller, ends }
+        Session { controller, ends, trees: None }
+    }
+
+    /// Swaps in each tree `trees` gives, at a tick boundary, telling the
+    /// sinks ([`crate::TickSink::tree_changed`]).
+    pub fn watch_trees(&mut self, trees: Box<dyn TreeSource>) {
+        self.trees = Some(trees);
     }
 
     /// The controller (its state, its record, its robot).
@@ -103,11 +119,18 @@ impl<R: Robot> Session<R> {
     /// no command is sent once it is set. A panic outside the behaviours is
     /// caught and returned: the caller still shuts the robot down.
     pub fn run(&mut self, stop: &AtomicBool, mut each_tick: impl FnMut(&TickRecord) -> ControlFlow<()>) -> SessionEnd {
-        let (controller, ends) = (&mut self.controller, self.ends);
+        let (controller, ends, trees) = (&mut self.controller, self.ends, &mut self.trees);
         let mut progress = ends.progress.map(ProgressWatch::new);
         let ticking = std::panic::AssertUnwindSafe(|| loop {
             if stop.load(Ordering::SeqCst) {
                 return SessionEnd::Interrupted;
+            }
+            if let Some(root) = trees.as_mut().and_then(|t| t.next_tree()) {
+                let time = controller.now();
+                if let Err(e) = controller.replace_root(root) {
+                    return SessionEnd::Failed(e);
+                }
+                tracing::info!(time, "tree replaced");
             }
             if ends.max_time_s.is_some_and(|limit| controller.now() >= limit) {
                 return SessionEnd::TimeLimit;

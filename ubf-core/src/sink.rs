@@ -13,6 +13,13 @@ pub trait TickSink: Send {
     }
     /// Called after every tick.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()>;
+    /// Called between ticks when the tree was replaced while running
+    /// ([`crate::Controller::replace_root`]): the records that follow have
+    /// `layout`'s nodes. A sink that names nodes by the layout it was
+    /// started with takes this one instead.
+    fn tree_changed(&mut self, _layout: &TreeLayout) -> std::io::Result<()> {
+        Ok(())
+    }
     /// Called once when the controller shuts down: flush here.
     fn finish(&mut self) -> std::io::Result<()> {
         Ok(())
@@ -27,6 +34,9 @@ impl<T: TickSink> TickSink for std::sync::Arc<std::sync::Mutex<T>> {
     }
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).record(record)
+    }
+    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).tree_changed(layout)
     }
     fn finish(&mut self) -> std::io::Result<()> {
         self.lock().unwrap_or_else(std::sync::PoisonError::into_inner).finish()
@@ -61,21 +71,47 @@ pub struct BackgroundSink {
     spare: Receiver<Box<TickRecord>>,
     writer: Option<JoinHandle<io::Result<()>>>,
     dropped: u64,
+    /// A new tree's layout, sent with the next record that is not dropped.
+    new_layout: Option<TreeLayout>,
 }
 
 enum Message {
     Start(TreeLayout),
+    TreeChanged(TreeLayout),
     Record(Box<TickRecord>),
 }
 
 impl BackgroundSink {
     /// Starts `sink` on a thread named after `name` (which also names it in
     /// warnings), with a pool of `capacity` record buffers.
-    pub fn spawn(name: impl Into<String>, mut sink: impl TickSink + 'static, capacity: usize) -> io::Result<Self> {
-        let name = name.into();
+    pub fn spawn(name: impl Into<String>, sink: impl TickSink + 'static, capacity: usize) -> io::Result<Self> {
+        BackgroundSink::start(name.into(), sink, capacity, None)
+    }
+
+    /// [`BackgroundSink::spawn`] for a sink that may see records late: its
+    /// thread wakes every `every` and takes what has come, so that handing
+    /// a record over never has to wake it. A tick then costs only the copy
+    /// of its record; the records reach the sink up to `every` later.
+    pub fn spawn_batched(
+        name: impl Into<String>,
+        sink: impl TickSink + 'static,
+        capacity: usize,
+        every: std::time::Duration,
+    ) -> io::Result<Self> {
+        BackgroundSink::start(name.into(), sink, capacity, Some(every))
+    }
+
+    fn start(
+        name: String,
+        mut sink: impl TickSink + 'static,
+        capacity: usize,
+        every: Option<std::time::Duration>,
+    ) -> io::Result<Self> {
         let capacity = capacity.max(1);
-        // One slot more than there are buffers, for the start message.
-        let (to_writer, messages) = crossbeam_channel::bounded::<Message>(capacity + 1);
+        // A slot for each buffer, one for each new tree's layout (which
+        // goes only with a record) and one for the start message: the
+        // channel is never full.
+        let (to_writer, messages) = crossbeam_channel::bounded::<Message>(2 * capacity + 1);
         let (give_back, spare) = crossbeam_channel::bounded::<Box<TickRecord>>(capacity);
         for _ in 0..capacity {
             let _ = give_back.send(Box::default());
@@ -83,9 +119,20 @@ impl BackgroundSink {
         let label = name.clone();
         let writer = std::thread::Builder::new().name(format!("sink {name}")).spawn(move || {
             let mut result = Ok(());
-            for message in messages {
+            let next = || match every {
+                None => messages.recv().ok(),
+                Some(every) => loop {
+                    match messages.try_recv() {
+                        Ok(message) => return Some(message),
+                        Err(crossbeam_channel::TryRecvError::Empty) => std::thread::sleep(every),
+                        Err(crossbeam_channel::TryRecvError::Disconnected) => return None,
+                    }
+                },
+            };
+            while let Some(message) = next() {
                 let written = match message {
                     Message::Start(layout) => sink.start(&layout),
+                    Message::TreeChanged(layout) => sink.tree_changed(&layout),
                     Message::Record(record) => {
                         let written = sink.record(&record);
                         let _ = give_back.send(record);
@@ -101,7 +148,14 @@ impl BackgroundSink {
             let finished = sink.finish().map_err(|e| io::Error::new(e.kind(), format!("{label}: {e}")));
             result.and(finished)
         })?;
-        Ok(BackgroundSink { name, to_writer: Some(to_writer), spare, writer: Some(writer), dropped: 0 })
+        Ok(BackgroundSink {
+            name,
+            to_writer: Some(to_writer),
+            spare,
+            writer: Some(writer),
+            dropped: 0,
+            new_layout: None,
+        })
     }
 
     /// Records dropped because the writer had fallen behind.
@@ -137,7 +191,17 @@ impl TickSink for BackgroundSink {
         };
         copy.copy_from(record);
         // Never full: there are no more buffers than slots.
+        if let Some(layout) = self.new_layout.take() {
+            let _ = to_writer.try_send(Message::TreeChanged(layout));
+        }
         let _ = to_writer.try_send(Message::Record(copy));
+        Ok(())
+    }
+
+    /// Passes the new layout on with the next record the writer gets, so
+    /// that the tick never waits for the writer.
+    fn tree_changed(&mut self, layout: &TreeLayout) -> io::Result<()> {
+        self.new_layout = Some(layout.clone());
         Ok(())
     }
 

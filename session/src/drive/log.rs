@@ -3,6 +3,7 @@
 //! its start and a cap on its size) and, where asked, a rosbag2 directory.
 
 use super::{DriveConfig, DriveError};
+use crate::json_topics::RunMessage;
 use crate::mcap_log::McapLog;
 use crate::ros2_log::{LogFormat, Ros2Log};
 use crate::ros2_view::Shown;
@@ -98,6 +99,10 @@ impl DriveMcap {
 impl TickSink for DriveMcap {
     fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
         self.log.start(layout)
+    }
+
+    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.log.tree_changed(layout)
     }
 
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
@@ -245,7 +250,20 @@ fn open_session_mcap(
         tracing::warn!("{} exists; this session has only its CSV log", path.display());
         return None;
     }
-    let run = crate::mcap_log::RunMessage {
+    let opened = McapLog::create_for_drive::<DriveReport>(&path, &run_message(model, pose, goal));
+    match opened {
+        Ok(log) => Some((log, path)),
+        Err(e) => {
+            tracing::warn!("{e}; this session has only its CSV log");
+            None
+        }
+    }
+}
+
+/// What a drive session is, as its logs and live view say it: the robot
+/// model, where it starts and its goal.
+pub(super) fn run_message(model: &RobotModel, pose: Pose2, goal: Option<ubf_core::Goal>) -> RunMessage {
+    RunMessage {
         scenario: format!("drive ({})", model.name),
         seed: 0,
         start: [pose.x, pose.y, pose.theta],
@@ -254,13 +272,5 @@ fn open_session_mcap(
             [wx, wy]
         }),
         goal: goal.map(|g| [g.x, g.y, g.tolerance]),
-    };
-    let opened = McapLog::create_for_drive::<DriveReport>(&path, &run);
-    match opened {
-        Ok(log) => Some((log, path)),
-        Err(e) => {
-            tracing::warn!("{e}; this session has only its CSV log");
-            None
-        }
     }
 }

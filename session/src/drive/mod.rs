@@ -25,7 +25,9 @@ pub use robot_file::{
 };
 pub use status::Status;
 
+use crate::json_topics::WorldMessage;
 use crate::ros2_view::Shown;
+use crate::watch::SharedTreeWatch;
 use status::StatusLine;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -68,6 +70,10 @@ pub enum DriveError {
     /// Publishing on ROS 2 could not start.
     #[error("{0}")]
     Ros2(String),
+    /// The live view could not be served (checked before the motors go
+    /// on).
+    #[error(transparent)]
+    Live(#[from] crate::live::LiveError),
     /// A log writer's thread could not be started.
     #[error("starting the log writer: {0}")]
     LogWriter(std::io::Error),
@@ -172,10 +178,16 @@ pub struct DriveOutcome {
 /// so the goal) carried over from the last pose. Every tick goes to the
 /// session's log; on the way out the robot gets STOP, ENABLE 0 and CLOSE and
 /// the log is flushed, whatever ended the session (a panic included).
-pub fn drive(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool, status: Status) -> DriveOutcome {
+pub fn drive(
+    config: &DriveConfig,
+    model: &RobotModel,
+    stop: &AtomicBool,
+    status: Status,
+    trees: Option<SharedTreeWatch>,
+) -> DriveOutcome {
     let mut logs = Vec::new();
     let mut pose = None;
-    let end = drive_sessions(config, model, stop, status, &mut logs, &mut pose);
+    let end = drive_sessions(config, model, stop, status, trees, &mut logs, &mut pose);
     service::stopping();
     DriveOutcome { end, logs, pose }
 }
@@ -185,11 +197,23 @@ fn drive_sessions(
     model: &RobotModel,
     stop: &AtomicBool,
     status: Status,
+    trees: Option<SharedTreeWatch>,
     logs: &mut Vec<PathBuf>,
     settled: &mut Option<Pose2>,
 ) -> Result<DriveEnd, DriveError> {
     let started = Instant::now();
     let out_of_time = || config.max_time_s.is_some_and(|t| started.elapsed().as_secs_f64() >= t);
+    // One server for every session, so that a viewer stays connected
+    // across a reconnect to the robot.
+    let live = match config.live {
+        Some(address) => {
+            let report = ("ubf.DriveReport", crate::json_topics::json_schema::<log::DriveReport>());
+            let server = crate::live::LiveServer::serve(address, report)?;
+            eprintln!("live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)", server.address());
+            Some(server)
+        }
+        None => None,
+    };
     let mut pose = Pose2::default();
     if let Some(file) = &config.pose_file {
         if let Some(saved) = pose_file::read(file)? {
@@ -234,7 +258,10 @@ fn drive_sessions(
                 return Err(e.into());
             }
         };
-        let root = config.root.build(&BuildContext::new(0));
+        // A drive that reconnects starts again with the tree that ran
+        // last, an edit included.
+        let root = trees.as_ref().map_or_else(|| config.root.clone(), SharedTreeWatch::current);
+        let root = root.build(&BuildContext::new(0));
         let mut controller = Controller::new(robot, root, Box::new(WallClock::new(config.period_s)));
         controller.set_goal(config.goal);
         controller.set_on_behavior_panic(config.on_behavior_panic);
@@ -252,6 +279,13 @@ fn drive_sessions(
         if status != Status::Off {
             controller.add_sink(Box::new(StatusLine::new(status)));
         }
+        if let Some(server) = &live {
+            // A view that cannot start is a warning: it is for watching.
+            match server.view(log::run_message(model, pose, config.goal), WorldMessage::default()) {
+                Ok(view) => controller.add_sink(Box::new(view)),
+                Err(e) => tracing::warn!("{e}; this session is not shown live"),
+            }
+        }
         let ending = log::SessionEnding::default();
         let attached = log::attach_logs(&mut controller, config, model, logs, &ending)
             .and_then(|()| attach_ros2(&mut controller, config));
@@ -262,6 +296,9 @@ fn drive_sessions(
             max_time_s: config.max_time_s.map(|limit| limit - started.elapsed().as_secs_f64()),
         };
         let mut session = Session::new(controller, ends);
+        if let Some(trees) = &trees {
+            session.watch_trees(Box::new(trees.clone()));
+        }
         let ended = match &attached {
             Ok(()) => session.run(stop, |_| ControlFlow::Continue(())),
             Err(_) => SessionEnd::Done,

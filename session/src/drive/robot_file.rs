@@ -215,6 +215,11 @@ pub struct DriveConfig {
     /// publishes the tree's topics, and leaves the robot's to its driver.
     #[serde(default)]
     pub publish_ros2: bool,
+    /// Serve the drive live to Foxglove on this address
+    /// (`"127.0.0.1:8765"`); `ubf drive --live ADDRESS` sets it. Anyone
+    /// who can reach the address can watch the robot (not steer it).
+    #[serde(default)]
+    pub live: Option<std::net::SocketAddr>,
     /// Give up (robot stopped, session closed, exit code 1) once the robot,
     /// by its own pose, has stayed within `radius_m` of one spot for
     /// `window_s`: pressed against a wall its goal lies behind, say.

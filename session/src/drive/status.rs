@@ -66,6 +66,10 @@ impl TickSink for StatusLine {
         Ok(())
     }
 
+    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+        self.start(layout)
+    }
+
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         if self.shown.elapsed() >= self.status.every() {
             self.shown = Instant::now();

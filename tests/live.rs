@@ -1,0 +1,189 @@
+//! `ubf run --live` and `ubf drive --live` watched by the official Foxglove
+//! client library (npm `@foxglove/ws-protocol`, through
+//! `scripts/foxglove-live-check.sh`), not by our own code: the topics it
+//! receives, their schemas, and that a viewer who stops reading slows
+//! nothing.
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+use std::process::{Child, ChildStderr, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A child process killed when dropped, so a failed assertion never leaves
+/// a run or an emulator behind.
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Starts `ubf ARGS` with its stderr piped, and reads stderr until the
+/// live view says where it is: its `ws://` address, and the rest of
+/// stderr.
+fn start_live(args: &[&str]) -> (Killed, String, BufReader<ChildStderr>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(args)
+        .current_dir(root())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = BufReader::new(child.stderr.take().unwrap());
+    let child = Killed(child);
+    let mut line = String::new();
+    loop {
+        line.clear();
+        assert!(err.read_line(&mut line).unwrap() > 0, "ubf ended without serving the live view");
+        if let Some(rest) = line.strip_prefix("live view on ") {
+            let url = rest.split_whitespace().next().unwrap().trim_end_matches(',').to_owned();
+            return (child, url, err);
+        }
+    }
+}
+
+/// What the official client saw in `seconds` at `url`.
+fn watch(url: &str, seconds: f64, stall: bool) -> Value {
+    let mut command = Command::new(root().join("scripts/foxglove-live-check.sh"));
+    command.args([url, &seconds.to_string()]);
+    if stall {
+        command.arg("--stall");
+    }
+    let output = command.output().expect("scripts/foxglove-live-check.sh needs Node.js and npm");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+/// The advertised channel of `topic`.
+fn channel<'a>(seen: &'a Value, topic: &str) -> &'a Value {
+    let channels = seen["channels"].as_array().unwrap();
+    channels.iter().find(|c| c["topic"] == topic).unwrap_or_else(|| panic!("no {topic} advertised: {seen}"))
+}
+
+/// Waits up to `seconds` for `child` to exit.
+fn wait_for(child: &mut Killed, seconds: f64) -> Option<std::process::ExitStatus> {
+    let deadline = Instant::now() + Duration::from_secs_f64(seconds);
+    while Instant::now() < deadline {
+        if let Some(status) = child.0.try_wait().unwrap() {
+            return Some(status);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
+}
+
+/// What a viewer needs of every live view: the robot's pose, the scene and
+/// the tree, each with the schema Foxglove's panels know it by, and
+/// messages that follow it.
+fn assert_shows_pose_scene_and_tree(seen: &Value, pose_topic: &str) {
+    assert_eq!(seen["subprotocol"], "foxglove.sdk.v1", "{seen}");
+    assert!(seen["server"].as_str().unwrap().starts_with("ubf "), "{seen}");
+    assert_eq!(seen["errors"], serde_json::json!([]), "{seen}");
+    for (topic, schema) in
+        [(pose_topic, "foxglove.PoseInFrame"), ("/scene", "foxglove.SceneUpdate"), ("/tree", "ubf.Tick")]
+    {
+        let advertised = channel(seen, topic);
+        assert_eq!(advertised["encoding"], "json", "{advertised}");
+        assert_eq!(advertised["schemaName"], schema, "{advertised}");
+        assert_eq!(advertised["schemaEncoding"], "jsonschema", "{advertised}");
+        assert_eq!(advertised["schema"]["type"], "object", "{advertised}");
+        assert!(seen["received"][topic].as_u64().unwrap_or(0) > 0, "no {topic} received: {seen}");
+    }
+    let pose = &seen["first"][pose_topic]["pose"];
+    assert!(pose["position"]["x"].is_number() && pose["orientation"]["w"].is_number(), "{pose}");
+    let tree = &seen["first"]["/tree"];
+    let nodes = tree["nodes"].as_array().unwrap();
+    assert!(!nodes.is_empty(), "{tree}");
+    assert!(nodes.iter().all(|n| n["path"].is_string() && n["vote"].is_number() && n["won"].is_boolean()), "{tree}");
+    assert!(tree["winner"].is_string(), "{tree}");
+}
+
+#[test]
+fn a_foxglove_client_watches_a_run_live() {
+    let args = ["run", "scenarios/corridor-box.ron", "--live", "127.0.0.1:0", "--speed", "4"];
+    let (mut run, url, _err) = start_live(&args);
+    let seen = watch(&url, 2.0, false);
+    assert_shows_pose_scene_and_tree(&seen, "/pose/true");
+    // The walls, drawn as lines.
+    let scene = &seen["first"]["/scene"]["entities"][0];
+    assert_eq!(scene["id"], "world", "{scene}");
+    assert!(scene["lines"][0]["points"].as_array().unwrap().len() >= 2, "{scene}");
+    assert_eq!(seen["first"]["/run"]["scenario"], "corridor-box", "{seen}");
+    assert!(seen["received"]["/ranges"].as_u64().unwrap_or(0) > 0, "{seen}");
+    assert!(seen["received"]["/pose/odometry"].as_u64().unwrap_or(0) > 0, "{seen}");
+    let status = wait_for(&mut run, 120.0).expect("the run ends");
+    assert!(status.success(), "{status}");
+}
+
+#[test]
+fn a_viewer_that_stops_reading_slows_nothing() {
+    // A camera that renders pairs, watched at ten times real time by a
+    // viewer that reads one message and then nothing: its queue fills, and
+    // the server drops its messages instead of waiting for it.
+    let paced = ["run", "scenarios/rendered-corridor.ron", "--live", "127.0.0.1:0", "--speed", "10", "--json"];
+    let (mut run, url, mut err) = start_live(&paced);
+    let started = Instant::now();
+    let seen = watch(&url, 1.0, true);
+    assert!(seen["received"].as_object().unwrap().values().any(|n| n.as_u64() > Some(0)), "{seen}");
+    let mut stalled = Command::new(root().join("scripts/foxglove-live-check.sh"));
+    stalled.args([&url, "600", "--stall"]).stdout(Stdio::null());
+    let _viewer = Killed(stalled.spawn().unwrap());
+    let status = wait_for(&mut run, 300.0).expect("the run ends while a viewer stalls");
+    let took = started.elapsed().as_secs_f64();
+    assert!(status.success(), "{status}");
+    let mut rest = String::new();
+    err.read_to_string(&mut rest).unwrap();
+    let mut stdout = String::new();
+    run.0.stdout.take().unwrap().read_to_string(&mut stdout).unwrap();
+    let report: Value = serde_json::from_str(&stdout).unwrap();
+    // The run took its paced time (its simulated time over ten), not
+    // twice that: the stalled viewer did not hold the ticks.
+    let paced_s = report["sim_time_s"].as_f64().unwrap() / 10.0;
+    assert!(took < 2.0 * paced_s + 5.0, "{took:.1} s for a run paced to {paced_s:.1} s; stderr: {rest}");
+}
+
+#[test]
+fn a_foxglove_client_watches_a_drive_live() {
+    let mut emulator = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["emulate-powerbot", "--listen", "127.0.0.1:0"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(emulator.stdout.take().unwrap());
+    let _emulator = Killed(emulator);
+    let mut line = String::new();
+    out.read_line(&mut line).unwrap();
+    let address = line.trim().rsplit(' ').next().unwrap().to_owned();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let robot = format!(
+        r#"RobotConfig(
+            name: "live",
+            connection: "{address}",
+            model: Powerbot,
+            log: "{}",
+            goal: (x: 2.0, y: 0.0, tolerance: 0.2),
+            root: Composite(arbiter: CommandFusion, children: [
+                (behavior: Stop(), weight: 1.0),
+                (behavior: GoTo(cruise_speed: 0.4)),
+            ]),
+        )"#,
+        dir.path().join("log.csv").display()
+    );
+    std::fs::write(&file, robot).unwrap();
+    let (mut drive, url, _err) =
+        start_live(&["drive", file.to_str().unwrap(), "--live", "127.0.0.1:0", "--until-goal"]);
+    let seen = watch(&url, 2.0, false);
+    assert_shows_pose_scene_and_tree(&seen, "/pose/odometry");
+    assert_eq!(seen["first"]["/run"]["scenario"], "drive (Powerbot)", "{seen}");
+    assert_eq!(seen["first"]["/goal"]["pose"]["position"]["x"], 2.0, "{seen}");
+    let status = wait_for(&mut drive, 60.0).expect("the drive ends at its goal");
+    assert!(status.success(), "{status}");
+}
