@@ -27,6 +27,79 @@ fn trajectory_column(dir: &Path, name: &str) -> Vec<f64> {
     lines.map(|l| l.split(',').nth(column).unwrap().parse().unwrap()).collect()
 }
 
+/// The child of the root that won each tick (`root/around/..` → `around`),
+/// with repeats on consecutive ticks dropped: who drove, in order.
+fn top_winners(dir: &Path) -> Vec<String> {
+    let csv = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let column = lines.next().unwrap().split(',').position(|h| h == "winner").unwrap();
+    let mut winners: Vec<String> =
+        lines.map(|l| l.split(',').nth(column).unwrap().split('/').nth(1).unwrap_or("").to_owned()).collect();
+    winners.dedup();
+    winners
+}
+
+#[test]
+fn then_ron_goes_to_the_door_through_it_then_to_the_goal() {
+    // docs/for-behaviortree-users.md, "do A then B": each waypoint's GoTo
+    // drives until it is passed, then falls silent for good.
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&load("scenarios/then.ron"), 1, Some(dir.path())).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert!(report.reached_goal && report.collisions == 0, "{report:?}");
+    assert_eq!(top_winners(dir.path()), ["to-door", "through-door", "to-goal", "Stop"]);
+    let (x, y) = (trajectory_column(dir.path(), "true_x"), trajectory_column(dir.path(), "true_y"));
+    let nearest =
+        |wx: f64, wy: f64| x.iter().zip(&y).map(|(x, y)| (x - wx).hypot(y - wy)).fold(f64::INFINITY, f64::min);
+    assert!(nearest(3.0, 2.0) <= 0.3 && nearest(5.0, 2.0) <= 0.3);
+}
+
+#[test]
+fn without_its_waypoints_then_ron_never_gets_past_the_wall() {
+    // The check above can fail: GoTo alone presses against the wall.
+    let scenario = edited(
+        "scenarios/then.ron",
+        &[
+            (r#"(behavior: GoTo(waypoint: (x: 3.0, y: 2.0, tolerance: 0.3), slow_radius: 0.0), name: "to-door"),"#, ""),
+            (
+                r#"(behavior: GoTo(waypoint: (x: 5.0, y: 2.0, tolerance: 0.3), slow_radius: 0.0), name: "through-door"),"#,
+                "",
+            ),
+        ],
+    );
+    let report = run(&scenario, 1, None).unwrap();
+    assert_eq!(report.end, EndReason::NoProgress, "{report:?}");
+    assert!(!report.reached_goal);
+}
+
+#[test]
+fn fallback_ron_goes_round_the_box_only_near_it_and_reaches_the_goal_in_10_seeds() {
+    // docs/for-behaviortree-users.md, "try A, else B": "around" speaks only
+    // near the box, and "straight" drives before and after it.
+    let scenario = load("scenarios/fallback.ron");
+    let dir = tempfile::tempdir().unwrap();
+    for seed in 0..10 {
+        let out = dir.path().join(seed.to_string());
+        let report = run(&scenario, seed, Some(&out)).unwrap();
+        assert_eq!(report.end, EndReason::GoalReached, "seed {seed}: {report:?}");
+        assert!(report.reached_goal && report.collisions == 0, "seed {seed}: {report:?}");
+        let winners = top_winners(&out);
+        assert_eq!(winners[..3], ["straight", "around", "straight"], "seed {seed}: {winners:?}");
+        assert_eq!(winners.last().unwrap(), "Stop", "seed {seed}: {winners:?}");
+    }
+}
+
+#[test]
+fn a_fallback_to_avoid_collision_alone_never_gets_past_the_box() {
+    // The page's warning: under selection the winner's action is taken
+    // whole, and AvoidCollision sets no forward speed. It and GoTo take
+    // turns in front of the box until the time limit.
+    let scenario = edited("scenarios/corridor-box.ron", &[("arbiter: CommandFusion", "arbiter: SimplePriority")]);
+    let report = run(&scenario, 1, None).unwrap();
+    assert_eq!(report.end, EndReason::TimeLimit, "{report:?}");
+    assert!(report.final_true_pose.x < 8.0, "{report:?}");
+}
+
 #[test]
 fn goes_round_a_box_to_the_goal_without_touching_anything_in_30_seeds() {
     let scenario = load("scenarios/corridor-box.ron");

@@ -2,7 +2,7 @@
 
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
-use ubf_core::{Action, Behavior, State};
+use ubf_core::{Action, Behavior, Goal, State};
 
 /// Settings of [`GoTo`], as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -24,11 +24,23 @@ pub struct GoToConfig {
     /// The vote while driving.
     #[serde(deserialize_with = "non_negative")]
     pub vote: f64,
+    /// A point to drive to instead of the goal (world frame). Once the
+    /// robot is within its tolerance the behaviour falls silent for good (a
+    /// waypoint is passed once), so that a lower-priority sibling takes
+    /// over: "this, then that".
+    pub waypoint: Option<Goal>,
 }
 
 impl Default for GoToConfig {
     fn default() -> Self {
-        GoToConfig { cruise_speed: 0.5, turn_gain: 1.5, max_turn_deg: 45.0, slow_radius: 1.0, vote: 0.5 }
+        GoToConfig {
+            cruise_speed: 0.5,
+            turn_gain: 1.5,
+            max_turn_deg: 45.0,
+            slow_radius: 1.0,
+            vote: 0.5,
+            waypoint: None,
+        }
     }
 }
 
@@ -36,25 +48,37 @@ impl Default for GoToConfig {
 /// and slows near the goal and while facing away from it. Silent when there
 /// is no goal or it is reached (a `Stop` on `GoalReached` holds the robot
 /// there).
+///
+/// With a waypoint it drives there instead, and stays silent from the first
+/// tick it finds the robot within the waypoint's tolerance until
+/// [`Behavior::reset`]. It is asked every tick whether or not it wins, so it
+/// counts the waypoint passed whenever the robot comes that near, whichever
+/// behaviour was driving.
 #[derive(Clone, Debug)]
 pub struct GoTo {
     config: GoToConfig,
+    /// The waypoint has been reached.
+    passed: bool,
 }
 
 impl GoTo {
     /// A go-to behaviour with these settings.
     pub fn new(config: GoToConfig) -> Self {
-        GoTo { config }
+        GoTo { config, passed: false }
     }
 }
 
 impl Behavior for GoTo {
     fn gen_action(&mut self, state: &State) -> Action {
-        let Some(goal) = state.goal else {
-            return Action::none();
+        let goal = match (self.config.waypoint, state.goal) {
+            (Some(_), _) if self.passed => return Action::none(),
+            (Some(waypoint), _) => waypoint,
+            (None, Some(goal)) => goal,
+            (None, None) => return Action::none(),
         };
         let distance = state.pose.distance_to(goal.x, goal.y);
         if distance <= goal.tolerance {
+            self.passed = self.config.waypoint.is_some();
             return Action::none();
         }
         let error = state.pose.bearing_to(goal.x, goal.y);
@@ -70,6 +94,10 @@ impl Behavior for GoTo {
     fn name(&self) -> &str {
         "GoTo"
     }
+
+    fn reset(&mut self) {
+        self.passed = false;
+    }
 }
 
 impl ubf_core::Describe for GoToConfig {
@@ -81,6 +109,16 @@ impl ubf_core::Describe for GoToConfig {
             Field::new("max_turn_deg", "number", "°/s", "45", "> 0", "largest turn rate it asks for"),
             Field::new("slow_radius", "number", "m", "1.0", "≥ 0", "within this distance the speed ramps down"),
             Field::new("vote", "number", "", "0.5", "≥ 0", "vote while driving"),
+            Field::new(
+                "waypoint",
+                "point",
+                "m",
+                "None",
+                "",
+                "`(x: .., y: .., tolerance: 0.2)` in the world frame: drive there instead of the goal, and fall silent \
+                 for good once within its tolerance (a waypoint is passed once; see \
+                 [for-behaviortree-users.md](for-behaviortree-users.md#do-a-then-b))",
+            ),
         ]
     }
 }
@@ -89,7 +127,7 @@ impl ubf_core::Describe for GoToConfig {
 mod tests {
     use super::*;
     use std::f64::consts::PI;
-    use ubf_core::{Goal, Pose2};
+    use ubf_core::Pose2;
 
     fn state_at(pose: Pose2, goal: Option<Goal>) -> State {
         State { pose, goal, ..State::default() }
@@ -116,6 +154,33 @@ mod tests {
         let right =
             go.gen_action(&state_at(Pose2::new(0.0, 0.0, PI / 2.0), Some(Goal { x: 5.0, y: 0.0, tolerance: 0.2 })));
         assert!(right.motion.rot_velocity.unwrap() < 0.0);
+    }
+
+    #[test]
+    fn a_waypoint_is_driven_to_then_left_to_others_for_good() {
+        let waypoint = Goal { x: 2.0, y: 0.0, tolerance: 0.3 };
+        let mut go = GoTo::new(GoToConfig { waypoint: Some(waypoint), ..GoToConfig::default() });
+        // The goal lies behind: the waypoint, not the goal, is steered for.
+        let goal = Some(Goal { x: -5.0, y: 0.0, tolerance: 0.2 });
+        let toward = go.gen_action(&state_at(Pose2::default(), goal));
+        assert!(toward.is_voting());
+        assert_eq!(toward.motion.rot_velocity, Some(0.0));
+        assert!(toward.motion.velocity.unwrap() > 0.0);
+        // It needs no goal at all.
+        assert!(go.gen_action(&state_at(Pose2::default(), None)).is_voting());
+        // Within the tolerance: silent, and still silent once the robot has left.
+        assert!(!go.gen_action(&state_at(Pose2::new(1.8, 0.0, 0.0), goal)).is_voting());
+        assert!(!go.gen_action(&state_at(Pose2::default(), goal)).is_voting());
+        go.reset();
+        assert!(go.gen_action(&state_at(Pose2::default(), goal)).is_voting());
+    }
+
+    #[test]
+    fn without_a_waypoint_it_drives_again_once_pushed_off_the_goal() {
+        let mut go = GoTo::new(GoToConfig::default());
+        let goal = Some(Goal { x: 2.0, y: 0.0, tolerance: 0.3 });
+        assert!(!go.gen_action(&state_at(Pose2::new(1.8, 0.0, 0.0), goal)).is_voting());
+        assert!(go.gen_action(&state_at(Pose2::default(), goal)).is_voting());
     }
 
     #[test]

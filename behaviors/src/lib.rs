@@ -2,7 +2,7 @@
 //!
 //! | name in a file | behaviour |
 //! | --- | --- |
-//! | `GoTo` | [`GoTo`]: drive to the state's goal |
+//! | `GoTo` | [`GoTo`]: drive to the state's goal, or to a waypoint once |
 //! | `Stop` | [`Stop`]: stop while a condition holds |
 //! | `AvoidCollision` | [`AvoidCollision`]: keep clear of what the sonar sees |
 //! | `ActionAiding` | [`ActionAiding`]: steer for the least uncertain egomotion (thesis ch. 3) |
