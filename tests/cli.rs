@@ -667,3 +667,12 @@ fn behaviours_describe_their_fields() {
     assert_eq!(unknown.status.code(), Some(2));
     assert!(text(&unknown.stderr).contains("unknown behaviour `Teleport`"), "{}", text(&unknown.stderr));
 }
+
+#[test]
+fn a_log_that_is_not_there_is_said_to_be_unreadable_not_unwritable() {
+    let missing = ubf(&["replay", "no-such-log.mcap"]);
+    assert_eq!(missing.status.code(), Some(2));
+    let said = text(&missing.stderr);
+    assert!(said.starts_with("error: reading no-such-log.mcap: "), "{said}");
+    assert!(!said.contains("writing"), "{said}");
+}

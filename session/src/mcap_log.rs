@@ -17,10 +17,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use ubf_core::{TickRecord, TickSink, TreeLayout};
 
-/// Why the log could not be written.
+/// Why a log could not be written, or read back.
 #[derive(Debug, thiserror::Error)]
-#[error("writing {}: {message}", path.display())]
+#[error("{doing} {}: {message}", path.display())]
 pub struct LogError {
+    doing: &'static str,
     path: PathBuf,
     message: String,
 }
@@ -28,7 +29,12 @@ pub struct LogError {
 impl LogError {
     /// Writing `path` failed, for the reason `message`.
     pub fn new(path: &Path, message: impl Into<String>) -> LogError {
-        LogError { path: path.to_owned(), message: message.into() }
+        LogError { doing: "writing", path: path.to_owned(), message: message.into() }
+    }
+
+    /// Reading `path` back failed, for the reason `message`.
+    pub fn reading(path: &Path, message: impl Into<String>) -> LogError {
+        LogError { doing: "reading", path: path.to_owned(), message: message.into() }
     }
 }
 
@@ -55,7 +61,7 @@ const CHUNK_EVERY_S: f64 = 1.0;
 
 impl McapFile {
     fn fail(&self, e: &dyn std::fmt::Display) -> LogError {
-        LogError { path: self.path.clone(), message: e.to_string() }
+        LogError::new(&self.path, e.to_string())
     }
 }
 
@@ -134,7 +140,7 @@ impl McapLog {
     /// Opens the log with its channels, `/report`'s schema named and given
     /// by `report`.
     fn open(path: &Path, report: (&str, Vec<u8>)) -> Result<McapLog, LogError> {
-        let fail = |e: &dyn std::fmt::Display| LogError { path: path.to_owned(), message: e.to_string() };
+        let fail = |e: &dyn std::fmt::Display| LogError::new(path, e.to_string());
         let file = SealedFile::create(path).map_err(|e| fail(&e))?;
         let options = mcap::WriteOptions::new().profile("").library(concat!("ubf ", env!("CARGO_PKG_VERSION")));
         let writer = options.create(file).map_err(|e| fail(&e))?;

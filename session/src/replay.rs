@@ -57,7 +57,7 @@ pub struct ReplayedRun {
 /// Reads the log at `path` back: everything up to its end, or, for a log
 /// a killed process left, up to its last whole chunk.
 pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
-    let fail = |message: String| LogError::new(path, message);
+    let fail = |message: String| LogError::reading(path, message);
     let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
     // A record's length comes from the file: one corrupted length must be
     // an error, not an attempt to allocate exabytes.
