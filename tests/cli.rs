@@ -316,6 +316,8 @@ fn a_panicking_behaviour_ends_the_run_with_its_report_or_is_skipped() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     assert!(text(&out.stdout).contains("failure         behaviour root/InjectFault panicked: sensor table empty"));
+    // Said once, in the run's words, not in Rust's panic message as well.
+    assert!(!text(&out.stderr).contains("panicked at"), "{}", text(&out.stderr));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["end"], "behavior_failed");

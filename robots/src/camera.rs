@@ -63,14 +63,9 @@ impl<R: Robot> CameraRobot<R> {
             .spawn(move || {
                 // A panic here would leave the robot driving on a camera
                 // that no longer delivers: it becomes a camera fault.
-                let run =
-                    std::panic::AssertUnwindSafe(|| take_pairs(source.as_mut(), &pipeline, &sender, &flag, paced));
-                if let Err(panic) = std::panic::catch_unwind(run) {
-                    let why = panic
-                        .downcast_ref::<&str>()
-                        .map(|s| (*s).to_owned())
-                        .or_else(|| panic.downcast_ref::<String>().cloned())
-                        .unwrap_or_else(|| "no message".into());
+                let run = || take_pairs(source.as_mut(), &pipeline, &sender, &flag, paced);
+                if let Err(panic) = ubf_core::catch_reported(run) {
+                    let why = ubf_core::panic_message(panic.as_ref());
                     let _ = sender.send(Err(format!("the camera's thread panicked: {why}")));
                 }
             })

@@ -11,6 +11,7 @@
 //! }
 //! ```
 
+mod bug_report;
 mod experiment;
 mod images;
 mod inspect;
@@ -628,6 +629,7 @@ pub fn parses<I: IntoIterator<Item = T>, T: Into<std::ffi::OsString> + Clone>(ar
 
 /// Runs the command line with `registry` resolving behaviour names.
 pub fn main_with(registry: Registry) -> ExitCode {
+    bug_report::install();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

@@ -65,6 +65,28 @@ impl BehaviorPanic {
     }
 }
 
+thread_local! {
+    /// How many [`catch_reported`] calls this thread is inside.
+    static CATCHING: std::cell::Cell<u32> = const { std::cell::Cell::new(0) };
+}
+
+/// Runs `f`, catching a panic that the caller reports in its own words (a
+/// behaviour's, named by its path; a session's, with the robot stopped).
+/// While `f` runs, [`panic_is_reported`] says so, so that a panic hook can
+/// leave the telling to the caller.
+pub fn catch_reported<T>(f: impl FnOnce() -> T) -> std::thread::Result<T> {
+    CATCHING.with(|c| c.set(c.get() + 1));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    CATCHING.with(|c| c.set(c.get() - 1));
+    result
+}
+
+/// Whether a panic on this thread now would be caught and reported by a
+/// [`catch_reported`] around it.
+pub fn panic_is_reported() -> bool {
+    CATCHING.with(|c| c.get() > 0)
+}
+
 /// What a panic said: its `&str` or `String` payload.
 pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload

@@ -148,8 +148,7 @@ impl Behavior for Composite {
             let behavior = &mut child.behavior;
             // The action is written straight into the bid, not passed back
             // through the `Result`: one copy of it fewer every child, every tick.
-            let asked =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| bid.action = behavior.gen_action(state)));
+            let asked = crate::catch_reported(|| bid.action = behavior.gen_action(state));
             match asked {
                 Ok(()) => {}
                 Err(payload) => {

@@ -156,7 +156,7 @@ impl<R: Robot> Controller<R> {
             return Ok(Action::stop(1.0));
         }
         let (root, state) = (&mut self.root, &self.record.state);
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| root.gen_action(state))).map_err(|payload| {
+        crate::catch_reported(|| root.gen_action(state)).map_err(|payload| {
             let panic = BehaviorPanic::caught(root.name(), payload);
             // A leaf root has no composite to silence it.
             self.root_faulted = root.as_composite().is_none();

@@ -79,7 +79,7 @@ pub mod stereo;
 
 pub use action::{Action, Channel, Motion};
 pub use arbiter::{Arbiter, ArbiterSpec, Arbitration, Bid};
-pub use behavior::{from_fn, panic_message, Behavior, BehaviorPanic, FnBehavior};
+pub use behavior::{catch_reported, from_fn, panic_is_reported, panic_message, Behavior, BehaviorPanic, FnBehavior};
 pub use clock::{Clock, PacedClock, SimClock, Stopwatch, WallClock};
 pub use command::{Command, Limits, Turn};
 pub use composite::Composite;
