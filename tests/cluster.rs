@@ -1,7 +1,8 @@
 //! Sweeps on a cluster: `--shard auto` takes the shard from a Slurm job
 //! array's variables and `--shard auto/N` from a Kubernetes Indexed Job's,
 //! the shards they run merge to the bytes one sweep writes, and what names
-//! no shard is refused with a sentence.
+//! no shard is refused with a sentence. The job files in `deploy/cluster/`
+//! run their sweep and its merge here, the scheduler stood in for.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -204,5 +205,220 @@ fn an_environment_that_names_no_shard_is_refused_with_a_sentence() {
         assert_eq!(result.status.code(), Some(2), "{spec} {vars:?}: {stderr}");
         assert!(stderr.starts_with("error: ") && stderr.contains(says), "{spec} {vars:?}: {stderr}");
         assert!(!out.exists(), "{spec} {vars:?}: nothing written");
+    }
+}
+
+// The job files in deploy/cluster/, run here without a cluster: the
+// scheduler's part (its variables, sbatch, the Job controller's `$(VAR)`)
+// stood in for, the rest run as it is.
+
+/// A folder for the stand-ins of the commands a job finds on its `PATH`:
+/// `ubf` is the binary under test.
+fn bin_dir(dir: &Path) -> std::path::PathBuf {
+    let bin = dir.join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_ubf"), bin.join("ubf")).unwrap();
+    bin
+}
+
+/// Writes an executable shell script `name` into `bin`.
+fn stand_in(bin: &Path, name: &str, script: &str) {
+    use std::os::unix::fs::PermissionsExt;
+    let path = bin.join(name);
+    std::fs::write(&path, format!("#!/bin/sh\n{script}")).unwrap();
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
+}
+
+/// `PATH` with `bin` first.
+fn path_with(bin: &Path) -> String {
+    format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default())
+}
+
+fn read(path: &str) -> String {
+    std::fs::read_to_string(root().join(path)).unwrap()
+}
+
+/// The value of the script's `#SBATCH --NAME=` line.
+fn sbatch_option(script: &str, name: &str) -> String {
+    let prefix = format!("#SBATCH --{name}=");
+    let found = script.lines().find_map(|l| l.strip_prefix(&prefix));
+    found.unwrap_or_else(|| panic!("no `{prefix}` line")).trim().to_owned()
+}
+
+/// The value the script gives a shell variable (`name="..."` on a line of
+/// its own), its quotes removed.
+fn shell_value(script: &str, name: &str) -> String {
+    let prefix = format!("{name}=");
+    let found = script.lines().find_map(|l| l.strip_prefix(&prefix));
+    found.unwrap_or_else(|| panic!("no `{prefix}` line")).trim_matches('"').to_owned()
+}
+
+/// One sweep of `scenario` over `seeds` into `dir/whole`.
+fn whole_sweep_of(dir: &Path, scenario: &str, seeds: &str) -> std::path::PathBuf {
+    let whole = dir.join("whole");
+    let out = ubf(&[], &["sweep", scenario, "--seeds", seeds, "--out", whole.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    whole
+}
+
+/// The seeds the job files' sweep is run with here, in place of their
+/// hundred thousand.
+const FEW_SEEDS: &str = "0..12";
+
+#[test]
+fn the_slurm_scripts_submit_run_and_merge_a_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = bin_dir(dir.path());
+    let path = path_with(&bin);
+    // sbatch as `--parsable` answers, each call recorded.
+    let log = dir.path().join("sbatch.log");
+    stand_in(&bin, "sbatch", "echo \"$*\" >> \"$SBATCH_LOG\"\necho '4242;cluster'\n");
+    let mut submit = Command::new("bash");
+    submit.arg("deploy/cluster/submit.sh");
+    let vars = [("PATH", path.clone()), ("SBATCH_LOG", log.display().to_string())];
+    let out = output(submit, &vars);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let submitted = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(
+        submitted,
+        "--parsable deploy/cluster/sweep.slurm\n--dependency=afterany:4242 deploy/cluster/merge.slurm\n"
+    );
+
+    // Every task of the array as Slurm starts it, then the merge.
+    let sweep = read("deploy/cluster/sweep.slurm");
+    let merge = read("deploy/cluster/merge.slurm");
+    assert_eq!(shell_value(&sweep, "out"), shell_value(&merge, "out"), "both scripts default to one folder");
+    let array = sbatch_option(&sweep, "array");
+    let range = array.split('%').next().unwrap();
+    let (min, max) = range.split_once('-').expect("a contiguous range of ids, as --shard auto needs");
+    let (min, max): (u64, u64) = (min.parse().unwrap(), max.parse().unwrap());
+    let count = max - min + 1;
+    let cpus = sbatch_option(&sweep, "cpus-per-task");
+    let shared = dir.path().join("shared");
+    let job = |script: &str, task: &[(&'static str, String)]| {
+        let mut command = Command::new("bash");
+        command.arg(script);
+        let mut vars = vec![
+            ("PATH", path.clone()),
+            ("HOME", dir.path().display().to_string()),
+            ("SEEDS", FEW_SEEDS.to_owned()),
+            ("SWEEP_OUT", shared.display().to_string()),
+        ];
+        vars.extend(task.iter().cloned());
+        output(command, &vars)
+    };
+    for id in min..=max {
+        let task = [
+            ("SLURM_ARRAY_TASK_ID", id.to_string()),
+            ("SLURM_ARRAY_TASK_MIN", min.to_string()),
+            ("SLURM_ARRAY_TASK_MAX", max.to_string()),
+            ("SLURM_ARRAY_TASK_COUNT", count.to_string()),
+            ("SLURM_ARRAY_TASK_STEP", "1".to_owned()),
+            ("SLURM_CPUS_PER_TASK", cpus.clone()),
+        ];
+        let out = job("deploy/cluster/sweep.slurm", &task);
+        assert!(out.status.success(), "task {id}: {}", text(&out.stderr));
+        let said = format!("--shard auto: shard {}/{count}, from SLURM_ARRAY_TASK_ID={id}", id - min);
+        assert!(text(&out.stderr).starts_with(&said), "task {id}: {}", text(&out.stderr));
+    }
+    let out = job("deploy/cluster/merge.slurm", &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let whole = whole_sweep_of(dir.path(), &shell_value(&sweep, "scenarios"), FEW_SEEDS);
+    assert_same_summary(&shared, &whole);
+}
+
+/// A Kubernetes manifest as JSON.
+fn manifest(path: &str) -> serde_json::Value {
+    serde_norway::from_str(&read(path)).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+/// The Job's one container.
+fn container(job: &serde_json::Value) -> &serde_json::Value {
+    let containers = job["spec"]["template"]["spec"]["containers"].as_array().expect("containers");
+    assert_eq!(containers.len(), 1);
+    &containers[0]
+}
+
+/// The container's environment, as its `env` sets it.
+fn container_env(container: &serde_json::Value) -> Vec<(String, String)> {
+    let env = container["env"].as_array().expect("env");
+    env.iter().map(|v| (v["name"].as_str().unwrap().to_owned(), v["value"].as_str().unwrap().to_owned())).collect()
+}
+
+/// `text` with each `$(NAME)` of `env` replaced by its value, as
+/// Kubernetes does in a container's command and arguments.
+fn kubernetes_expanded(text: &str, env: &[(String, String)]) -> String {
+    env.iter().fold(text.to_owned(), |text, (name, value)| text.replace(&format!("$({name})"), value))
+}
+
+/// `env` with `SEEDS` and `SWEEP_OUT` replaced: the sweep run here.
+fn here(env: &[(String, String)], shared: &Path) -> Vec<(String, String)> {
+    let mut here: Vec<(String, String)> =
+        env.iter().filter(|(name, _)| name != "SEEDS" && name != "SWEEP_OUT").cloned().collect();
+    here.push(("SEEDS".into(), FEW_SEEDS.into()));
+    here.push(("SWEEP_OUT".into(), shared.display().to_string()));
+    here
+}
+
+#[test]
+fn the_indexed_job_runs_its_shards_and_the_merge_job_merges_them() {
+    let job = manifest("deploy/cluster/sweep-job.yaml");
+    assert_eq!((job["apiVersion"].as_str(), job["kind"].as_str()), (Some("batch/v1"), Some("Job")));
+    let spec = &job["spec"];
+    assert_eq!(spec["completionMode"], "Indexed");
+    let completions = spec["completions"].as_u64().expect("completions");
+    assert!(spec["parallelism"].as_u64().expect("parallelism") <= completions);
+    assert_eq!(spec["template"]["spec"]["restartPolicy"], "Never", "podFailurePolicy needs it");
+    let ubf_container = container(&job);
+    let rule = &spec["podFailurePolicy"]["rules"][0];
+    assert_eq!((rule["action"].as_str(), rule["onExitCodes"]["values"][0].as_u64()), (Some("FailJob"), Some(2)));
+    assert_eq!(rule["onExitCodes"]["containerName"], ubf_container["name"]);
+    assert_eq!(ubf_container["workingDir"], "/ubf", "the repository, where the scenario's path starts");
+    assert_eq!(ubf_container["command"], serde_json::json!(["sh", "-c"]));
+    let env = container_env(ubf_container);
+    let script = kubernetes_expanded(ubf_container["args"][0].as_str().expect("one argument"), &env);
+    assert!(script.contains(&format!("--shard auto/{completions} ")), "N is the Job's completions: {script}");
+
+    // Every pod, in the repository (its working folder), then the merge.
+    let dir = tempfile::tempdir().unwrap();
+    let bin = bin_dir(dir.path());
+    let shared = dir.path().join("shared");
+    let env = here(&env, &shared);
+    for index in 0..completions {
+        let mut pod = Command::new("sh");
+        pod.arg("-c").arg(&script).env("PATH", path_with(&bin)).envs(env.iter().map(|(k, v)| (k, v)));
+        let out = output(pod, &[("JOB_COMPLETION_INDEX", index.to_string())]);
+        assert!(out.status.success(), "index {index}: {}", text(&out.stderr));
+    }
+    let merge_job = manifest("deploy/cluster/merge-job.yaml");
+    let merge_container = container(&merge_job);
+    assert_eq!(merge_container["volumeMounts"], ubf_container["volumeMounts"]);
+    assert_eq!(merge_job["spec"]["template"]["spec"]["volumes"], job["spec"]["template"]["spec"]["volumes"]);
+    let merge_env = container_env(merge_container);
+    let sweep_out = |env: &[(String, String)]| env.iter().find(|(k, _)| k == "SWEEP_OUT").cloned();
+    assert_eq!(sweep_out(&merge_env), sweep_out(&container_env(ubf_container)), "both Jobs use one folder");
+    let words: Vec<String> = merge_container["command"]
+        .as_array()
+        .expect("command")
+        .iter()
+        .map(|w| kubernetes_expanded(w.as_str().unwrap(), &here(&merge_env, &shared)))
+        .collect();
+    let mut merge = Command::new(&words[0]);
+    merge.args(&words[1..]).env("PATH", path_with(&bin));
+    let out = output(merge, &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let scenario = script.split_whitespace().nth(2).expect("ubf sweep SCENARIO");
+    let whole = whole_sweep_of(dir.path(), scenario, FEW_SEEDS);
+    assert_same_summary(&shared, &whole);
+
+    // The shell around `ubf`: a shard whose runs failed (1) is done; bad
+    // input (2, which fails the Job) and a stop (130) are passed on.
+    let fake = dir.path().join("fake");
+    std::fs::create_dir(&fake).unwrap();
+    stand_in(&fake, "ubf", "exit \"$UBF_STATUS\"\n");
+    for (status, expected) in [(0, 0), (1, 0), (2, 2), (130, 130)] {
+        let mut pod = Command::new("sh");
+        pod.arg("-c").arg(&script).env("PATH", path_with(&fake)).env("UBF_STATUS", status.to_string());
+        assert_eq!(output(pod, &[]).status.code(), Some(expected), "ubf exiting {status}");
     }
 }
