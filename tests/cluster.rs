@@ -2,7 +2,8 @@
 //! array's variables and `--shard auto/N` from a Kubernetes Indexed Job's,
 //! the shards they run merge to the bytes one sweep writes, and what names
 //! no shard is refused with a sentence. The job files in `deploy/cluster/`
-//! run their sweep and its merge here, the scheduler stood in for.
+//! run their sweep and its merge here, the scheduler stood in for, and
+//! docs/cluster.md shows each as it is.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -420,5 +421,37 @@ fn the_indexed_job_runs_its_shards_and_the_merge_job_merges_them() {
         let mut pod = Command::new("sh");
         pod.arg("-c").arg(&script).env("PATH", path_with(&fake)).env("UBF_STATUS", status.to_string());
         assert_eq!(output(pod, &[]).status.code(), Some(expected), "ubf exiting {status}");
+    }
+}
+
+/// The fenced blocks of a Markdown page, their bodies as they are.
+fn fenced_blocks(page: &str) -> Vec<String> {
+    let mut blocks = Vec::new();
+    let mut open: Option<String> = None;
+    for line in page.lines() {
+        match (line.trim_start().starts_with("```"), open.take()) {
+            (true, Some(body)) => blocks.push(body),
+            (true, None) => open = Some(String::new()),
+            (false, Some(mut body)) => {
+                body.push_str(line);
+                body.push('\n');
+                open = Some(body);
+            }
+            (false, None) => {}
+        }
+    }
+    blocks
+}
+
+#[test]
+fn the_cluster_page_shows_every_job_file_as_it_is() {
+    let blocks = fenced_blocks(&read("docs/cluster.md"));
+    let mut files: Vec<_> =
+        std::fs::read_dir(root().join("deploy/cluster")).unwrap().map(|e| e.unwrap().path()).collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert!(blocks.contains(&text), "docs/cluster.md does not show {} as it is", file.display());
     }
 }
