@@ -17,6 +17,7 @@ mod images;
 mod inspect;
 mod robot;
 mod run;
+mod shard;
 mod sweep;
 
 use crate::ros2_log::LogFormat;
@@ -230,10 +231,11 @@ enum Command {
         /// Run only share K of N (from 0) of the runs, leaving their
         /// reports and `shard-K-of-N.json` in `--out` (which may hold other
         /// shards' output) instead of a summary; `ubf sweep merge` then
-        /// combines the shards. For a Slurm job array or a Kubernetes
-        /// indexed job.
-        #[arg(long, value_name = "K/N", value_parser = crate::sweep::Shard::parse)]
-        shard: Option<crate::sweep::Shard>,
+        /// combines the shards. `auto` takes K and N from a Slurm job
+        /// array's variables, `auto/N` takes K from a Kubernetes Indexed
+        /// Job's `JOB_COMPLETION_INDEX` (docs/cluster.md).
+        #[arg(long, value_name = "K/N|auto|auto/N", value_parser = shard::ShardSpec::parse)]
+        shard: Option<shard::ShardSpec>,
         /// Also write every run's trajectory.csv and plot.png.
         #[arg(long)]
         trajectories: bool,

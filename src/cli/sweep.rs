@@ -1,5 +1,6 @@
 //! `ubf sweep` and `ubf sweep merge`.
 
+use super::shard::ShardSpec;
 use super::{CliError, Exit, Outcome};
 use crate::scenario::Scenario;
 use crate::sweep::{Ended, Shard, SweepError, SweepItem, SweepSettings};
@@ -14,7 +15,7 @@ pub(super) struct SweepRequest<'a> {
     pub files: &'a [PathBuf],
     pub seeds: std::ops::Range<u64>,
     pub layout_seeds: Option<&'a [u64]>,
-    pub shard: Option<Shard>,
+    pub shard: Option<ShardSpec>,
     pub jobs: Option<usize>,
     pub out: &'a Path,
     pub trajectories: bool,
@@ -28,6 +29,7 @@ pub(super) struct SweepRequest<'a> {
 /// stopped it (`--resume` finishes it).
 pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
     let SweepRequest { files, seeds, layout_seeds, shard, jobs, out, trajectories, overwrite, resume, huge } = request;
+    let shard = shard.map(super::shard::resolve_here).transpose()?;
     let share = shard.map_or(1, |s| s.count);
     let layouts = layout_seeds.map_or(1, <[u64]>::len) as u64;
     let runs = (seeds.end - seeds.start).saturating_mul(files.len() as u64).saturating_mul(layouts).div_ceil(share);
