@@ -98,6 +98,19 @@ impl LiveServer {
         self.address
     }
 
+    /// Says on stderr where the view is served, and, off loopback, who can
+    /// watch it.
+    pub fn announce(&self) {
+        eprintln!("live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)", self.address);
+        if !self.address.ip().is_loopback() {
+            eprintln!(
+                "warning: the live view is served beyond this machine: anyone who can reach {} sees the robot, \
+                 where it is and what its sensors see, without a password or encryption",
+                self.address
+            );
+        }
+    }
+
     /// A sink showing one session, `run` in `world`, whose time 0 is now,
     /// on its own thread ([`LiveSink`]): a viewer that falls behind costs
     /// dropped records, never a tick.

@@ -151,7 +151,7 @@ pub fn run_until(
     let _live_server = match live.as_ref().and_then(|l| l.foxglove) {
         Some(address) => {
             let server = crate::live::LiveServer::serve(address, ("ubf.Report", crate::json_topics::report_schema()))?;
-            eprintln!("live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)", server.address());
+            server.announce();
             let view = server.view(run_message.clone(), world.clone())?;
             controller.add_sink(Box::new(view));
             Some(server)

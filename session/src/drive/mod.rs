@@ -209,7 +209,7 @@ fn drive_sessions(
         Some(address) => {
             let report = ("ubf.DriveReport", crate::json_topics::json_schema::<log::DriveReport>());
             let server = crate::live::LiveServer::serve(address, report)?;
-            eprintln!("live view on ws://{} (Foxglove: Open connection, Foxglove WebSocket)", server.address());
+            server.announce();
             Some(server)
         }
         None => None,
