@@ -1,6 +1,7 @@
 //! The workspace keeps its shape: no circle of files inside any crate (a
 //! file that uses another never ends up used by it, through any chain),
-//! and the product never depends on the research in `lab/`.
+//! the product never depends on the research in `lab/`, and no crate
+//! declares a dependency its code does not use.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -121,6 +122,57 @@ fn the_product_never_depends_on_the_lab() {
         for path in modules(&root.join(krate).join("src")).values() {
             let text = std::fs::read_to_string(path).unwrap();
             assert!(!text.contains("ubf_lab"), "{} names the lab", path.display());
+        }
+    }
+}
+
+/// The dependencies `manifest` declares (normal, dev and per-target), as
+/// the names code uses them by (`rand_chacha` for `rand-chacha`).
+fn declared_dependencies(manifest: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut in_dependencies = false;
+    for line in manifest.lines().map(str::trim) {
+        if line.starts_with('[') {
+            in_dependencies = line.ends_with("dependencies]") && !line.starts_with("[workspace");
+            continue;
+        }
+        if !in_dependencies || line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let name = line.split(['=', '.', ' ']).next().unwrap_or("");
+        names.push(name.replace('-', "_"));
+    }
+    names
+}
+
+#[test]
+fn every_crate_uses_the_dependencies_it_declares() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for krate in CRATES.iter().copied().chain(["examples/wander"]) {
+        let dir = root.join(krate);
+        let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
+        // The root package's examples/ holds other packages, not its own.
+        let folders: &[&str] =
+            if krate == "." { &["src", "tests", "benches"] } else { &["src", "tests", "benches", "examples"] };
+        let mut code = String::new();
+        for folder in folders {
+            let mut stack = vec![dir.join(folder)];
+            while let Some(path) = stack.pop() {
+                if path.is_dir() {
+                    stack.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+                } else if path.extension().is_some_and(|e| e == "rs") {
+                    let text = std::fs::read_to_string(&path).unwrap();
+                    code.extend(
+                        text.lines().filter(|l| !l.trim_start().starts_with("//")).map(|l| l.to_owned() + "\n"),
+                    );
+                }
+            }
+        }
+        for name in declared_dependencies(&manifest) {
+            let used = [format!("{name}::"), format!("use {name}"), format!("{name}!")]
+                .iter()
+                .any(|p| code.contains(p.as_str()));
+            assert!(used, "{krate}/Cargo.toml declares `{name}`, which its code never names: drop it");
         }
     }
 }

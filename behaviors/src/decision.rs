@@ -63,6 +63,10 @@ pub struct DecisionCosts {
     pub bridge_heading_var_per_m: f64,
 }
 
+// Each field's default is its own function, not `#[serde(default)]` on the
+// struct: serde builds a struct's whole default before it reads a field, and
+// this default comes from the built-in file being read, which would then
+// wait on itself.
 impl DecisionCosts {
     fn default_step_sigma() -> f64 {
         DecisionCosts::default().step_sigma_per_cv

@@ -9,9 +9,29 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use ubf_core::{Aim, LandmarkObservation, PanTilt, Robot, RobotError, RobotWrapper, State, StereoImages, Wraps};
-use ubf_perception::features::{FeatureConfig, StereoPipeline};
-use ubf_perception::source::CameraSource;
+use ubf_perception::features::{FeatureConfig, PipelineError, StereoPipeline};
+use ubf_perception::source::{CameraSource, SourceError};
 use ubf_perception::StereoCamera;
+
+/// What went wrong with the camera: the fault a [`RobotError::Camera`]
+/// carries.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CameraFault {
+    /// The source could not give a pair (a device gone, an unreadable
+    /// file).
+    #[error(transparent)]
+    Source(#[from] SourceError),
+    /// The feature pipeline refused a pair.
+    #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    /// A recorded pair's time, s, is too far off to be waited for.
+    #[error("a pair's time, {0} s, is beyond any clock")]
+    TimeBeyondAnyClock(f64),
+    /// The camera's thread panicked, with this message.
+    #[error("the camera's thread panicked: {0}")]
+    Panicked(String),
+}
 
 /// A processed pair: when it was taken, what was found in it, and the pair
 /// itself. The instant becomes a time on the controller's clock when the
@@ -20,7 +40,7 @@ type Frame = (Instant, Vec<LandmarkObservation>, Arc<StereoImages>);
 
 /// The camera's thread and what comes out of it.
 struct CameraThread {
-    frames: Receiver<Result<Frame, String>>,
+    frames: Receiver<Result<Frame, CameraFault>>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
 }
@@ -66,7 +86,7 @@ impl<R: Robot> CameraRobot<R> {
                 let run = || take_pairs(source.as_mut(), &pipeline, &sender, &flag, paced);
                 if let Err(panic) = ubf_core::catch_reported(run) {
                     let why = ubf_core::panic_message(panic.as_ref());
-                    let _ = sender.send(Err(format!("the camera's thread panicked: {why}")));
+                    let _ = sender.send(Err(CameraFault::Panicked(why)));
                 }
             })
             .map_err(RobotError::Io)?;
@@ -100,7 +120,7 @@ impl<R: Robot> CameraRobot<R> {
 fn take_pairs(
     source: &mut (dyn CameraSource + Send),
     pipeline: &StereoPipeline,
-    frames: &crossbeam_channel::Sender<Result<Frame, String>>,
+    frames: &crossbeam_channel::Sender<Result<Frame, CameraFault>>,
     stop: &AtomicBool,
     paced: bool,
 ) {
@@ -111,7 +131,7 @@ fn take_pairs(
             Ok(Some(pair)) => pair,
             Ok(None) => return,
             Err(e) => {
-                let _ = frames.send(Err(e.to_string()));
+                let _ = frames.send(Err(e.into()));
                 return;
             }
         };
@@ -119,7 +139,7 @@ fn take_pairs(
             let offset = pair.time - *first_time.get_or_insert(pair.time);
             let Some(due) = Duration::try_from_secs_f64(offset.max(0.0)).ok().and_then(|d| started.checked_add(d))
             else {
-                let _ = frames.send(Err(format!("a pair's time, {} s, is beyond any clock", pair.time)));
+                let _ = frames.send(Err(CameraFault::TimeBeyondAnyClock(pair.time)));
                 return;
             };
             // In short naps, so that a stop is not kept waiting.
@@ -128,7 +148,7 @@ fn take_pairs(
             }
         }
         let taken = Instant::now();
-        let found = pipeline.process(&pair.left, &pair.right).map_err(|e| e.to_string());
+        let found = pipeline.process(&pair.left, &pair.right).map_err(CameraFault::from);
         let frame = found.map(|landmarks| (taken, landmarks, Arc::new(pair.into_images())));
         match frames.try_send(frame) {
             Ok(()) | Err(crossbeam_channel::TrySendError::Full(_)) => {}
@@ -167,7 +187,7 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
                     state.stereo.calibration = Some(StereoCamera { mount, ..*camera });
                     state.stereo.images = Some(images);
                 }
-                Ok(Err(e)) => return Err(RobotError::Camera(e)),
+                Ok(Err(fault)) => return Err(RobotError::Camera(Box::new(fault))),
                 // No new pair, or the source has ended: the last frame stays.
                 Err(TryRecvError::Empty | TryRecvError::Disconnected) => return Ok(()),
             }

@@ -91,6 +91,83 @@ const ANSWER_WAIT: Duration = Duration::from_millis(1000);
 /// Pause between two rounds of reading the encoders.
 const POLL_PERIOD: Duration = Duration::from_millis(20);
 
+/// What went wrong with the head: the fault a [`RobotError::PanTilt`]
+/// carries, behind the head's connection.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PtuError {
+    /// Its link could not be opened.
+    #[error("opening its link: {0}")]
+    Open(#[source] io::Error),
+    /// Its thread could not be started.
+    #[error("starting its thread: {0}")]
+    Thread(#[source] io::Error),
+    /// A command could not be written.
+    #[error("writing `{command}`: {source}")]
+    Write {
+        /// The command.
+        command: String,
+        /// Why.
+        source: io::Error,
+    },
+    /// Reading the link failed.
+    #[error("reading: {0}")]
+    Read(#[source] io::Error),
+    /// The other end closed the link.
+    #[error("the link closed")]
+    Closed,
+    /// No answer came in time.
+    #[error("no answer to `{command}` within {within_ms} ms")]
+    NoAnswer {
+        /// The command or query.
+        command: String,
+        /// How long it was waited for, ms.
+        within_ms: u128,
+    },
+    /// What came back is not lines: another device on the line.
+    #[error("no line end in {bytes} bytes after `{command}`: is this a PTU?")]
+    NoLineEnd {
+        /// The command or query.
+        command: String,
+        /// Bytes that came without one.
+        bytes: usize,
+    },
+    /// The unit refused a command or query.
+    #[error("`{command}` refused: {message}")]
+    Refused {
+        /// The command or query.
+        command: String,
+        /// The unit's message.
+        message: String,
+    },
+    /// A query's answer holds no number.
+    #[error("`{query}` answered `{answer}`, not a number")]
+    NotANumber {
+        /// The query.
+        query: String,
+        /// Its answer.
+        answer: String,
+    },
+    /// The unit reported a resolution no angle can be computed with.
+    #[error("unusable resolution: {0:?}")]
+    UnusableResolution(PtuAxes),
+    /// The unit reported a minimum above a maximum.
+    #[error("limits out of order (minimum above maximum): {0:?}")]
+    LimitsOutOfOrder(PtuAxes),
+    /// The newest reading is too old to trust: the head may have stopped
+    /// answering, which must not pass for holding still.
+    #[error("no reading for {for_s:.2} s (stale after {after_s} s)")]
+    Stale {
+        /// Age of the newest reading, s.
+        for_s: f64,
+        /// The age a reading is refused at, s.
+        after_s: f64,
+    },
+    /// No reading has come yet.
+    #[error("no reading yet")]
+    NoReadingYet,
+}
+
 /// One answer of the unit.
 #[derive(Clone, Debug, PartialEq)]
 enum Answer {
@@ -135,9 +212,10 @@ struct Conversation {
 
 impl Conversation {
     /// Sends `text` and a delimiter, and waits for the answer.
-    fn ask(&mut self, text: &str) -> Result<Answer, String> {
-        self.link.write_all(format!("{text} ").as_bytes()).map_err(|e| format!("writing `{text}`: {e}"))?;
-        self.link.flush().map_err(|e| format!("writing `{text}`: {e}"))?;
+    fn ask(&mut self, text: &str) -> Result<Answer, PtuError> {
+        let written = |source| PtuError::Write { command: text.to_owned(), source };
+        self.link.write_all(format!("{text} ").as_bytes()).map_err(written)?;
+        self.link.flush().map_err(written)?;
         let deadline = Instant::now() + ANSWER_WAIT;
         loop {
             while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
@@ -147,36 +225,35 @@ impl Conversation {
                 }
             }
             if self.pending.len() > 4096 {
-                return Err(format!("no line end in {} bytes after `{text}`: is this a PTU?", self.pending.len()));
+                return Err(PtuError::NoLineEnd { command: text.to_owned(), bytes: self.pending.len() });
             }
             if Instant::now() > deadline {
-                return Err(format!("no answer to `{text}` within {} ms", ANSWER_WAIT.as_millis()));
+                return Err(PtuError::NoAnswer { command: text.to_owned(), within_ms: ANSWER_WAIT.as_millis() });
             }
             let mut buffer = [0u8; 256];
             match self.link.read(&mut buffer) {
-                Ok(0) => return Err("the link closed".into()),
+                Ok(0) => return Err(PtuError::Closed),
                 Ok(n) => self.pending.extend_from_slice(&buffer[..n]),
                 Err(e) if link::is_timeout(&e) => {}
-                Err(e) => return Err(format!("reading: {e}")),
+                Err(e) => return Err(PtuError::Read(e)),
             }
         }
     }
 
     /// A command that must be done.
-    fn command(&mut self, text: &str) -> Result<(), String> {
+    fn command(&mut self, text: &str) -> Result<(), PtuError> {
         match self.ask(text)? {
             Answer::Done(_) => Ok(()),
-            Answer::Refused(message) => Err(format!("`{text}` refused: {message}")),
+            Answer::Refused(message) => Err(PtuError::Refused { command: text.to_owned(), message }),
         }
     }
 
     /// A query whose answer is a number.
-    fn number(&mut self, text: &str) -> Result<f64, String> {
+    fn number(&mut self, text: &str) -> Result<f64, PtuError> {
         match self.ask(text)? {
-            Answer::Done(result) => {
-                first_number(&result).ok_or_else(|| format!("`{text}` answered `{result}`, not a number"))
-            }
-            Answer::Refused(message) => Err(format!("`{text}` refused: {message}")),
+            Answer::Done(answer) => first_number(&answer)
+                .ok_or_else(|| PtuError::NotANumber { query: text.to_owned(), answer: answer.clone() }),
+            Answer::Refused(message) => Err(PtuError::Refused { command: text.to_owned(), message }),
         }
     }
 }
@@ -201,8 +278,9 @@ struct Shared {
     target: Option<Aim>,
     /// The newest reading and when it was taken.
     reading: Option<(Instant, Aim)>,
-    /// Why the thread stopped, if it did.
-    failure: Option<String>,
+    /// Why the thread stopped, if it did (shared: every later command and
+    /// reading reports it).
+    failure: Option<Arc<PtuError>>,
 }
 
 /// A PTU head, driven from a thread of its own.
@@ -219,10 +297,9 @@ impl Ptu {
     /// speed, the held tilt) and reads its resolution, limits and angles;
     /// then keeps reading its encoders until dropped.
     pub fn connect(config: PtuConfig) -> Result<Ptu, RobotError> {
-        let link = link::open(&config.connection, config.baud)
-            .map_err(|e| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", config.connection)))?;
+        let failed = |fault: PtuError| RobotError::PanTilt { unit: config.connection.clone(), fault: Box::new(fault) };
+        let link = link::open(&config.connection, config.baud).map_err(|e| failed(PtuError::Open(e)))?;
         let mut talk = Conversation { link, pending: Vec::new() };
-        let failed = |e: String| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", config.connection));
         let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
         let first = Self::read(&mut talk, &axes, &config).map_err(failed)?;
         let shared = Arc::new(Mutex::new(Shared { reading: Some((Instant::now(), first)), ..Shared::default() }));
@@ -231,7 +308,7 @@ impl Ptu {
         let thread = std::thread::Builder::new()
             .name("pan-tilt".into())
             .spawn(move || Self::run(talk, axes, settings, &for_thread, &flag))
-            .map_err(|e| RobotError::PanTilt(format!("starting the pan-tilt thread: {e}")))?;
+            .map_err(|e| failed(PtuError::Thread(e)))?;
         Ok(Ptu { config, axes, shared, stop, thread: Some(thread) })
     }
 
@@ -240,16 +317,16 @@ impl Ptu {
         self.axes
     }
 
-    fn handshake(talk: &mut Conversation, config: &PtuConfig) -> Result<PtuAxes, String> {
+    fn handshake(talk: &mut Conversation, config: &PtuConfig) -> Result<PtuAxes, PtuError> {
         // Whatever the unit said before (a power-up banner) is not ours.
         let mut scratch = [0u8; 256];
         let quiet_until = Instant::now() + Duration::from_millis(100);
         while Instant::now() < quiet_until {
             match talk.link.read(&mut scratch) {
-                Ok(0) => return Err("the link closed".into()),
+                Ok(0) => return Err(PtuError::Closed),
                 Ok(_) => {}
                 Err(e) if link::is_timeout(&e) => {}
-                Err(e) => return Err(format!("reading: {e}")),
+                Err(e) => return Err(PtuError::Read(e)),
             }
         }
         talk.command("ED")?;
@@ -263,10 +340,10 @@ impl Ptu {
             tilt_limits: [whole(talk.number("TN")?), whole(talk.number("TX")?)],
         };
         if !(axes.pan_step > 0.0 && axes.tilt_step > 0.0 && axes.pan_step.is_finite() && axes.tilt_step.is_finite()) {
-            return Err(format!("unusable resolution: {axes:?}"));
+            return Err(PtuError::UnusableResolution(axes));
         }
         if axes.pan_limits[0] > axes.pan_limits[1] || axes.tilt_limits[0] > axes.tilt_limits[1] {
-            return Err(format!("limits out of order (minimum above maximum): {axes:?}"));
+            return Err(PtuError::LimitsOutOfOrder(axes));
         }
         let speed = (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0);
         talk.command(&format!("PS{speed}"))?;
@@ -289,7 +366,7 @@ impl Ptu {
         }
     }
 
-    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<Aim, String> {
+    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<Aim, PtuError> {
         let pan = talk.number("PP")? * axes.pan_step * Self::pan_sign(config);
         let tilt = talk.number("TP")? * axes.tilt_step;
         Ok(Aim { pan, tilt })
@@ -308,7 +385,7 @@ impl Ptu {
             match sent.and_then(|()| Self::read(&mut talk, &axes, &config)) {
                 Ok(aim) => lock().reading = Some((Instant::now(), aim)),
                 Err(e) => {
-                    lock().failure = Some(e);
+                    lock().failure = Some(Arc::new(e));
                     return;
                 }
             }
@@ -323,11 +400,14 @@ impl Ptu {
         self.shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
     }
 
+    /// `fault`, as the error of the head on this connection.
+    fn fault(&self, fault: impl std::error::Error + Send + Sync + 'static) -> RobotError {
+        RobotError::PanTilt { unit: self.config.connection.clone(), fault: Box::new(fault) }
+    }
+
     fn failure(&self) -> Option<RobotError> {
-        self.shared()
-            .failure
-            .as_ref()
-            .map(|e| RobotError::PanTilt(format!("pan-tilt unit on {}: {e}", self.config.connection)))
+        let failure = self.shared().failure.clone();
+        failure.map(|e| self.fault(e))
     }
 }
 
@@ -347,13 +427,11 @@ impl PanTilt for Ptu {
         let reading = self.shared().reading;
         match reading {
             Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok(aim),
-            Some((at, _)) => Err(RobotError::PanTilt(format!(
-                "pan-tilt unit on {}: no reading for {:.2} s (stale after {} s)",
-                self.config.connection,
-                at.elapsed().as_secs_f64(),
-                self.config.stale_after_s
-            ))),
-            None => Err(RobotError::PanTilt(format!("pan-tilt unit on {}: no reading yet", self.config.connection))),
+            Some((at, _)) => {
+                let (for_s, after_s) = (at.elapsed().as_secs_f64(), self.config.stale_after_s);
+                Err(self.fault(PtuError::Stale { for_s, after_s }))
+            }
+            None => Err(self.fault(PtuError::NoReadingYet)),
         }
     }
 }

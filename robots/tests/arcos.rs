@@ -86,6 +86,8 @@ fn the_wrong_robot_is_refused() {
     let link = link::open(&emulator.address, 9600).unwrap();
     let err = ArcosRobot::connect(link, RobotModel::p3dx(), &ConnectOptions::default()).err().unwrap();
     assert!(err.to_string().contains("expects a Pioneer p3dx"), "{err}");
+    // Not a lost link: a new session would meet the same robot.
+    assert!(matches!(err, ubf_core::RobotError::WrongRobot { .. }) && !err.is_link_loss(), "{err:?}");
     emulator.finish();
 }
 
@@ -177,15 +179,17 @@ fn a_dead_robot_is_reported_not_waited_for() {
     // The robot side goes away mid-run.
     emulator.finish();
     std::thread::sleep(Duration::from_millis(300));
-    let mut failed = false;
+    let mut failed = None;
     for _ in 0..20 {
-        if robot.sense(&mut state).is_err() || robot.act(&Command::Stop).is_err() {
-            failed = true;
+        if let Err(e) = robot.sense(&mut state).and_then(|()| robot.act(&Command::Stop)) {
+            failed = Some(e);
             break;
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    assert!(failed, "a vanished robot must surface as an error");
+    let failed = failed.expect("a vanished robot must surface as an error");
+    // The drive reopens the link on a lost link, and only on one.
+    assert!(failed.is_link_loss(), "{failed:?}");
     assert!(state.sensor_age > 0.3, "and the state says its data is old: {}", state.sensor_age);
 }
 

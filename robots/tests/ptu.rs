@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::{Aim, NullRobot, PanTilt, Robot, State, StereoCamera};
+use ubf_core::{Aim, NullRobot, PanTilt, Robot, RobotError, State, StereoCamera};
 use ubf_perception::features::FeatureConfig;
 use ubf_perception::source::ImageDirectory;
 use ubf_robots::arcos::link::{self, Link};
@@ -117,7 +117,10 @@ fn a_silent_head_is_reported_not_read_as_holding_still() {
     emulator.finish();
     // Within the answer wait (1 s) plus the staleness limit (0.5 s).
     std::thread::sleep(Duration::from_millis(1600));
-    let error = ptu.measured().unwrap_err().to_string();
+    let error = ptu.measured().unwrap_err();
+    // A head's fault, never the robot's lost link: nothing reconnects for it.
+    assert!(matches!(error, RobotError::PanTilt { .. }) && !error.is_link_loss(), "{error:?}");
+    let error = error.to_string();
     assert!(error.contains("pan-tilt unit on tcp://"), "{error}");
     assert!(ptu.command(Aim::default()).is_err());
 }

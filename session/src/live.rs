@@ -128,8 +128,9 @@ impl LiveServer {
 
 impl Drop for LiveServer {
     /// Closes the listening socket and every client's connection, waiting
-    /// [`CLOSE_WAIT`] at most: a viewer that has stopped reading never
-    /// answers its close, and must not hold the end of a run or a drive.
+    /// `CLOSE_WAIT` (a second) at most: a viewer that has stopped reading
+    /// never answers its close, and must not hold the end of a run or a
+    /// drive.
     fn drop(&mut self) {
         if let Some(server) = self.server.take() {
             let shutdown = server.stop();

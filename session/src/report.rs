@@ -2,6 +2,10 @@
 
 use serde::Serialize;
 use ubf_core::Pose2;
+// For the fields' links only: their docs are also the JSON log's schema
+// descriptions, so a link's target is named here rather than in the text.
+#[cfg(doc)]
+use ubf_behaviors::decision::DecisionCosts;
 
 /// Why a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, schemars::JsonSchema)]

@@ -29,6 +29,15 @@ fn qos_of(topic: &str) -> Qos {
     }
 }
 
+/// A message of one type for a topic whose writer was made for another: a
+/// fault of the view, reported instead of published.
+#[derive(Debug, thiserror::Error)]
+#[error("a {message} on a topic of another type")]
+struct OtherType {
+    /// The message's ROS 2 type.
+    message: &'static str,
+}
+
 /// Publishes ticks on ROS 2.
 pub struct Ros2Publisher {
     view: Ros2View,
@@ -74,11 +83,10 @@ impl Ros2Publisher {
             (Writer::Image(w), Message::Image(m)) => w.publish(m),
             (Writer::Pose(w), Message::Pose(m)) => w.publish(m),
             (Writer::Tick(w), Message::Tick(m)) => w.publish(m),
-            (_, message) => Err(RobotError::Other(format!(
-                "{}: a {} on a topic of another type",
-                self.node.resolve(topic),
-                message.type_name()
-            ))),
+            (_, message) => Err(RobotError::Middleware {
+                what: self.node.resolve(topic),
+                source: Box::new(OtherType { message: message.type_name() }),
+            }),
         }
     }
 }

@@ -67,8 +67,7 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
             rotate_then_translate,
             odometry_fusion,
         } => {
-            let profile = rotate_then_translate
-                .then_some(ubf_robots::sim::MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 });
+            let profile = rotate_then_translate.then(ubf_robots::sim::MotionProfile::rotate_then_translate);
             let jobs = jobs.unwrap_or_else(super::cores);
             let options =
                 EndpointOptions { seeds, jobs, rendered, layout_seed, objective, model, profile, odometry_fusion };

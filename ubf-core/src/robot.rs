@@ -1,43 +1,6 @@
 //! The robot seen from the controller: sense, act, shut down.
 
-use crate::{Command, Hold, Limits, Pose2, State};
-
-/// Why a robot could not sense or act. More kinds may come; match with a
-/// catch-all arm.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum RobotError {
-    /// The link to the robot is gone (cable, socket, emulator killed).
-    #[error("robot disconnected: {0}")]
-    Disconnected(String),
-    /// Reading or writing the link failed.
-    #[error("robot I/O: {0}")]
-    Io(#[from] std::io::Error),
-    /// The robot said something that makes no sense.
-    #[error("robot protocol: {0}")]
-    Protocol(String),
-    /// The camera failed (an unreadable pair, a device gone): a camera
-    /// fault, not a lost link, so nothing reconnects to the robot, and its
-    /// motors are never enabled again, because of it.
-    #[error("camera: {0}")]
-    Camera(String),
-    /// The pan-tilt unit the camera rides on failed (its link, a reading
-    /// gone stale): like a camera fault, not a lost link to the robot.
-    #[error("{0}")]
-    PanTilt(String),
-    /// Anything else.
-    #[error("{0}")]
-    Other(String),
-}
-
-impl RobotError {
-    /// Whether the link to the robot itself was lost, so that reopening it
-    /// may help: not a fault of the camera or another device it carries,
-    /// for which a new session would only enable the motors again.
-    pub fn is_link_loss(&self) -> bool {
-        matches!(self, RobotError::Disconnected(_) | RobotError::Io(_))
-    }
-}
+use crate::{Command, Hold, Limits, Pose2, RobotError, State};
 
 /// A robot the controller can drive: a simulator, a serial-port Powerbot, or
 /// a wrapper around either (a limiter, a recorder, a fault injector).
@@ -274,8 +237,8 @@ impl<R: Robot> RobotWrapper for VelocityLimiter<R> {
 
 #[cfg(test)]
 mod tests {
-    use super::{NullRobot, Robot, RobotError, RobotWrapper, VelocityLimiter, Wraps};
-    use crate::{Command, Limits, State, Turn};
+    use super::{NullRobot, Robot, RobotWrapper, VelocityLimiter, Wraps};
+    use crate::{Command, Limits, RobotError, State, Turn};
 
     /// A wrapper that writes only `act`: it counts the commands.
     struct Counting {

@@ -6,7 +6,7 @@
 //! `sensor_age`), not by the wall, so the same policy runs, and is tested,
 //! on the simulator's clock and on a real robot's.
 
-use crate::{Command, Pose2, Robot, RobotError, RobotWrapper, State, Wraps};
+use crate::{Command, LinkLoss, Pose2, Robot, RobotError, RobotWrapper, State, Wraps};
 use serde::Deserialize;
 
 /// When to hold the robot still, whatever the behaviours want.
@@ -187,10 +187,10 @@ impl<R: Robot> RobotWrapper for SafetyGuard<R> {
         let age = state.sensor_age.min(state.time - started);
         if age > self.policy.link_lost_after_s {
             self.hold = Some(Hold::StaleData);
-            return Err(RobotError::Disconnected(if state.sensor_age.is_finite() {
-                format!("no sensor data for {:.2} s", state.sensor_age)
+            return Err(RobotError::from(if state.sensor_age.is_finite() {
+                LinkLoss::NoSensorData { for_s: state.sensor_age }
             } else {
-                format!("no sensor data in the first {:.2} s", state.time - started)
+                LinkLoss::NoSensorDataYet { within_s: state.time - started }
             }));
         }
         self.pose = state.pose;
@@ -241,7 +241,7 @@ mod tests {
     // Not `super::*`: with `RobotWrapper` in scope as well as `Robot`, a
     // guard's `sense` would be ambiguous.
     use super::{Hold, SafetyGuard, SafetyPolicy};
-    use crate::{Command, NullRobot, Robot, RobotError, State, Turn, Wraps};
+    use crate::{Command, LinkLoss, NullRobot, Robot, RobotError, State, Turn, Wraps};
 
     const GO: Command = Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) };
 
@@ -264,7 +264,7 @@ mod tests {
         assert_eq!(guard.hold(), Some(Hold::StaleData));
         assert_eq!(tick(&mut guard, 0.8, 0.0).unwrap(), GO, "fresh again");
         let lost = tick(&mut guard, 2.2, 1.31).unwrap_err();
-        assert!(matches!(lost, RobotError::Disconnected(_)), "{lost}");
+        assert!(matches!(lost, RobotError::Disconnected { reason: LinkLoss::NoSensorData { .. } }), "{lost}");
     }
 
     #[test]
@@ -272,7 +272,9 @@ mod tests {
         let mut guard = SafetyGuard::new(NullRobot::default(), SafetyPolicy::default());
         assert!(tick(&mut guard, 10.0, f64::INFINITY).is_ok());
         assert!(tick(&mut guard, 11.29, f64::INFINITY).is_ok());
-        assert!(tick(&mut guard, 11.31, f64::INFINITY).is_err());
+        let never = tick(&mut guard, 11.31, f64::INFINITY).unwrap_err();
+        assert!(matches!(never, RobotError::Disconnected { reason: LinkLoss::NoSensorDataYet { .. } }), "{never}");
+        assert_eq!(never.to_string(), "robot disconnected: no sensor data in the first 1.31 s");
     }
 
     #[test]

@@ -67,7 +67,7 @@ pub enum Steer {
     Both,
 }
 
-/// Settings of [`ActionAiding`], as written in a scenario file.
+/// Settings of [`ActionAiding`](super::ActionAiding), as written in a scenario file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ActionAidingConfig {

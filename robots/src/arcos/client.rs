@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use ubf_core::{Bumpers, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
+use ubf_core::{Bumpers, Command, Limits, LinkLoss, Pose2, RangeReading, Robot, RobotError, State, Turn};
 
 /// How long to wait for each handshake reply.
 const REPLY_TIMEOUT: Duration = Duration::from_millis(500);
@@ -101,8 +101,27 @@ struct Latest {
     arrived: Option<Instant>,
     /// Latest range per sonar slot of the model, range units.
     ranges_mm: Vec<Option<u16>>,
-    /// The link failed or closed.
-    ended: bool,
+    /// How the link ended, if it did.
+    ended: Option<Ended>,
+}
+
+/// How the reader's link ended: the reason kept for every later tick that
+/// asks (a [`LinkLoss`] holds errors that cannot be copied).
+#[derive(Clone, Copy, Debug)]
+enum Ended {
+    /// The other end closed it.
+    Closed,
+    /// A read failed with this kind of error.
+    Failed(io::ErrorKind),
+}
+
+impl From<Ended> for LinkLoss {
+    fn from(ended: Ended) -> Self {
+        match ended {
+            Ended::Closed => LinkLoss::Closed,
+            Ended::Failed(kind) => LinkLoss::ReadFailed(kind),
+        }
+    }
 }
 
 /// What a signal handler needs to stop the robot while the control loop is
@@ -196,7 +215,7 @@ fn next_body(
             return Ok(None);
         }
         match link.read(&mut buffer) {
-            Ok(0) => return Err(RobotError::Disconnected("the link closed".into())),
+            Ok(0) => return Err(LinkLoss::Closed.into()),
             Ok(n) => decoder.push(&buffer[..n]),
             Err(e) if is_timeout(&e) => {}
             Err(e) => return Err(e.into()),
@@ -216,7 +235,8 @@ fn handshake(link: &mut dyn Link) -> Result<Identity, RobotError> {
             match body.first() {
                 Some(&first) if first == echo => {
                     if echo == 2 {
-                        return Identity::parse(&body).map_err(|e| RobotError::Protocol(e.to_string()));
+                        return Identity::parse(&body)
+                            .map_err(|e| RobotError::Protocol { what: "the SYNC2 reply".into(), source: Box::new(e) });
                     }
                 }
                 Some(0x32 | 0x33) => {
@@ -229,14 +249,16 @@ fn handshake(link: &mut dyn Link) -> Result<Identity, RobotError> {
             }
         }
     }
-    Err(RobotError::Disconnected(format!("no handshake after {ATTEMPTS} attempts")))
+    Err(LinkLoss::NoHandshake { attempts: ATTEMPTS }.into())
 }
 
 /// HOSTBAUD: tells the controller to switch to `baud`, lets the packet
 /// drain at the old rate, then follows on this side. Only on a serial line.
 fn switch_baud(link: &mut dyn Link, baud: u32) -> Result<(), RobotError> {
-    let code = baud_code(baud).ok_or_else(|| {
-        RobotError::Protocol(format!("switch_to_baud {baud}: the controller offers 9600, 19200, 38400, 57600, 115200"))
+    let code = baud_code(baud).ok_or_else(|| RobotError::Setting {
+        setting: "switch_to_baud",
+        value: baud.to_string(),
+        expected: "a rate the controller offers (9600, 19200, 38400, 57600 or 115200), or 0 to stay at `baud`",
     })?;
     send(link, ClientCommand::HostBaud(code))?;
     std::thread::sleep(Duration::from_millis(50));
@@ -254,13 +276,15 @@ fn request_config(link: &mut dyn Link) -> Result<Option<ConfigPacket>, RobotErro
     while let Some(body) = next_body(link, &mut decoder, deadline.saturating_duration_since(Instant::now()))? {
         heard = true;
         if body.first() == Some(&CONFIG_TYPE) {
-            return ConfigPacket::parse(&body).map(Some).map_err(|e| RobotError::Protocol(format!("CONFIG: {e}")));
+            return ConfigPacket::parse(&body)
+                .map(Some)
+                .map_err(|e| RobotError::Protocol { what: "CONFIG".into(), source: Box::new(e) });
         }
     }
     if heard {
         Ok(None)
     } else {
-        Err(RobotError::Disconnected("no packet after OPEN".into()))
+        Err(LinkLoss::NoReply { command: "OPEN" }.into())
     }
 }
 
@@ -279,10 +303,10 @@ impl ArcosRobot {
         if !identity.class.eq_ignore_ascii_case(&model.class)
             || !identity.subclass.eq_ignore_ascii_case(&model.subclass)
         {
-            return Err(RobotError::Protocol(format!(
-                "the robot is a {} {} ({}), the configuration expects a {} {}",
-                identity.class, identity.subclass, identity.name, model.class, model.subclass
-            )));
+            return Err(RobotError::WrongRobot {
+                found: format!("{} {} ({})", identity.class, identity.subclass, identity.name),
+                expected: format!("{} {}", model.class, model.subclass),
+            });
         }
         let target = model.arcos.switch_to_baud;
         let switched = match link.baud() {
@@ -294,9 +318,9 @@ impl ArcosRobot {
         };
         send(link.as_mut(), ClientCommand::Open)?;
         let config = request_config(link.as_mut()).map_err(|e| match e {
-            RobotError::Disconnected(why) if switched => RobotError::Disconnected(format!(
-                "{why} after switching to {target} baud; if the robot cannot, set switch_to_baud: 0 in its model"
-            )),
+            RobotError::Disconnected { reason } if switched => {
+                LinkLoss::AfterBaudSwitch { baud: target, lost: Box::new(reason) }.into()
+            }
             e => e,
         })?;
         let mut limits = Limits::new(model.max_velocity, model.max_rot_velocity_deg.to_radians());
@@ -414,13 +438,15 @@ fn read_sips(mut link: Box<dyn Link>, latest: &Mutex<Latest>, sonar_slot: &[Opti
     let mut decoder = StreamDecoder::new();
     let mut unwrapper = Unwrapper::default();
     let mut buffer = [0u8; 512];
-    let end = |latest: &Mutex<Latest>| latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner).ended = true;
+    let end = |latest: &Mutex<Latest>, how| {
+        latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner).ended = Some(how);
+    };
     while !stop.load(Ordering::Relaxed) {
         match link.read(&mut buffer) {
-            Ok(0) => return end(latest),
+            Ok(0) => return end(latest, Ended::Closed),
             Ok(n) => decoder.push(&buffer[..n]),
             Err(e) if is_timeout(&e) => continue,
-            Err(_) => return end(latest),
+            Err(e) => return end(latest, Ended::Failed(e.kind())),
         }
         while let Some(body) = decoder.next_body() {
             let Ok(mut sip) = Sip::parse(&body) else { continue };
@@ -476,7 +502,7 @@ impl ArcosRobot {
         while asked.elapsed() < bound {
             std::thread::sleep(Duration::from_millis(10));
             let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            if latest.ended {
+            if latest.ended.is_some() {
                 return;
             }
             let fresh = latest.arrived.is_some_and(|t| t > asked);
@@ -534,7 +560,7 @@ impl Robot for ArcosRobot {
         };
         let Some(sip) = &self.sip else {
             state.sensor_age = f64::INFINITY;
-            return if ended { Err(RobotError::Disconnected("no SIP ever arrived".into())) } else { Ok(()) };
+            return ended.map_or(Ok(()), |how| Err(LinkLoss::from(how).into()));
         };
         let odometry = Pose2::new(
             position.0 as f64 * a.dist_conv_factor / 1000.0,
@@ -558,10 +584,7 @@ impl Robot for ArcosRobot {
         state.estop = sip.estop();
         state.battery_volts = Some(sip.tail.battery_x10.map_or(f64::from(sip.battery) / 10.0, |b| f64::from(b) / 10.0));
         state.sensor_age = self.last_sip_at.map_or(f64::INFINITY, |t| t.elapsed().as_secs_f64());
-        if ended {
-            return Err(RobotError::Disconnected("the reader stopped: link lost".into()));
-        }
-        Ok(())
+        ended.map_or(Ok(()), |how| Err(LinkLoss::from(how).into()))
     }
 
     fn act(&mut self, command: &Command) -> Result<(), RobotError> {

@@ -10,7 +10,7 @@ use rustdds::{
     DomainParticipant, DomainParticipantStatusEvent, QosPolicies, QosPolicyBuilder, StatusEvented, TopicKind,
 };
 use serde::Deserialize;
-use ubf_core::RobotError;
+use ubf_core::{LinkLoss, RobotError};
 
 /// A topic's quality of service, as ROS 2 names its stock profiles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -62,7 +62,11 @@ pub struct Publisher<M: RosMessage> {
 impl<M: RosMessage> Publisher<M> {
     /// Publishes `message`.
     pub fn publish(&self, message: M) -> Result<(), RobotError> {
-        self.writer.write(message, None).map_err(|e| RobotError::Disconnected(format!("publishing {}: {e}", self.name)))
+        self.writer.write(message, None).map_err(|e| {
+            // The error carries the message back; a failure needs only why.
+            let source = Box::new(e.forget_data());
+            LinkLoss::SendFailed { what: format!("publishing {}", self.name), source }.into()
+        })
     }
 
     /// Waits up to `wait` for every matched reader to acknowledge what was
@@ -92,7 +96,12 @@ impl<M: RosMessage> Subscription<M> {
             match self.reader.take_next_sample() {
                 Ok(Some(sample)) => latest = Some(sample.into_value()),
                 Ok(None) => return Ok(latest),
-                Err(e) => return Err(RobotError::Protocol(format!("reading {}: {e}", self.name))),
+                Err(e) => {
+                    return Err(RobotError::Protocol {
+                        what: format!("a message on {}", self.name),
+                        source: Box::new(e),
+                    })
+                }
             }
         }
     }
@@ -109,14 +118,21 @@ pub struct Node {
     seen: Vec<Endpoint>,
 }
 
+/// DDS could not set up `what`.
+fn setup(what: String, e: impl std::error::Error + Send + Sync + 'static) -> RobotError {
+    RobotError::Middleware { what, source: Box::new(e) }
+}
+
 /// `ROS_DOMAIN_ID`, as ROS 2 reads it: unset or empty is domain 0.
 pub fn domain_from_env() -> Result<u16, RobotError> {
     match std::env::var("ROS_DOMAIN_ID") {
         Err(_) => Ok(0),
         Ok(text) if text.trim().is_empty() => Ok(0),
         // RTPS's port formula leaves room for domains 0 to 232.
-        Ok(text) => text.trim().parse::<u16>().ok().filter(|d| *d <= 232).ok_or_else(|| {
-            RobotError::Other(format!("ROS_DOMAIN_ID is `{text}`; it must be a whole number from 0 to 232"))
+        Ok(text) => text.trim().parse::<u16>().ok().filter(|d| *d <= 232).ok_or_else(|| RobotError::Setting {
+            setting: "ROS_DOMAIN_ID",
+            value: text.clone(),
+            expected: "a whole number from 0 to 232",
         }),
     }
 }
@@ -124,12 +140,12 @@ pub fn domain_from_env() -> Result<u16, RobotError> {
 impl Node {
     /// Joins `domain` with topics under `namespace` (`""` or `/robot1`).
     pub fn join(domain: u16, namespace: &str) -> Result<Node, RobotError> {
-        let fail =
-            |what: &str, e: &dyn std::fmt::Display| RobotError::Other(format!("ROS 2 domain {domain}: {what}: {e}"));
-        let participant = DomainParticipant::new(domain).map_err(|e| fail("joining", &e))?;
+        let in_domain = |what: &str| format!("ROS 2 domain {domain}: {what}");
+        let participant = DomainParticipant::new(domain).map_err(|e| setup(in_domain("joining"), e))?;
         let qos = QosPolicyBuilder::new().build();
-        let publisher = participant.create_publisher(&qos).map_err(|e| fail("creating a publisher", &e))?;
-        let subscriber = participant.create_subscriber(&qos).map_err(|e| fail("creating a subscriber", &e))?;
+        let publisher = participant.create_publisher(&qos).map_err(|e| setup(in_domain("creating a publisher"), e))?;
+        let subscriber =
+            participant.create_subscriber(&qos).map_err(|e| setup(in_domain("creating a subscriber"), e))?;
         let namespace = namespace.trim_matches('/');
         let namespace = if namespace.is_empty() { String::new() } else { format!("/{namespace}") };
         Ok(Node { participant, publisher, subscriber, namespace, domain, seen: Vec::new() })
@@ -154,7 +170,7 @@ impl Node {
         let dds_name = format!("rt{}", self.resolve(name));
         self.participant
             .create_topic(dds_name, M::dds_name(), &qos.policies(), TopicKind::NoKey)
-            .map_err(|e| RobotError::Other(format!("ROS 2 topic {}: {e}", self.resolve(name))))
+            .map_err(|e| setup(format!("ROS 2 topic {}", self.resolve(name)), e))
     }
 
     /// A writer of `M` on topic `name`.
@@ -163,7 +179,7 @@ impl Node {
         let name = self.resolve(name);
         match self.publisher.create_datawriter_no_key_cdr::<M>(&topic, Some(qos.policies())) {
             Ok(writer) => Ok(Publisher { writer, name }),
-            Err(e) => Err(RobotError::Other(format!("publishing {name}: {e}"))),
+            Err(e) => Err(setup(format!("publishing {name}"), e)),
         }
     }
 
@@ -173,7 +189,7 @@ impl Node {
         let name = self.resolve(name);
         match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies())) {
             Ok(reader) => Ok(Subscription { reader, name }),
-            Err(e) => Err(RobotError::Other(format!("subscribing {name}: {e}"))),
+            Err(e) => Err(setup(format!("subscribing {name}"), e)),
         }
     }
 

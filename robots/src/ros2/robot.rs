@@ -5,7 +5,7 @@ use super::msg::{LaserScan, Odometry, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
 use serde::Deserialize;
 use std::time::{Duration, Instant};
-use ubf_core::{angle_difference, Command, Limits, Pose2, RangeReading, Robot, RobotError, State, Turn};
+use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading, Robot, RobotError, State, Turn};
 
 /// The `ros2: (...)` settings of a robot file. The defaults are ROS 2's
 /// conventions: topics `cmd_vel`, `odom`, `scan` in the root namespace,
@@ -104,7 +104,7 @@ impl Ros2Robot {
             }
             if Instant::now() >= deadline {
                 let topic = node.resolve(&config.odom);
-                let why = node
+                let diagnosis = node
                     .why_unheard::<Odometry>(&config.odom, config.odom_qos)
                     .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
                     .unwrap_or_else(|| {
@@ -113,10 +113,8 @@ impl Ros2Robot {
                              this ROS_DOMAIN_ID, publishing nav_msgs/msg/Odometry?"
                         )
                     });
-                return Err(RobotError::Disconnected(format!(
-                    "no odometry on {topic} within {:.1} s: {why}",
-                    config.connect_timeout_s
-                )));
+                let within_s = config.connect_timeout_s;
+                return Err(LinkLoss::TopicUnheard { what: "odometry", topic, within_s, diagnosis }.into());
             }
             node.watch_discovery();
             std::thread::sleep(Duration::from_millis(10));
@@ -157,10 +155,11 @@ impl Ros2Robot {
         self.cmd_vel.publish(twist)
     }
 
-    /// Sends a zero twist and says why the link is lost.
-    fn lost(&mut self, why: String) -> RobotError {
+    /// Sends a zero twist and says why the link is lost: `topic`, which
+    /// carries `what`, has been silent for `silent`.
+    fn lost(&mut self, what: &'static str, topic: &str, silent: Duration) -> RobotError {
         let _ = self.publish(Twist::default());
-        RobotError::Disconnected(why)
+        LinkLoss::TopicSilent { what, topic: self.node.resolve(topic), for_s: silent.as_secs_f64() }.into()
     }
 }
 
@@ -188,16 +187,16 @@ impl Robot for Ros2Robot {
         }
         let age = now - self.latest_odom.1;
         if age > self.stale_after {
-            let topic = self.node.resolve(&self.config.odom);
-            return Err(self.lost(format!("no odometry on {topic} for {:.2} s", age.as_secs_f64())));
+            let topic = self.config.odom.clone();
+            return Err(self.lost("odometry", &topic, age));
         }
         if let Some(scan) = self.scan.take_latest()? {
             self.latest_scan = Some((scan, now));
         }
         match &self.latest_scan {
             Some((_, at)) if now - *at > STALE_SCAN.max(self.stale_after) => {
-                let topic = self.node.resolve(&self.config.scan);
-                return Err(self.lost(format!("no scan on {topic} for {:.2} s", (now - *at).as_secs_f64())));
+                let (topic, silent) = (self.config.scan.clone(), now - *at);
+                return Err(self.lost("scan", &topic, silent));
             }
             Some((scan, _)) => ranges_of(scan, &mut state.ranges),
             None => state.ranges.clear(),

@@ -53,32 +53,33 @@ impl MotionProfile {
     fn default_tolerance_deg() -> f64 {
         2.0
     }
+
+    /// The thesis's decoupled motion with the default heading tolerance,
+    /// as a scenario file's `RotateThenTranslate()` gives it.
+    pub fn rotate_then_translate() -> Self {
+        MotionProfile::RotateThenTranslate { heading_tolerance_deg: Self::default_tolerance_deg() }
+    }
 }
 
-/// How odometry differs from the truth.
+/// How odometry differs from the truth; a field left out keeps its
+/// default (perfect odometry).
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct OdometryErrors {
     /// True distance per encoder distance of the left wheel (a soft tyre is
     /// below 1).
-    #[serde(default = "OdometryErrors::one", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub left_scale: f64,
     /// True distance per encoder distance of the right wheel.
-    #[serde(default = "OdometryErrors::one", deserialize_with = "positive")]
+    #[serde(deserialize_with = "positive")]
     pub right_scale: f64,
     /// A steady turn while driving that odometry does not see, °/m;
     /// negative veers right, like the thesis's robot (§4.4.1).
-    #[serde(default, deserialize_with = "finite")]
+    #[serde(deserialize_with = "finite")]
     pub veer_deg_per_m: f64,
     /// Random heading slip, ° per √m driven.
-    #[serde(default, deserialize_with = "non_negative")]
+    #[serde(deserialize_with = "non_negative")]
     pub slip_deg_per_sqrt_m: f64,
-}
-
-impl OdometryErrors {
-    fn one() -> f64 {
-        1.0
-    }
 }
 
 impl Default for OdometryErrors {
@@ -322,8 +323,19 @@ mod tests {
     }
 
     #[test]
+    fn settings_written_without_fields_take_their_one_default() {
+        use ubf_core::config::from_ron;
+        let profile: MotionProfile = from_ron("RotateThenTranslate()").unwrap();
+        assert_eq!(profile, MotionProfile::rotate_then_translate());
+        assert_eq!(from_ron::<OdometryErrors>("()").unwrap(), OdometryErrors::default());
+        let scaled: OdometryErrors = from_ron("(left_scale: 0.98)").unwrap();
+        assert_eq!(scaled, OdometryErrors { left_scale: 0.98, ..OdometryErrors::default() });
+        assert_eq!(from_ron::<crate::sim::sonar::SonarConfig>("()").unwrap(), Default::default());
+    }
+
+    #[test]
     fn rotate_then_translate_never_does_both() {
-        let profile = MotionProfile::RotateThenTranslate { heading_tolerance_deg: 2.0 };
+        let profile = MotionProfile::rotate_then_translate();
         let mut body = Body::new(config(profile, OdometryErrors::default()));
         let mut rng = ChaCha8Rng::seed_from_u64(0);
         let command = Command::Drive { velocity: 0.5, turn: Turn::Heading { heading: 1.0, max_rate: 1.0 } };

@@ -13,7 +13,6 @@ use ubf_core::{Pose2, RangeReading};
 #[serde(default, deny_unknown_fields)]
 pub struct SonarConfig {
     /// Whether the robot has its sonar on.
-    #[serde(default = "SonarConfig::yes")]
     pub enabled: bool,
     /// Farthest echo reported, m.
     #[serde(deserialize_with = "positive")]
@@ -27,12 +26,6 @@ pub struct SonarConfig {
     /// The transducers; by default the robot model's ring.
     #[serde(default)]
     pub units: Option<Vec<SonarUnit>>,
-}
-
-impl SonarConfig {
-    fn yes() -> bool {
-        true
-    }
 }
 
 impl Default for SonarConfig {

@@ -68,8 +68,8 @@ pub enum DriveError {
         source: std::io::Error,
     },
     /// Publishing on ROS 2 could not start.
-    #[error("{0}")]
-    Ros2(String),
+    #[error(transparent)]
+    Ros2(RobotError),
     /// The live view could not be served (checked before the motors go
     /// on).
     #[error(transparent)]
@@ -353,8 +353,7 @@ fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -
     }
     let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
     let shown = Shown { robot: !ros2_robot, images: config.log_images, tree: true };
-    let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace)
-        .map_err(|e| DriveError::Ros2(e.to_string()))?;
+    let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace).map_err(DriveError::Ros2)?;
     controller.add_sink(Box::new(publisher));
     Ok(())
 }
