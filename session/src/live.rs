@@ -5,7 +5,8 @@
 //! The server only advertises and sends: it takes no messages, parameters
 //! or service calls from its clients, so a viewer cannot move the robot.
 //! It still shows the robot's surroundings to anyone who can reach its
-//! address, which is why it binds to loopback unless told otherwise.
+//! address: it binds only where it is told, the docs give loopback, and
+//! [`LiveServer::announce`] warns when it is anything else.
 //!
 //! A slow viewer never slows a tick: the view runs on a thread of its own
 //! behind a [`BackgroundSink`], which drops records when it falls behind
