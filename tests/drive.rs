@@ -2,71 +2,18 @@
 //! TCP loopback: drive to a goal, stop on SIGTERM, close the session, keep
 //! the log.
 
+mod common;
+
+use common::{emulator, emulator_with, wait_for, Killed};
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
-
-/// A child process killed when dropped, so a failed assertion never leaves
-/// an emulator running (holding the test's output open).
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-impl std::ops::Deref for Killed {
-    type Target = Child;
-    fn deref(&self) -> &Child {
-        &self.0
-    }
-}
-
-impl std::ops::DerefMut for Killed {
-    fn deref_mut(&mut self) -> &mut Child {
-        &mut self.0
-    }
-}
-
-fn emulator() -> (Killed, String, BufReader<std::process::ChildStdout>) {
-    emulator_with(&["--listen", "127.0.0.1:0"])
-}
-
-/// `ubf emulate-powerbot ARGS`, with the address it serves on.
-fn emulator_with(args: &[&str]) -> (Killed, String, BufReader<std::process::ChildStdout>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .arg("emulate-powerbot")
-        .args(args)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = BufReader::new(child.stdout.take().unwrap());
-    let mut line = String::new();
-    out.read_line(&mut line).unwrap();
-    assert!(line.starts_with("emulating a Powerbot on "), "{line}");
-    let address = line.trim().rsplit(' ').next().unwrap().to_owned();
-    (Killed(child), address, out)
-}
 
 /// A loopback address nothing listens on: a port the system just handed
 /// out and took back (a fixed one may be held by another program).
 fn unused_address() -> String {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     listener.local_addr().unwrap().to_string()
-}
-
-/// Waits up to `seconds` for `child` to exit.
-fn wait_for(child: &mut Child, seconds: f64) -> Option<std::process::ExitStatus> {
-    let deadline = std::time::Instant::now() + Duration::from_secs_f64(seconds);
-    while std::time::Instant::now() < deadline {
-        if let Some(status) = child.try_wait().unwrap() {
-            return Some(status);
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    None
 }
 
 fn config(address: &str, log: &std::path::Path, extra: &str) -> String {

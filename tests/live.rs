@@ -4,22 +4,14 @@
 //! receives, their schemas, and that a viewer who stops reading slows
 //! nothing.
 
+mod common;
+
+use common::{emulator, wait_for, Killed};
 use serde_json::Value;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
-use std::process::{Child, ChildStderr, Command, Stdio};
-use std::time::{Duration, Instant};
-
-/// A child process killed when dropped, so a failed assertion never leaves
-/// a run or an emulator behind.
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
+use std::process::{ChildStderr, Command, Stdio};
+use std::time::Instant;
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -65,18 +57,6 @@ fn watch(url: &str, seconds: f64, stall: bool) -> Value {
 fn channel<'a>(seen: &'a Value, topic: &str) -> &'a Value {
     let channels = seen["channels"].as_array().unwrap();
     channels.iter().find(|c| c["topic"] == topic).unwrap_or_else(|| panic!("no {topic} advertised: {seen}"))
-}
-
-/// Waits up to `seconds` for `child` to exit.
-fn wait_for(child: &mut Killed, seconds: f64) -> Option<std::process::ExitStatus> {
-    let deadline = Instant::now() + Duration::from_secs_f64(seconds);
-    while Instant::now() < deadline {
-        if let Some(status) = child.0.try_wait().unwrap() {
-            return Some(status);
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    None
 }
 
 /// What a viewer needs of every live view: the robot's pose, the scene and
@@ -151,16 +131,7 @@ fn a_viewer_that_stops_reading_slows_nothing() {
 
 #[test]
 fn a_foxglove_client_watches_a_drive_live() {
-    let mut emulator = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["emulate-powerbot", "--listen", "127.0.0.1:0"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = BufReader::new(emulator.stdout.take().unwrap());
-    let _emulator = Killed(emulator);
-    let mut line = String::new();
-    out.read_line(&mut line).unwrap();
-    let address = line.trim().rsplit(' ').next().unwrap().to_owned();
+    let (_emulator, address, _emulator_out) = emulator();
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");
     let robot = format!(

@@ -3,21 +3,14 @@
 //! more than the tree, is refused with its reason and the running tree
 //! goes on.
 
+mod common;
+
+use common::{emulator, Killed};
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{channel, Receiver};
 use std::time::Duration;
-
-/// A child process killed when dropped.
-struct Killed(Child);
-
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 /// Replaces `path`'s content at once, as an editor that saves by renaming
 /// does: the watcher never reads half a file.
@@ -110,16 +103,7 @@ fn a_run_takes_a_valid_edit_of_its_tree_and_refuses_the_others() {
 
 #[test]
 fn a_drive_takes_a_new_tree_without_stopping_and_refuses_a_new_connection() {
-    let mut emulator = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["emulate-powerbot", "--listen", "127.0.0.1:0"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = BufReader::new(emulator.stdout.take().unwrap());
-    let _emulator = Killed(emulator);
-    let mut line = String::new();
-    out.read_line(&mut line).unwrap();
-    let address = line.trim().rsplit(' ').next().unwrap().to_owned();
+    let (_emulator, address, _emulator_out) = emulator();
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");
     let robot = |connection: &str, root: &str| {
