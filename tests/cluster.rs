@@ -5,6 +5,9 @@
 //! run their sweep and its merge here, the scheduler stood in for, and
 //! docs/cluster.md shows each as it is.
 
+mod common;
+
+use common::sweep_args;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -42,22 +45,6 @@ fn ubf(vars: &[(&str, String)], args: &[&str]) -> Output {
 
 fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
-}
-
-/// The test sweep's arguments (two scenarios, seeds 3..=14) into `out`,
-/// with `extra`.
-fn sweep_args<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
-    let mut args = vec![
-        "sweep",
-        "scenarios/corridor-box.ron",
-        "scenarios/goto-open-floor.ron",
-        "--seeds",
-        "3..=14",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(extra);
-    args
 }
 
 /// Asserts `merged` holds the summary `whole` does, byte for byte (what

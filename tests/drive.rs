@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{emulator, emulator_with, wait_for, Killed};
+use common::{emulator, emulator_with, ptu_emulator, wait_for, Killed};
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -715,18 +715,7 @@ fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
     let dir = tempfile::tempdir().unwrap();
     record_frames(dir.path(), 2);
     let (mut emulator, address, _) = emulator();
-    let (mut head, head_address, _) = {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
-            .args(["emulate-ptu", "--listen", "127.0.0.1:0"])
-            .stdout(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut out = BufReader::new(child.stdout.take().unwrap());
-        let mut line = String::new();
-        out.read_line(&mut line).unwrap();
-        let address = line.trim().rsplit(' ').next().unwrap().to_owned();
-        (Killed(child), address, out)
-    };
+    let (mut head, head_address, _) = ptu_emulator();
     let extra = format!(
         r#"max_time_s: 20.0,
             camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{head_address}")),"#

@@ -1,6 +1,8 @@
 //! `ubf sweep`: the summary does not depend on the number of jobs, every run
 //! leaves a report, and bad arguments are refused.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -11,17 +13,7 @@ fn ubf(args: &[&str]) -> Output {
 /// The test sweep (two scenarios, seeds 3..=14) into `out`, with `extra`
 /// arguments.
 fn sweep_with(out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "sweep",
-        "scenarios/corridor-box.ron",
-        "scenarios/goto-open-floor.ron",
-        "--seeds",
-        "3..=14",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(extra);
-    ubf(&args)
+    ubf(&common::sweep_args(out, extra))
 }
 
 fn sweep(out: &Path, jobs: &str) -> Output {

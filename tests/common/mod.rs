@@ -3,6 +3,7 @@
 #![allow(dead_code)] // each test file uses its own part
 
 use std::io::{BufRead, BufReader};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
@@ -36,18 +37,41 @@ pub fn emulator() -> (Killed, String, BufReader<std::process::ChildStdout>) {
 
 /// `ubf emulate-powerbot ARGS`, with the address it serves on.
 pub fn emulator_with(args: &[&str]) -> (Killed, String, BufReader<std::process::ChildStdout>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .arg("emulate-powerbot")
-        .args(args)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (child, line, out) = serve("emulate-powerbot", args);
+    assert!(line.starts_with("emulating a Powerbot on "), "{line}");
+    (child, line.rsplit(' ').next().unwrap().to_owned(), out)
+}
+
+/// `ubf emulate-ptu --listen 127.0.0.1:0`, with the address it serves on.
+pub fn ptu_emulator() -> (Killed, String, BufReader<std::process::ChildStdout>) {
+    let (child, line, out) = serve("emulate-ptu", &["--listen", "127.0.0.1:0"]);
+    (child, line.rsplit(' ').next().unwrap().to_owned(), out)
+}
+
+/// `ubf COMMAND ARGS`, with the first line it prints (where it serves).
+fn serve(command: &str, args: &[&str]) -> (Killed, String, BufReader<std::process::ChildStdout>) {
+    let mut child =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).arg(command).args(args).stdout(Stdio::piped()).spawn().unwrap();
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut line = String::new();
     out.read_line(&mut line).unwrap();
-    assert!(line.starts_with("emulating a Powerbot on "), "{line}");
-    let address = line.trim().rsplit(' ').next().unwrap().to_owned();
-    (Killed(child), address, out)
+    (Killed(child), line.trim().to_owned(), out)
+}
+
+/// The test sweep's arguments (two scenarios, seeds 3..=14) into `out`,
+/// with `extra`.
+pub fn sweep_args<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "sweep",
+        "scenarios/corridor-box.ron",
+        "scenarios/goto-open-floor.ron",
+        "--seeds",
+        "3..=14",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    args
 }
 
 /// Waits up to `seconds` for `child` to exit.
