@@ -157,6 +157,38 @@ fn same_scenario_and_seed_give_identical_reports() {
 }
 
 #[test]
+fn every_command_that_writes_a_folder_refuses_a_full_one_unless_told_to_overwrite() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_arg = out.to_str().unwrap();
+    let run = |extra: &[&str]| ubf(&[&["run", "scenarios/goto-open-floor.ron", "--out", out_arg], extra].concat());
+    assert!(run(&[]).status.success());
+    let report = std::fs::read(out.join("report.json")).unwrap();
+    // Again into the same folder: refused, with what to do, nothing touched.
+    let again = run(&["--seed", "9"]);
+    assert_eq!(again.status.code(), Some(2));
+    let said = text(&again.stderr);
+    assert!(said.contains("is not empty") && said.contains("--overwrite"), "{said}");
+    assert_eq!(std::fs::read(out.join("report.json")).unwrap(), report);
+    // With --overwrite the earlier run is replaced.
+    assert!(run(&["--seed", "9", "--overwrite"]).status.success());
+    assert_ne!(std::fs::read(out.join("report.json")).unwrap(), report);
+    // A run never takes a recording's folder, nor a recording a run's.
+    let frames = |extra: &[&str]| {
+        ubf(&[&["frames", "scenarios/rendered-corridor.ron", "--out", out_arg, "--max-frames", "1"], extra].concat())
+    };
+    let refused = frames(&["--overwrite"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(text(&refused.stderr).contains("not deleting it"), "{}", text(&refused.stderr));
+    assert!(out.join("report.json").is_file());
+    std::fs::remove_dir_all(&out).unwrap();
+    assert!(frames(&[]).status.success());
+    assert_eq!(frames(&[]).status.code(), Some(2));
+    assert!(frames(&["--overwrite"]).status.success());
+    assert_eq!(run(&["--overwrite"]).status.code(), Some(2));
+}
+
+#[test]
 fn the_stock_binary_does_not_know_a_users_behaviour() {
     // Wander is registered by the example crate's own binary, not by ubf.
     let out = ubf(&["check", "examples/wander/wander.ron"]);

@@ -6,15 +6,25 @@ use crate::scenario::{Scenario, Work};
 use std::path::Path;
 use ubf_core::Registry;
 
+/// How `ubf frames` records.
+pub(super) struct FramesRequest<'a> {
+    /// The scenario file.
+    pub file: &'a Path,
+    /// Where the pairs go.
+    pub out: &'a Path,
+    /// The seed, if not the scenario's.
+    pub seed: Option<u64>,
+    /// At most this many pairs.
+    pub max: usize,
+    /// Record beyond the bound on bytes.
+    pub huge: bool,
+    /// Replace an earlier recording in `out`.
+    pub overwrite: bool,
+}
+
 /// Records a scenario's rendered pairs into `out`.
-pub(super) fn frames(
-    registry: &Registry,
-    file: &Path,
-    out: &Path,
-    seed: Option<u64>,
-    max: usize,
-    huge: bool,
-) -> Outcome {
+pub(super) fn frames(registry: &Registry, request: FramesRequest) -> Outcome {
+    let FramesRequest { file, out, seed, max, huge, overwrite } = request;
     let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
     let scenario = loaded.map_err(CliError::bad_input)?;
     let bytes = crate::frames::recording_bytes(&scenario, max);
@@ -26,6 +36,7 @@ pub(super) fn frames(
             Work::bytes_text(Work::MOST_RECORDING_BYTES)
         )));
     }
+    super::out_dir::prepare(out, &super::out_dir::FRAMES, overwrite)?;
     let count = crate::frames::record(&scenario, seed.unwrap_or(scenario.seed), out, max).map_err(CliError::failed)?;
     println!("{count} stereo pairs in {}", out.display());
     Ok(Exit::Success)

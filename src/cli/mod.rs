@@ -15,6 +15,7 @@ mod bug_report;
 mod experiment;
 mod images;
 mod inspect;
+mod out_dir;
 mod robot;
 mod run;
 mod shard;
@@ -164,9 +165,15 @@ enum Command {
         /// Use this seed instead of the scenario's.
         #[arg(long)]
         seed: Option<u64>,
-        /// Write report.json, trajectory.csv and plot.png into this directory.
+        /// Write report.json, trajectory.csv, run.mcap and plot.png into
+        /// this directory (absent or empty).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Replace an earlier run's output in `--out` (a directory holding
+        /// its report.json or run.mcap); without this a non-empty `--out`
+        /// is refused, so an earlier run is never overwritten by accident.
+        #[arg(long, requires = "out")]
+        overwrite: bool,
         /// Print the report as JSON on stdout.
         #[arg(long)]
         json: bool,
@@ -297,9 +304,14 @@ enum Command {
     Frames {
         /// The scenario file (RON); its robot needs a camera.
         file: PathBuf,
-        /// Where the images go.
+        /// Where the images go (absent or empty).
         #[arg(long)]
         out: PathBuf,
+        /// Replace an earlier recording in `--out` (a directory holding its
+        /// frames.csv or camera.ron); without this a non-empty `--out` is
+        /// refused.
+        #[arg(long)]
+        overwrite: bool,
         /// Seed (default: the scenario's).
         #[arg(long)]
         seed: Option<u64>,
@@ -658,12 +670,12 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     }
     let outcome = match cli.command {
-        Command::Run { file, seed, out, json, huge, log_images, log_format, ros2, live, watch, speed } => {
+        Command::Run { file, seed, out, overwrite, json, huge, log_images, log_format, ros2, live, watch, speed } => {
             let paced = ros2 || live.is_some() || watch;
             let live = paced.then_some(crate::run::Live { speed, ros2, foxglove: live, trees: None });
             let rosbag = log_format == LogFormat::Ros2;
             let outputs = out.as_deref().map(|dir| crate::run::Outputs { dir, images: log_images, rosbag });
-            run::command(&registry, &file, seed, outputs, run::RunFlags { json, huge, watch }, live)
+            run::command(&registry, &file, seed, outputs, run::RunFlags { json, huge, watch, overwrite }, live)
         }
         Command::Replay { file, plot } => run::replay(&file, plot),
         Command::Check { files } => inspect::check(&registry, &files),
@@ -726,8 +738,8 @@ pub fn main_with(registry: Registry) -> ExitCode {
             };
             robot::emulate_ptu(&listen, pty, &config)
         }
-        Command::Frames { file, out, seed, max_frames, huge } => {
-            images::frames(&registry, &file, &out, seed, max_frames, huge)
+        Command::Frames { file, out, seed, max_frames, huge, overwrite } => {
+            images::frames(&registry, images::FramesRequest { file: &file, out: &out, seed, max: max_frames, huge, overwrite })
         }
         Command::Pipeline {
             dir,

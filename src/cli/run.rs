@@ -16,6 +16,8 @@ pub(super) struct RunFlags {
     pub huge: bool,
     /// Take edits of the tree while running.
     pub watch: bool,
+    /// Replace an earlier run's output in `--out`.
+    pub overwrite: bool,
 }
 
 /// Runs a scenario and prints its report; a run a behaviour ended, or
@@ -25,7 +27,7 @@ pub(super) fn command(
     file: &Path,
     seed: Option<u64>,
     outputs: Option<Outputs>,
-    RunFlags { json, huge, watch }: RunFlags,
+    RunFlags { json, huge, watch, overwrite }: RunFlags,
     mut live: Option<Live>,
 ) -> Outcome {
     let load = move |registry: &Registry, file: &Path| match huge {
@@ -34,6 +36,9 @@ pub(super) fn command(
     };
     let scenario = load(registry, file).map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
+    if let Some(outputs) = &outputs {
+        super::out_dir::prepare(outputs.dir, &super::out_dir::RUN, overwrite)?;
+    }
     if let Some(live) = live.as_mut().filter(|_| watch) {
         let registry = registry.clone();
         let load_tree: LoadTree = Box::new(move |file| Ok(load(&registry, file).map_err(|e| e.to_string())?.root));

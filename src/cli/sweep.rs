@@ -65,9 +65,9 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
     }
     if !resume {
         match shard {
-            None => clear_sweep_output(out, overwrite),
-            Some(shard) => clear_shard_output(out, shard, overwrite),
-        }?;
+            None => super::out_dir::prepare(out, &super::out_dir::SWEEP, overwrite)?,
+            Some(shard) => clear_shard_output(out, shard, overwrite)?,
+        }
     }
     let jobs = jobs.unwrap_or_else(super::cores);
     let stop = crate::drive::install_stop_flag();
@@ -188,76 +188,22 @@ pub(super) fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Outcome {
     Ok(Exit::Success)
 }
 
-/// Why a sweep's output directory cannot take a new sweep (or shard).
-#[derive(Debug, thiserror::Error)]
-enum OutputError {
-    #[error("--out {}: {source}", dir.display())]
-    Unreadable { dir: PathBuf, source: std::io::Error },
-    #[error(
-        "--out {} is not empty: earlier runs would sit beside the new summary. \
-         Choose another directory, pass --overwrite to replace an earlier sweep's output, or --resume to \
-         finish an interrupted one",
-        .0.display()
-    )]
-    NotEmpty(PathBuf),
-    #[error(
-        "--out {} holds no summary.json (nor an interrupted sweep's .sweep-plan.json), so it is not a sweep's \
-         output: not deleting it",
-        .0.display()
-    )]
-    NotASweep(PathBuf),
-    #[error("{} exists: this shard has run before. Pass --overwrite to run it again", .0.display())]
-    ShardRan(PathBuf),
-    #[error("clearing {}: {source}", path.display())]
-    Clearing { path: PathBuf, source: std::io::Error },
-}
-
-impl From<OutputError> for CliError {
-    /// The directory's state is the user's to change; failing to read or
-    /// clear it is not.
-    fn from(error: OutputError) -> Self {
-        match error {
-            OutputError::Unreadable { .. } | OutputError::Clearing { .. } => CliError::failed(error),
-            OutputError::NotEmpty(_) | OutputError::NotASweep(_) | OutputError::ShardRan(_) => {
-                CliError::bad_input(error)
-            }
-        }
-    }
-}
-
-/// Makes `out` ready for a sweep: absent or empty, or, with `overwrite`,
-/// an earlier sweep's output (it holds a summary.json, or the plan an
-/// interrupted sweep leaves), which is removed.
-fn clear_sweep_output(out: &Path, overwrite: bool) -> Result<(), OutputError> {
-    let mut entries = match std::fs::read_dir(out) {
-        Ok(entries) => entries,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(source) => return Err(OutputError::Unreadable { dir: out.to_owned(), source }),
-    };
-    if entries.next().is_none() {
-        return Ok(());
-    }
-    if !overwrite {
-        return Err(OutputError::NotEmpty(out.to_owned()));
-    }
-    if !out.join("summary.json").is_file() && !out.join(".sweep-plan.json").is_file() {
-        return Err(OutputError::NotASweep(out.to_owned()));
-    }
-    std::fs::remove_dir_all(out).map_err(|source| OutputError::Clearing { path: out.to_owned(), source })
-}
-
 /// Makes `out` ready for one shard of a sweep: other shards' output may be
 /// there (shards often share a directory), but this shard's record only
 /// with `overwrite`.
-fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), OutputError> {
+fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), CliError> {
     let record = out.join(shard.record_name());
     if !record.exists() {
         return Ok(());
     }
     if !overwrite {
-        return Err(OutputError::ShardRan(record));
+        return Err(CliError::bad_input(format!(
+            "{} exists: this shard has run before. Pass --overwrite to run it again",
+            record.display()
+        )));
     }
-    std::fs::remove_file(&record).map_err(|source| OutputError::Clearing { path: record, source })
+    std::fs::remove_file(&record)
+        .map_err(|e| CliError::failed(format!("cannot remove {} to run the shard again: {e}", record.display())))
 }
 
 /// Parses `A..B`, `A..=B` or `N` into a range of seeds.
