@@ -133,6 +133,43 @@ fn missing_file_and_bad_arguments_exit_2_without_panicking() {
 }
 
 #[test]
+fn every_error_a_user_can_cause_reads_as_one_sentence_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let unwritable = "/proc/ubf-cannot-write-here";
+    std::fs::write(at("not-ron.ron"), "Scenario(").unwrap();
+    std::fs::write(at("empty.mcap"), "").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["run".into(), at("nope.ron")], "nope.ron"),
+        (vec!["check".into(), dir.path().to_str().unwrap().into()], dir.path().to_str().unwrap()),
+        (vec!["check".into(), at("not-ron.ron")], "not-ron.ron:"),
+        (vec!["replay".into(), at("nope.mcap")], "nope.mcap"),
+        (vec!["replay".into(), at("empty.mcap")], "empty.mcap"),
+        (vec!["tree".into(), at("nope.ron")], "nope.ron"),
+        (vec!["drive".into(), at("nope.ron")], "nope.ron"),
+        (vec!["pipeline".into(), at("nowhere")], "nowhere"),
+        (vec!["sweep".into(), "merge".into(), at("nowhere")], "nowhere"),
+        (vec!["run".into(), "scenarios/goto-open-floor.ron".into(), "--out".into(), unwritable.into()], unwritable),
+        (vec!["model".into(), "heatmap".into(), "--out".into(), format!("{unwritable}/m.png")], unwritable),
+        (
+            vec!["frames".into(), "scenarios/rendered-corridor.ron".into(), "--out".into(), unwritable.into()],
+            unwritable,
+        ),
+    ];
+    for (args, names) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = ubf(&args);
+        let said = text(&out.stderr);
+        assert!(matches!(out.status.code(), Some(1 | 2)), "{args:?}: {:?}\n{said}", out.status);
+        assert!(said.starts_with("error: ") && said.contains(names), "{args:?}:\n{said}");
+        // Rust's debug text and panics are for developers, not for users.
+        for debug in ["Os {", "kind:", "Error(", "Error {", "panicked", "RUST_BACKTRACE", "\\n"] {
+            assert!(!said.contains(debug), "{args:?} says `{debug}`:\n{said}");
+        }
+    }
+}
+
+#[test]
 fn run_reaches_the_goal_and_prints_json() {
     let out = ubf(&["run", "scenarios/goto-open-floor.ron", "--json"]);
     assert!(out.status.success(), "{}", text(&out.stderr));

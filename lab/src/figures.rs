@@ -4,7 +4,7 @@
 use crate::environment_map::EnvironmentMap;
 use plotters::prelude::*;
 use std::path::Path;
-use ubf_session::plot::{register_font, PlotError};
+use ubf_session::plot::{canvas, PlotError};
 
 /// Draws the CV of `cv` over the floor ahead of the camera as a heat map
 /// (thesis figure 16): lateral position across, depth up, log₁₀ CV as
@@ -18,11 +18,9 @@ pub fn draw_error_model(
     path: &Path,
 ) -> Result<(), PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError::new(path, e);
-    register_font();
     let half_fov = camera.horizontal_fov() / 2.0;
     let x_max = max_depth * half_fov.tan();
-    let root = BitMapBackend::new(path, (1000, 900)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let root = canvas(path, (1000, 900))?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
     let (map_area, bar_area) = root.split_horizontally(890);
     let mut chart = ChartBuilder::on(&map_area)
@@ -116,7 +114,6 @@ pub fn draw_error_model(
 /// interval; the base route's cells are outlined.
 pub fn draw_environment_map(map: &EnvironmentMap, path: &Path) -> Result<(), PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError::new(path, e);
-    register_font();
     let mut factors: Vec<&str> = Vec::new();
     for c in &map.cells {
         if !factors.contains(&c.factor) {
@@ -127,8 +124,7 @@ pub fn draw_environment_map(map: &EnvironmentMap, path: &Path) -> Result<(), Plo
     let (label_w, cell_w, cell_h, top, bottom) = (190i32, 190i32, 84i32, 70i32, 70i32);
     let width = (label_w + cell_w * columns as i32 + 20) as u32;
     let height = (top + cell_h * factors.len() as i32 + bottom) as u32;
-    let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let root = canvas(path, (width, height))?;
     let title = format!(
         "Where aiding pays: best aided / straight end-point error (held-out seeds {}..{}, layout {})",
         map.held_out_seeds[0], map.held_out_seeds[1], map.held_out_layout_seed

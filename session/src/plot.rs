@@ -52,12 +52,26 @@ impl PlotError {
     }
 }
 
+/// A white canvas of `size` pixels that will be saved as a PNG at `path`.
+/// The file is created first, so an unwritable path is said in words
+/// rather than in the drawing library's debug text when it saves.
+pub fn canvas(
+    path: &Path,
+    size: (u32, u32),
+) -> Result<DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>, PlotError> {
+    std::fs::File::create(path).map_err(|e| PlotError::new(path, format!("cannot create the file: {e}")))?;
+    register_font();
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| PlotError::new(path, e))?;
+    Ok(root)
+}
+
 static FONT: Once = Once::new();
 
 /// Registers the font plots are drawn with, once; call it before drawing
 /// text. The font ships inside a crate, so plots need no system font
 /// libraries.
-pub fn register_font() {
+fn register_font() {
     FONT.call_once(|| {
         // Registering a valid built-in font cannot fail; if it somehow did,
         // text would be missing, not the plot.
@@ -128,15 +142,13 @@ fn draw_legend<DB: DrawingBackend>(
 /// time underneath.
 pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     let fail = |e: &dyn std::fmt::Display| PlotError { path: path.display().to_string(), message: e.to_string() };
-    register_font();
     let (x0, x1, y0, y1) = bounds(plot);
     // Equal scales on both axes, so a corridor looks like one.
     let (width, legend_width) = (1400u32, 230u32);
     let plot_width = f64::from(width - legend_width - 90);
     let map_height = ((plot_width * (y1 - y0) / (x1 - x0)) as u32 + 110).clamp(300, 1400);
     let panel_height = if plot.timeline.is_some() { 420 } else { 0 };
-    let root = BitMapBackend::new(path, (width, map_height + panel_height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let root = canvas(path, (width, map_height + panel_height))?;
     let (top, panel) = root.split_vertically(map_height);
     let (map_area, legend_area) = top.split_horizontally(width - legend_width);
     let mut chart = ChartBuilder::on(&map_area)

@@ -738,9 +738,10 @@ pub fn main_with(registry: Registry) -> ExitCode {
             };
             robot::emulate_ptu(&listen, pty, &config)
         }
-        Command::Frames { file, out, seed, max_frames, huge, overwrite } => {
-            images::frames(&registry, images::FramesRequest { file: &file, out: &out, seed, max: max_frames, huge, overwrite })
-        }
+        Command::Frames { file, out, seed, max_frames, huge, overwrite } => images::frames(
+            &registry,
+            images::FramesRequest { file: &file, out: &out, seed, max: max_frames, huge, overwrite },
+        ),
         Command::Pipeline {
             dir,
             json,

@@ -19,7 +19,8 @@ pub(super) struct OutputKind {
 pub(super) const RUN: OutputKind = OutputKind { command: "ubf run", markers: &["report.json", "run.mcap"] };
 
 /// A sweep's output, finished or interrupted.
-pub(super) const SWEEP: OutputKind = OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"] };
+pub(super) const SWEEP: OutputKind =
+    OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"] };
 
 /// A recording of stereo pairs.
 pub(super) const FRAMES: OutputKind = OutputKind { command: "ubf frames", markers: &["frames.csv", "camera.ron"] };
