@@ -1,6 +1,6 @@
 #!/bin/sh
 # What the test suite needs besides Rust, on a Debian or Ubuntu machine:
-# Python 3 with venv (the checks against outside implementations install
+# a C compiler (a few crates build C), Python 3 with venv (the checks against outside implementations install
 # their own PyPI packages, Cyclone DDS, the MCAP and rosbag2 readers and
 # jsonschema, into .venv-* on first use), and `unshare` and `ip`, with which
 # the ROS 2 tests put their DDS traffic in a private network namespace, and
@@ -10,6 +10,7 @@
 # Installs only what is missing; root or sudo needed for that.
 set -eu
 missing=""
+command -v cc >/dev/null || missing="$missing gcc libc6-dev"
 command -v python3 >/dev/null || missing="$missing python3"
 python3 -c "import venv, ensurepip" 2>/dev/null || missing="$missing python3-venv"
 command -v unshare >/dev/null || missing="$missing util-linux"

@@ -226,6 +226,44 @@ fn every_command_that_writes_a_folder_refuses_a_full_one_unless_told_to_overwrit
 }
 
 #[test]
+fn ubf_new_writes_the_crate_the_workspace_builds_and_tests() {
+    // examples/my-behaviours is what `ubf new` writes, built and tested by
+    // this suite as a workspace member; here `ubf new` must write the same
+    // sources, and a Cargo.toml that Cargo resolves against this checkout
+    // with the versions in its Cargo.lock, offline.
+    let dir = tempfile::tempdir().unwrap();
+    let crate_dir = dir.path().join("my-behaviours");
+    let out = ubf(&["new", crate_dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/my-behaviours");
+    for file in ["src/main.rs", "tests/scenario.rs", "my-behaviours.ron", ".gitignore"] {
+        assert_eq!(
+            std::fs::read_to_string(crate_dir.join(file)).unwrap(),
+            std::fs::read_to_string(example.join(file)).unwrap(),
+            "{file}: `ubf new` and examples/my-behaviours differ"
+        );
+    }
+    let manifest = std::fs::read_to_string(crate_dir.join("Cargo.toml")).unwrap();
+    assert!(manifest.contains("[profile.dev.package.\"*\"]\nopt-level = 3"), "{manifest}");
+    let tree = Command::new(env!("CARGO"))
+        .args(["tree", "--offline", "--depth", "1", "--prefix", "none", "-e", "normal", "--manifest-path"])
+        .arg(crate_dir.join("Cargo.toml"))
+        .output()
+        .unwrap();
+    assert!(tree.status.success(), "{}", text(&tree.stderr));
+    let checkout = std::fs::canonicalize(env!("CARGO_MANIFEST_DIR")).unwrap();
+    let core = format!("ubf-core v0.1.0 ({})", checkout.join("ubf-core").display());
+    assert!(text(&tree.stdout).lines().any(|line| line == core), "{}", text(&tree.stdout));
+    // Never into a folder that holds anything, nor under a name Cargo refuses.
+    let again = ubf(&["new", crate_dir.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(2));
+    assert!(text(&again.stderr).contains("is not empty"), "{}", text(&again.stderr));
+    let badly_named = ubf(&["new", dir.path().join("My Behaviours").to_str().unwrap()]);
+    assert_eq!(badly_named.status.code(), Some(2));
+    assert!(text(&badly_named.stderr).contains("lower-case"), "{}", text(&badly_named.stderr));
+}
+
+#[test]
 fn the_stock_binary_does_not_know_a_users_behaviour() {
     // Wander is registered by the example crate's own binary, not by ubf.
     let out = ubf(&["check", "examples/wander/wander.ron"]);

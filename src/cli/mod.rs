@@ -15,6 +15,7 @@ mod bug_report;
 mod experiment;
 mod images;
 mod inspect;
+mod new;
 mod out_dir;
 mod robot;
 mod run;
@@ -260,6 +261,20 @@ enum Command {
         /// Run it even beyond the bounds on runs and on ticks per run.
         #[arg(long)]
         huge: bool,
+    },
+    /// Write a new crate for your own behaviours into DIR (named after it):
+    /// a behaviour, a scenario file using it, a test, and a Cargo.toml that
+    /// builds the simulator optimised (docs/writing-a-behavior.md).
+    New {
+        /// The directory (absent or empty); its name is the crate's.
+        dir: PathBuf,
+        /// Take ubf from this checkout (default: the one this ubf was built
+        /// from).
+        #[arg(long, value_name = "DIR")]
+        ubf_path: Option<PathBuf>,
+        /// Take ubf from this git repository.
+        #[arg(long, value_name = "URL", conflicts_with = "ubf_path")]
+        ubf_git: Option<String>,
     },
     /// Check scenario files without running them; exit code 2 on the first
     /// bad one.
@@ -679,6 +694,10 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
         Command::Replay { file, plot } => run::replay(&file, plot),
         Command::Check { files } => inspect::check(&registry, &files),
+        Command::New { dir, ubf_path, ubf_git } => {
+            let source = ubf_path.map(new::UbfSource::Path).or(ubf_git.map(new::UbfSource::Git));
+            new::command(&dir, source)
+        }
         Command::Tree { file, mermaid } => inspect::tree(&registry, &file, mermaid),
         Command::Behaviors { describe, names } => inspect::behaviors(&registry, describe, &names),
         Command::Sweep { action: Some(SweepAction::Merge { dirs, out }), .. } => sweep::merge(&dirs, out.as_deref()),
