@@ -89,6 +89,58 @@ fn fallback_ron_goes_round_the_box_only_near_it_and_reaches_the_goal_in_10_seeds
     }
 }
 
+/// How often the robot was handed back, within `within_s`, to the behaviour
+/// it was taken from, with a jump in the command each time: two behaviours
+/// taking turns every few ticks. A handover that leaves the command as it
+/// was (a fallback's two GoTos) is not one.
+fn flicks(dir: &Path, within_s: f64) -> usize {
+    let csv = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (winner, speed, turn) = (column("winner"), column("cmd_velocity"), column("cmd_rot_velocity"));
+    let mut spells: Vec<(f64, String)> = Vec::new();
+    let mut last_command = (0.0, 0.0);
+    for line in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        let command: (f64, f64) = (fields[speed].parse().unwrap(), fields[turn].parse().unwrap());
+        let jump = (command.0 - last_command.0).abs() > 0.05 || (command.1 - last_command.1).abs() > 0.1;
+        last_command = command;
+        match spells.last_mut() {
+            Some((_, w)) if w == fields[winner] => {}
+            Some((_, w)) if !jump => *w = fields[winner].to_owned(),
+            _ => spells.push((fields[0].parse().unwrap(), fields[winner].to_owned())),
+        }
+    }
+    spells.windows(3).filter(|w| w[0].1 == w[2].1 && w[2].0 - w[1].0 < within_s).count()
+}
+
+#[test]
+fn every_shipped_scenario_reaches_its_goal_without_chattering() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut checked = 0;
+    for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_str().unwrap().to_owned();
+        let scenario = Scenario::load(&ubf::registry(), &path).unwrap();
+        if scenario.goal.is_none() {
+            continue;
+        }
+        for seed in 1..=3 {
+            let out = dir.path().join(format!("{name}-{seed}"));
+            let report = run(&scenario, seed, Some(&out)).unwrap();
+            assert_eq!(report.end, EndReason::GoalReached, "{name} seed {seed}: {report:?}");
+            assert_eq!(report.collisions, 0, "{name} seed {seed}: {report:?}");
+            // Going round one obstacle hands over twice; noise at an edge
+            // may add a flick or two, never the dozens of a tug of war.
+            let flicks = flicks(&out, 1.0);
+            assert!(flicks <= 2, "{name} seed {seed}: the winner flicked back {flicks} times");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 5, "{checked} scenarios with a goal");
+}
+
 #[test]
 fn a_fallback_to_avoid_collision_alone_never_gets_past_the_box() {
     // The page's warning: under selection the winner's action is taken
@@ -435,14 +487,14 @@ const LAYOUT_2121: (&str, &str) = ("seed: 21)", "seed: 2121)");
 fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in_the_wall() {
     // A veer odometry does not see, with this seed's slip, walks a robot
     // steering by odometry 1.4 m off the goal line, 0.6 m from the wall;
-    // odometry puts the goal towards the wall, and every turn towards it
-    // sweeps the robot's corner into the wall until the time limit.
+    // odometry puts the goal towards the wall, and the robot, held off the
+    // wall by AvoidCollision, never gets there before the time limit.
     // Steering by egomotion (with odometry's sideways motion), it does not.
     let by_odometry =
         edited("lab/scenarios/thesis/route-2-1.ron", &[VEER, LAYOUT_2121, ("max_time_s: 2500.0", "max_time_s: 200.0")]);
     let report = run(&by_odometry, 104, None).unwrap();
     assert_eq!(report.end, EndReason::TimeLimit, "{report:?}");
-    assert!(report.collisions > 100, "{report:?}");
+    assert!(!report.reached_goal, "{report:?}");
     let navigating = (
         "egomotion: (estimator: Rigid())",
         "egomotion: (estimator: Rigid(), odometry_fusion: Sideways, navigate: true)",

@@ -74,7 +74,9 @@ impl Check for AvoidCollisionConfig {
 /// current one and measures how far the robot could drive along each before
 /// its swept strip (`path_half_width` either side) meets an echo. While the
 /// way straight ahead is clear for `slow_distance` it is silent, so walls
-/// alongside never fight a go-to behaviour. Otherwise it:
+/// alongside never fight a go-to behaviour; once it has turned off, it
+/// stays until the way towards the goal is clear too (up to the goal), so
+/// that a go-to cannot turn straight back into the obstacle. Otherwise it:
 ///
 /// - limits the forward speed in proportion to the clearance straight ahead,
 ///   down to zero at `stop_distance`, through the `max_velocity` limit
@@ -101,6 +103,12 @@ fn candidate(i: usize) -> f64 {
     (i as f64 * 5.0 - 90.0).to_radians()
 }
 
+/// Where the robot would rather go, relative to its heading: the goal's
+/// bearing, within ±90°, or straight ahead without a goal.
+fn preferred_heading(state: &State) -> f64 {
+    state.goal.map_or(0.0, |g| state.pose.bearing_to(g.x, g.y)).clamp(-FRAC_PI_2, FRAC_PI_2)
+}
+
 impl AvoidCollision {
     /// An avoider with these settings.
     pub fn new(config: AvoidCollisionConfig) -> Self {
@@ -111,7 +119,7 @@ impl AvoidCollision {
     /// straight ahead without a goal; if none is free for `needed` metres,
     /// the freest.
     fn choose(&self, state: &State, needed: f64) -> f64 {
-        let preferred = state.goal.map_or(0.0, |g| state.pose.bearing_to(g.x, g.y)).clamp(-FRAC_PI_2, FRAC_PI_2);
+        let preferred = preferred_heading(state);
         let free: [f64; CANDIDATES] = std::array::from_fn(|i| self.free_distance(candidate(i)));
         let freest = free.iter().copied().fold(0.0, f64::max);
         let needed = needed.min(freest);
@@ -136,11 +144,24 @@ impl Behavior for AvoidCollision {
         // forward sonars sit: the echo's distance along the heading less the
         // nearest echo-free offset of the ring.
         let ahead = self.free_distance(0.0) - c.body_front;
-        if ahead >= c.slow_distance {
+        // Having turned off, it holds on while the way to the goal is still
+        // blocked: going silent the moment straight ahead is clear let a
+        // go-to turn straight back into the obstacle, and the two took turns
+        // every few ticks at its edge.
+        // An echo beyond the goal (the wall it stands by) is not in its way.
+        let beyond_goal = state.distance_to_goal().map_or(f64::INFINITY, |d| d - c.body_front);
+        let to_goal = self.free_distance(preferred_heading(state)) - c.body_front;
+        let holding = self.committed.is_some() && to_goal < c.slow_distance.min(beyond_goal);
+        if ahead >= c.slow_distance && !holding {
             self.committed = None;
             return Action::none();
         }
-        let nearness = ((c.slow_distance - ahead) / (c.slow_distance - c.stop_distance)).clamp(0.0, 1.0);
+        let nearness_at =
+            |clear: f64| ((c.slow_distance - clear) / (c.slow_distance - c.stop_distance)).clamp(0.0, 1.0);
+        let nearness = match holding {
+            true => nearness_at(ahead).max(nearness_at(to_goal)),
+            false => nearness_at(ahead),
+        };
         let needed = c.slow_distance + c.body_front;
         let kept = self
             .committed
@@ -244,6 +265,31 @@ mod tests {
         assert!(avoid.gen_action(&state(&[(5.0, 0.8)])).vote > a.vote);
         // At the stop distance, no forward speed at all.
         assert_eq!(avoid.gen_action(&state(&[(0.0, 0.5)])).motion.max_velocity, Some(0.0));
+    }
+
+    #[test]
+    fn holds_on_while_the_way_to_the_goal_is_blocked() {
+        let mut avoid = AvoidCollision::new(AvoidCollisionConfig::default());
+        let goal_at = |bearing_deg: f64| {
+            let b = f64::to_radians(bearing_deg);
+            Some(ubf_core::Goal { x: 5.0 * b.cos(), y: 5.0 * b.sin(), tolerance: 0.2 })
+        };
+        let mut s = state(&[(0.0, 1.0)]);
+        s.goal = goal_at(0.0);
+        assert!(avoid.gen_action(&s).is_voting());
+        // Turned off: straight ahead is clear, the box is on the goal's side.
+        let mut s = state(&[(40.0, 1.0)]);
+        s.goal = goal_at(40.0);
+        assert!(avoid.gen_action(&s).is_voting(), "let go while the goal is still behind the box");
+        // Past it: the way to the goal is clear, and it falls silent.
+        let mut s = state(&[(100.0, 1.0)]);
+        s.goal = goal_at(40.0);
+        assert!(!avoid.gen_action(&s).is_voting());
+        // A wall beyond the goal is not in the way.
+        avoid.gen_action(&state(&[(0.0, 1.0)]));
+        let mut s = state(&[(40.0, 1.0)]);
+        s.goal = Some(ubf_core::Goal { x: 0.5, y: 0.3, tolerance: 0.2 });
+        assert!(!avoid.gen_action(&s).is_voting());
     }
 
     #[test]
