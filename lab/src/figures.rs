@@ -4,7 +4,7 @@
 use crate::environment_map::EnvironmentMap;
 use plotters::prelude::*;
 use std::path::Path;
-use ubf_session::plot::{canvas, PlotError};
+use ubf_session::plot::{canvas, equal_scale, wrap_text, PlotError};
 
 /// Draws the CV of `cv` over the floor ahead of the camera as a heat map
 /// (thesis figure 16): lateral position across, depth up, log₁₀ CV as
@@ -21,14 +21,16 @@ pub fn draw_error_model(
     let half_fov = camera.horizontal_fov() / 2.0;
     let x_max = max_depth * half_fov.tan();
     let root = canvas(path, (1000, 900))?;
-    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
+    let root = root.margin(8, 0, 0, 0).titled(title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
     let (map_area, bar_area) = root.split_horizontally(890);
-    let mut chart = ChartBuilder::on(&map_area)
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(50)
-        .build_cartesian_2d(-x_max..x_max, 0.0..max_depth)
-        .map_err(|e| fail(&e))?;
+    let chart_on = |x: std::ops::Range<f64>, y: std::ops::Range<f64>| {
+        ChartBuilder::on(&map_area).margin(12).x_label_area_size(36).y_label_area_size(50).build_cartesian_2d(x, y)
+    };
+    // A metre as long across as in depth, so the field of view has its
+    // true angle.
+    let pixels = chart_on(0.0..1.0, 0.0..1.0).map_err(|e| fail(&e))?.plotting_area().dim_in_pixel();
+    let (x_range, y_range) = equal_scale((-x_max, x_max, 0.0, max_depth), pixels);
+    let mut chart = chart_on(x_range, y_range).map_err(|e| fail(&e))?;
     chart
         .configure_mesh()
         .x_desc("lateral x (m, right positive)")
@@ -121,8 +123,14 @@ pub fn draw_environment_map(map: &EnvironmentMap, path: &Path) -> Result<(), Plo
         }
     }
     let columns = factors.iter().map(|f| map.cells.iter().filter(|c| c.factor == *f).count()).max().unwrap_or(1);
-    let (label_w, cell_w, cell_h, top, bottom) = (190i32, 190i32, 84i32, 70i32, 70i32);
+    let (label_w, cell_w, cell_h, top) = (190i32, 190i32, 84i32, 70i32);
     let width = (label_w + cell_w * columns as i32 + 20) as u32;
+    let note = "Each cell: the level, the aided technique with the least error on the development seeds, and its \
+                error over straight driving's on held-out runs with 95 % CI. Green: aiding pays; red: it costs. \
+                Outlined: the base route.";
+    let note_lines = wrap_text(note, 13.0, width - 24);
+    let (key_h, line_h) = (58i32, 18i32);
+    let bottom = 16 + key_h + line_h * note_lines.len() as i32 + 8;
     let height = (top + cell_h * factors.len() as i32 + bottom) as u32;
     let root = canvas(path, (width, height))?;
     let title = format!(
@@ -162,9 +170,89 @@ pub fn draw_environment_map(map: &EnvironmentMap, path: &Path) -> Result<(), Plo
             }
         }
     }
-    let note = "Each cell: the level, the aided technique with the least error on the development seeds, and its error over straight driving's on held-out runs with 95 % CI. Green: aiding pays; red: it costs. Outlined: the base route.";
-    let at = (12, top + cell_h * factors.len() as i32 + 20);
-    root.draw(&Text::new(note, at, ("sans-serif", 13))).map_err(|e| fail(&e))?;
+    // The colour key: the ratio each colour stands for, on the cells' scale.
+    let key_top = top + cell_h * factors.len() as i32 + 16;
+    root.draw(&Text::new("aided / straight", (12, key_top + 2), ("sans-serif", 15))).map_err(|e| fail(&e))?;
+    let (key_left, key_w) = (label_w, 400i32);
+    for i in 0..key_w {
+        let ratio = 2f64.powf(2.0 * f64::from(i) / f64::from(key_w) - 1.0);
+        let column = [(key_left + i, key_top), (key_left + i + 1, key_top + 18)];
+        root.draw(&Rectangle::new(column, colour(ratio).filled())).map_err(|e| fail(&e))?;
+    }
+    root.draw(&Rectangle::new([(key_left, key_top), (key_left + key_w, key_top + 18)], BLACK.stroke_width(1)))
+        .map_err(|e| fail(&e))?;
+    for (ratio, label) in [(0.5, "× 0.5 or less"), (1.0, "× 1"), (2.0, "× 2 or more")] {
+        let x = key_left + (f64::log2(ratio) + 1.0) as i32 * key_w / 2;
+        root.draw(&PathElement::new(vec![(x, key_top + 18), (x, key_top + 24)], BLACK.stroke_width(1)))
+            .map_err(|e| fail(&e))?;
+        let anchor = match ratio {
+            r if r < 1.0 => (x, key_top + 28),
+            r if r > 1.0 => (x - ubf_session::plot::text_width(label, 13.0) as i32, key_top + 28),
+            _ => (x - ubf_session::plot::text_width(label, 13.0) as i32 / 2, key_top + 28),
+        };
+        root.draw(&Text::new(label, anchor, ("sans-serif", 13))).map_err(|e| fail(&e))?;
+    }
+    for (k, line) in note_lines.iter().enumerate() {
+        let at = (12, key_top + key_h + line_h * k as i32);
+        root.draw(&Text::new(line.as_str(), at, ("sans-serif", 13))).map_err(|e| fail(&e))?;
+    }
     root.present().map_err(|e| fail(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::environment_map::EnvironmentCell;
+
+    /// Whether any pixel of `png` within `margin` pixels of an edge is dark:
+    /// text or lines running off the canvas.
+    fn ink_at_the_edges(png: &Path, margin: u32) -> bool {
+        let image = image::open(png).unwrap().to_luma8();
+        let (w, h) = image.dimensions();
+        image.enumerate_pixels().any(|(x, y, p)| {
+            let near_edge = x < margin || y < margin || x >= w - margin || y >= h - margin;
+            near_edge && p.0[0] < 128
+        })
+    }
+
+    #[test]
+    fn the_environment_map_keeps_its_text_and_key_on_the_canvas() {
+        let factors = ["corridor width", "landmarks", "side-wall share", "featureless stretch"];
+        let cells = factors
+            .iter()
+            .flat_map(|&factor| {
+                [0.4, 0.9, 1.0, 2.6].into_iter().enumerate().map(move |(i, ratio)| EnvironmentCell {
+                    factor,
+                    level: format!("{} m", 10 * i),
+                    base: i == 2,
+                    best: "tracking",
+                    straight_m: 0.1,
+                    aided_m: 0.1 * ratio,
+                    ratio,
+                    ratio_ci95: [ratio * 0.8, ratio * 1.25],
+                })
+            })
+            .collect();
+        let map = EnvironmentMap {
+            development_seeds: [0, 30],
+            held_out_seeds: [1000, 1030],
+            held_out_layout_seed: 101,
+            cells,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("map.png");
+        draw_environment_map(&map, &path).unwrap();
+        assert!(!ink_at_the_edges(&path, 4), "something runs off the canvas");
+    }
+
+    #[test]
+    fn the_error_model_keeps_its_labels_on_the_canvas() {
+        let camera = ubf_perception::StereoCamera::default();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.png");
+        draw_error_model("model", |x, y| 0.01 + x.abs() / y, &camera, 40.0, &path).unwrap();
+        assert_eq!(image::image_dimensions(&path).unwrap(), (1000, 900));
+        assert!(!ink_at_the_edges(&path, 2), "something runs off the canvas");
+    }
 }

@@ -5,6 +5,7 @@
 use crate::json_topics::WorldMessage;
 use crate::replay::{Decision, ReplayedRun, Timeline};
 use plotters::prelude::*;
+use std::ops::Range;
 use std::path::Path;
 use std::sync::Once;
 use ubf_core::Goal;
@@ -66,6 +67,47 @@ pub fn canvas(
     Ok(root)
 }
 
+/// The ranges to plot so that a metre is as many pixels across as up, in a
+/// plotting area of `pixels`: the narrower of `bounds`' two ranges is
+/// widened about its centre. Maps that stretch one axis make a square room
+/// look like a corridor.
+pub fn equal_scale(bounds: (f64, f64, f64, f64), pixels: (u32, u32)) -> (Range<f64>, Range<f64>) {
+    let (x0, x1, y0, y1) = bounds;
+    let (w, h) = (f64::from(pixels.0.max(1)), f64::from(pixels.1.max(1)));
+    let metres_per_pixel = ((x1 - x0) / w).max((y1 - y0) / h);
+    let widen = |lo: f64, hi: f64, span: f64| {
+        let centre = (lo + hi) / 2.0;
+        (centre - span / 2.0)..(centre + span / 2.0)
+    };
+    (widen(x0, x1, metres_per_pixel * w), widen(y0, y1, metres_per_pixel * h))
+}
+
+/// `text` broken into lines at spaces so that none is wider than
+/// `max_width` pixels in the plots' font at `size` points (a word longer
+/// than that stands alone).
+pub fn wrap_text(text: &str, size: f64, max_width: u32) -> Vec<String> {
+    register_font();
+    let font = ("sans-serif", size).into_font();
+    let width = |line: &str| font.box_size(line).map_or(0, |(w, _)| w);
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split_whitespace() {
+        match lines.last_mut() {
+            Some(line) if width(&format!("{line} {word}")) <= max_width => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_owned()),
+        }
+    }
+    lines
+}
+
+/// How wide `text` is in the plots' font at `size` points, pixels.
+pub fn text_width(text: &str, size: f64) -> u32 {
+    register_font();
+    ("sans-serif", size).into_font().box_size(text).map_or(0, |(w, _)| w)
+}
+
 static FONT: Once = Once::new();
 
 /// Registers the font plots are drawn with, once; call it before drawing
@@ -100,6 +142,12 @@ fn bounds(plot: &RunPlot) -> (f64, f64, f64, f64) {
     (x0 - margin, x1 + margin, y0 - margin, y1 + margin)
 }
 
+/// The legends' text size, points.
+const LEGEND_TEXT: f64 = 16.0;
+
+/// Where the legends' text starts, pixels from the left of their column.
+const LEGEND_TEXT_AT: i32 = 44;
+
 /// How a legend entry is drawn.
 #[derive(Clone, Copy)]
 enum Mark {
@@ -132,7 +180,8 @@ fn draw_legend<DB: DrawingBackend>(
             Mark::Band(color) => area.draw(&Rectangle::new([(x - 12, y - 3), (x + 12, y + 3)], color.filled())),
         }
         .map_err(|e| err(&e))?;
-        area.draw(&Text::new(label.clone(), (x + 22, y - 8), ("sans-serif", 16))).map_err(|e| err(&e))?;
+        area.draw(&Text::new(label.clone(), (LEGEND_TEXT_AT, y - 8), ("sans-serif", LEGEND_TEXT)))
+            .map_err(|e| err(&e))?;
     }
     Ok(())
 }
@@ -151,13 +200,13 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     let root = canvas(path, (width, map_height + panel_height))?;
     let (top, panel) = root.split_vertically(map_height);
     let (map_area, legend_area) = top.split_horizontally(width - legend_width);
-    let mut chart = ChartBuilder::on(&map_area)
-        .caption(plot.title, ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(50)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(|e| fail(&e))?;
+    let map_area = map_area.margin(8, 0, 0, 0).titled(plot.title, ("sans-serif", 22)).map_err(|e| fail(&e))?;
+    let chart_on = |x: Range<f64>, y: Range<f64>| {
+        ChartBuilder::on(&map_area).margin(12).x_label_area_size(36).y_label_area_size(50).build_cartesian_2d(x, y)
+    };
+    let pixels = chart_on(0.0..1.0, 0.0..1.0).map_err(|e| fail(&e))?.plotting_area().dim_in_pixel();
+    let (x_range, y_range) = equal_scale((x0, x1, y0, y1), pixels);
+    let mut chart = chart_on(x_range, y_range).map_err(|e| fail(&e))?;
     chart.configure_mesh().x_desc("x (m)").y_desc("y (m)").light_line_style(WHITE).draw().map_err(|e| fail(&e))?;
     let mut legend: Vec<(String, Mark)> = Vec::new();
 
@@ -259,7 +308,13 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     }
     draw_legend(&legend_area, &legend).map_err(|e| fail(&e))?;
     if let Some(timeline) = plot.timeline {
+        let (panel, votes_legend) = panel.split_horizontally(width - legend_width);
         draw_timeline(&panel, timeline).map_err(|e| fail(&e))?;
+        // The votes' legend beside them, as the map's, so that it hides no
+        // line; it starts level with the vote panel, the lowest of three.
+        let (_, votes_legend) = votes_legend.split_vertically(panel_height * 2 / 3 - 40);
+        let entries = vote_legend(timeline, legend_width - LEGEND_TEXT_AT as u32 - 8);
+        draw_legend(&votes_legend, &entries).map_err(|e| fail(&e))?;
     }
     root.present().map_err(|e| fail(&e))?;
     Ok(())
@@ -304,25 +359,33 @@ fn draw_timeline<DB: DrawingBackend>(
         .build_cartesian_2d(0.0..end, 0.0..top * 1.05)
         .map_err(|e| err(&e))?;
     chart.configure_mesh().x_desc("time (s)").y_desc("vote").light_line_style(WHITE).draw().map_err(|e| err(&e))?;
-    for (i, (name, votes)) in timeline.votes.iter().enumerate() {
-        let color = Palette99::pick(i).to_rgba();
+    for (i, (_, votes)) in timeline.votes.iter().enumerate() {
         let points = timeline.time.iter().zip(votes).filter(|(_, v)| v.is_finite()).map(|(t, v)| (*t, *v));
-        chart
-            .draw_series(LineSeries::new(points, color.stroke_width(1)))
-            .map_err(|e| err(&e))?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
-    if !timeline.votes.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.85))
-            .draw()
-            .map_err(|e| err(&e))?;
+        chart.draw_series(LineSeries::new(points, vote_colour(i).stroke_width(1))).map_err(|e| err(&e))?;
     }
     Ok(())
+}
+
+/// The colour of the `i`th behaviour's votes.
+fn vote_colour(i: usize) -> RGBColor {
+    let RGBAColor(r, g, b, _) = Palette99::pick(i).to_rgba();
+    RGBColor(r, g, b)
+}
+
+/// The votes' legend: each behaviour by its path in the tree, shortened
+/// from the root end (`…/avoid/GoTo`) to what fits in `width` pixels.
+fn vote_legend(timeline: &Timeline, width: u32) -> Vec<(String, Mark)> {
+    let fit = |path: &str| {
+        let mut shown = path.strip_prefix("root/").unwrap_or(path).to_owned();
+        while text_width(&shown, LEGEND_TEXT) > width {
+            match shown.trim_start_matches("…/").split_once('/') {
+                Some((_, rest)) => shown = format!("…/{rest}"),
+                None => break,
+            }
+        }
+        shown
+    };
+    timeline.votes.iter().enumerate().map(|(i, (name, _))| (fit(name), Mark::Line(vote_colour(i), 2))).collect()
 }
 
 /// Draws a run as its log tells it (`ubf run` and `ubf replay` both draw
@@ -371,4 +434,83 @@ pub fn draw_paths(
         timeline: None,
     };
     draw(&plot, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pixels of `png` darker than mid-grey, as a bounding box
+    /// `(left, top, right, bottom)` within `region`.
+    fn dark_box(png: &Path, region: (u32, u32, u32, u32)) -> (u32, u32, u32, u32) {
+        let image = image::open(png).unwrap().to_luma8();
+        let (mut left, mut top, mut right, mut bottom) = (u32::MAX, u32::MAX, 0, 0);
+        for y in region.1..region.3 {
+            for x in region.0..region.2 {
+                if image.get_pixel(x, y).0[0] < 100 {
+                    (left, top, right, bottom) = (left.min(x), top.min(y), right.max(x), bottom.max(y));
+                }
+            }
+        }
+        (left, top, right, bottom)
+    }
+
+    fn room(width: f64, depth: f64) -> WorldMessage {
+        let corners = [[0.0, 0.0], [width, 0.0], [width, depth], [0.0, depth]];
+        let segments = (0..4).map(|i| [corners[i], corners[(i + 1) % 4]]).collect();
+        WorldMessage { segments, ..WorldMessage::default() }
+    }
+
+    #[test]
+    fn a_square_room_is_drawn_square_and_a_corridor_long() {
+        let dir = tempfile::tempdir().unwrap();
+        for (width, depth) in [(10.0, 10.0), (60.0, 4.0), (3.0, 30.0)] {
+            let world = room(width, depth);
+            let path = dir.path().join("plot.png");
+            let plot = RunPlot {
+                title: "room",
+                world: &world,
+                true_path: &[],
+                estimated_path: &[],
+                decisions: &[],
+                collisions: &[],
+                start: None,
+                goal: None,
+                timeline: None,
+            };
+            draw(&plot, &path).unwrap();
+            let (w, h) = image::image_dimensions(&path).unwrap();
+            assert_eq!(w, 1400);
+            // The walls: what is dark inside the axes, left of the legend.
+            let image = image::open(&path).unwrap().to_luma8();
+            let dark = |x: u32, y: u32| image.get_pixel(x, y).0[0] < 100;
+            let y_axis = (0..w / 2).find(|&x| (0..h).filter(|&y| dark(x, y)).count() > h as usize / 2).unwrap();
+            let x_axis = (0..h).rev().find(|&y| (0..w).filter(|&x| dark(x, y)).count() > w as usize / 2).unwrap();
+            let (left, top, right, bottom) = dark_box(&path, (y_axis + 3, 40, w - 240, x_axis - 3));
+            // The same pixels per metre both ways (less the walls' 2 px
+            // stroke), to within rounding.
+            let (across, up) = (f64::from(right - left) - 2.0, f64::from(bottom - top) - 2.0);
+            let drawn = (up / depth) / (across / width);
+            assert!((drawn - 1.0).abs() < 0.015, "{width}×{depth} m drawn {across} × {up} px");
+        }
+    }
+
+    #[test]
+    fn equal_scale_widens_the_narrower_range_about_its_centre() {
+        let (x, y) = equal_scale((0.0, 10.0, -1.0, 1.0), (1000, 500));
+        assert_eq!((x.start, x.end), (0.0, 10.0));
+        assert_eq!((y.start, y.end), (-2.5, 2.5));
+        let (x, y) = equal_scale((0.0, 1.0, 0.0, 10.0), (500, 500));
+        assert_eq!((x.start, x.end, y.start, y.end), (-4.5, 5.5, 0.0, 10.0));
+    }
+
+    #[test]
+    fn wrapped_text_fits_its_width() {
+        let text = "Each cell: the level, the aided technique with the least error on the development seeds, and its \
+                    error over straight driving's on held-out runs with 95 % CI.";
+        let lines = wrap_text(text, 13.0, 300);
+        assert!(lines.len() > 2, "{lines:?}");
+        assert!(lines.iter().all(|l| text_width(l, 13.0) <= 300), "{lines:?}");
+        assert_eq!(lines.join(" "), text.split_whitespace().collect::<Vec<_>>().join(" "));
+    }
 }
