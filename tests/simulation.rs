@@ -445,6 +445,11 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
         assert!((c - m).abs() < 20f64.to_radians(), "tick {tick}: commanded {c}, measured {m}");
     }
     assert!(widest_pan > 55f64.to_radians(), "the camera swept {:.1}°", widest_pan.to_degrees());
+    // The log carries the pan, so the plot (and a replay's) draws it.
+    let replayed = ubf::replay::read(&dir.path().join("run.mcap")).unwrap();
+    assert_eq!(replayed.timeline.camera_pan_deg.len(), replayed.timeline.time.len());
+    let logged = replayed.timeline.camera_pan_deg.iter().map(|p| p.abs()).fold(0.0, f64::max);
+    assert!((logged - widest_pan.to_degrees()).abs() < 0.01, "{logged}° logged");
     assert!(worst_heading < 2f64.to_radians(), "heading off by {:.2}°", worst_heading.to_degrees());
     assert!(report.endpoint_error_m.unwrap() < 0.5, "{report:?}");
     // Lifted as if the camera looked ahead, no frame matches (every motion

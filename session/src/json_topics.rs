@@ -129,6 +129,10 @@ pub struct TickMessage {
     pub winner: Option<String>,
     /// Every node's path, effective vote and whether it won, in pre-order.
     pub nodes: Vec<NodeVote>,
+    /// Where the camera on a pan-tilt head points, rad from straight ahead
+    /// (counter-clockwise positive); absent without a head.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_pan: Option<f64>,
 }
 
 /// One node's part in a tick.
@@ -372,6 +376,7 @@ impl JsonTopics {
                         composite: info.composite,
                     })
                     .collect(),
+                camera_pan: record.state.camera_aim.map(|aim| aim.pan),
             };
             send(out, "/tree", time, &tick)?;
         }

@@ -142,6 +142,12 @@ fn bounds(plot: &RunPlot) -> (f64, f64, f64, f64) {
     (x0 - margin, x1 + margin, y0 - margin, y1 + margin)
 }
 
+/// The turn rate's colour.
+const TURN: RGBColor = RGBColor(200, 90, 0);
+
+/// The camera pan's colour.
+const CAMERA_PAN: RGBColor = RGBColor(120, 40, 160);
+
 /// The legends' text size, points.
 const LEGEND_TEXT: f64 = 16.0;
 
@@ -308,13 +314,19 @@ pub fn draw(plot: &RunPlot, path: &Path) -> Result<(), PlotError> {
     }
     draw_legend(&legend_area, &legend).map_err(|e| fail(&e))?;
     if let Some(timeline) = plot.timeline {
-        let (panel, votes_legend) = panel.split_horizontally(width - legend_width);
+        let (panel, legends) = panel.split_horizontally(width - legend_width);
         draw_timeline(&panel, timeline).map_err(|e| fail(&e))?;
-        // The votes' legend beside them, as the map's, so that it hides no
-        // line; it starts level with the vote panel, the lowest of three.
-        let (_, votes_legend) = votes_legend.split_vertically(panel_height * 2 / 3 - 40);
+        // The legends beside the panels, as the map's, so that they hide no
+        // line: the camera's beside the turn panel (the second of three),
+        // the votes' beside the vote panel (the third).
+        if !timeline.camera_pan_deg.is_empty() {
+            let (_, beside_turn) = legends.split_vertically(panel_height / 3 - 40);
+            let entries = [("turn rate".into(), Mark::Line(TURN, 1)), ("camera pan".into(), Mark::Line(CAMERA_PAN, 2))];
+            draw_legend(&beside_turn, &entries).map_err(|e| fail(&e))?;
+        }
+        let (_, beside_votes) = legends.split_vertically(panel_height * 2 / 3 - 40);
         let entries = vote_legend(timeline, legend_width - LEGEND_TEXT_AT as u32 - 8);
-        draw_legend(&votes_legend, &entries).map_err(|e| fail(&e))?;
+        draw_legend(&beside_votes, &entries).map_err(|e| fail(&e))?;
     }
     root.present().map_err(|e| fail(&e))?;
     Ok(())
@@ -335,20 +347,27 @@ fn draw_timeline<DB: DrawingBackend>(
         let pad = 0.1 * (hi - lo).max(0.1);
         (lo - pad)..(hi + pad)
     };
-    let series: [(&str, &[f64], RGBColor); 2] = [
-        ("speed (m/s)", &timeline.speed, RGBColor(30, 80, 200)),
-        ("turn rate (°/s)", &timeline.turn_deg, RGBColor(200, 90, 0)),
-    ];
+    let series: [(&str, &[f64], RGBColor); 2] =
+        [("speed (m/s)", &timeline.speed, RGBColor(30, 80, 200)), ("turn rate (°/s)", &timeline.turn_deg, TURN)];
     for (row, (label, values, color)) in rows.iter().zip(series) {
+        // The camera's pan shares the turn panel, on the same axis, in °.
+        let pan = (label.starts_with("turn") && !timeline.camera_pan_deg.is_empty())
+            .then_some(timeline.camera_pan_deg.as_slice());
+        let range = finite_range(&[values, pan.unwrap_or_default()].concat());
+        let label = if pan.is_some() { "turn (°/s), pan (°)" } else { label };
         let mut chart = ChartBuilder::on(row)
             .margin(8)
             .x_label_area_size(24)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..end, finite_range(values))
+            .build_cartesian_2d(0.0..end, range)
             .map_err(|e| err(&e))?;
         chart.configure_mesh().y_desc(label).light_line_style(WHITE).draw().map_err(|e| err(&e))?;
         let points = timeline.time.iter().zip(values).filter(|(_, v)| v.is_finite()).map(|(t, v)| (*t, *v));
         chart.draw_series(LineSeries::new(points, color.stroke_width(1))).map_err(|e| err(&e))?;
+        if let Some(pan) = pan {
+            let points = timeline.time.iter().zip(pan).filter(|(_, v)| v.is_finite()).map(|(t, v)| (*t, *v));
+            chart.draw_series(LineSeries::new(points, CAMERA_PAN.stroke_width(2))).map_err(|e| err(&e))?;
+        }
     }
     let top =
         timeline.votes.iter().flat_map(|(_, v)| v.iter()).copied().filter(|v| v.is_finite()).fold(1.0f64, f64::max);

@@ -29,6 +29,9 @@ pub struct Timeline {
     pub turn_deg: Vec<f64>,
     /// Each behaviour's (leaf's) name and its vote per tick.
     pub votes: Vec<(String, Vec<f64>)>,
+    /// Where the camera on a pan-tilt head pointed, ° from straight ahead
+    /// (NaN where the log does not say); empty without a head.
+    pub camera_pan_deg: Vec<f64>,
 }
 
 /// A run read back from its log.
@@ -117,6 +120,12 @@ pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
                 out.timeline.time.push(tick.time);
                 out.timeline.speed.push(tick.velocity);
                 out.timeline.turn_deg.push(tick.rot_velocity.map_or(f64::NAN, f64::to_degrees));
+                if let Some(pan) = tick.camera_pan {
+                    // Filled in from the first tick that says, so that the
+                    // series stays aligned with `time`.
+                    out.timeline.camera_pan_deg.resize(out.timeline.time.len() - 1, f64::NAN);
+                    out.timeline.camera_pan_deg.push(pan.to_degrees());
+                }
                 for ((_, votes), &i) in out.timeline.votes.iter_mut().zip(&leaves) {
                     votes.push(tick.nodes.get(i).map_or(f64::NAN, |n| n.vote));
                 }
