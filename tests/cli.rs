@@ -264,6 +264,25 @@ fn ubf_new_writes_the_crate_the_workspace_builds_and_tests() {
 }
 
 #[test]
+fn the_figures_in_the_docs_are_the_ones_the_code_draws_now() {
+    // A change to how figures are drawn shows in review as a changed PNG
+    // in docs/figures/: `UBF_RECORD_FIGURES=1` draws them again.
+    let dir = tempfile::tempdir().unwrap();
+    let run = ubf(&["run", "scenarios/corridor-box.ron", "--out", dir.path().join("run").to_str().unwrap()]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let model = dir.path().join("model.png");
+    assert!(ubf(&["model", "heatmap", "--out", model.to_str().unwrap()]).status.success());
+    let figures = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/figures");
+    for (drawn, shown) in [(dir.path().join("run/plot.png"), "corridor-box.png"), (model, "error-model.png")] {
+        let drawn = std::fs::read(drawn).unwrap();
+        if std::env::var_os("UBF_RECORD_FIGURES").is_some() {
+            std::fs::write(figures.join(shown), &drawn).unwrap();
+        }
+        assert!(drawn == std::fs::read(figures.join(shown)).unwrap(), "docs/figures/{shown} is not what is drawn now");
+    }
+}
+
+#[test]
 fn the_stock_binary_does_not_know_a_users_behaviour() {
     // Wander is registered by the example crate's own binary, not by ubf.
     let out = ubf(&["check", "examples/wander/wander.ron"]);

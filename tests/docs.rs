@@ -280,7 +280,11 @@ fn scratch() -> Scratch {
     std::fs::create_dir(dir.join("docs")).unwrap();
     for entry in std::fs::read_dir(root().join("docs")).unwrap() {
         let path = entry.unwrap().path();
-        std::fs::copy(&path, dir.join("docs").join(path.file_name().unwrap())).unwrap();
+        let to = dir.join("docs").join(path.file_name().unwrap());
+        match path.is_dir() {
+            true => std::os::unix::fs::symlink(&path, to).unwrap(),
+            false => drop(std::fs::copy(&path, to).unwrap()),
+        }
     }
     std::fs::create_dir(dir.join("robots")).unwrap();
     link_entries(&root().join("robots"), &dir.join("robots"), &["config"]);
