@@ -1,6 +1,6 @@
 //! Keep clear of obstacles the range sensors see.
 
-use crate::clearance::{echo_points, free_distance};
+use crate::clearance::{free_distance, EchoPoints};
 use serde::Deserialize;
 use std::f64::consts::FRAC_PI_2;
 use ubf_core::config::{non_negative, positive, Check};
@@ -93,7 +93,7 @@ pub struct AvoidCollision {
     /// noise does not make it dither.
     committed: Option<f64>,
     /// Echo points in the robot frame (reused every tick).
-    points: Vec<(f64, f64)>,
+    points: EchoPoints,
 }
 
 /// Candidate headings, relative to the robot's, every 5° over ±90°.
@@ -112,7 +112,7 @@ fn preferred_heading(state: &State) -> f64 {
 impl AvoidCollision {
     /// An avoider with these settings.
     pub fn new(config: AvoidCollisionConfig) -> Self {
-        AvoidCollision { config, committed: None, points: Vec::new() }
+        AvoidCollision { config, committed: None, points: EchoPoints::default() }
     }
 
     /// The free heading (robot frame) nearest the goal's bearing, or nearest
@@ -132,13 +132,13 @@ impl AvoidCollision {
 
     /// How far the robot's strip along `heading` (robot frame) is free.
     fn free_distance(&self, heading: f64) -> f64 {
-        free_distance(&self.points, heading, self.config.path_half_width)
+        free_distance(self.points.points(), heading, self.config.path_half_width)
     }
 }
 
 impl Behavior for AvoidCollision {
     fn gen_action(&mut self, state: &State) -> Action {
-        echo_points(state, &mut self.points);
+        self.points.update(state);
         let c = &self.config;
         // Clearance ahead is measured from the robot's front, where the
         // forward sonars sit: the echo's distance along the heading less the

@@ -38,7 +38,14 @@ impl Pose2 {
 
     /// Expresses a point given in this pose's frame in the parent frame.
     pub fn transform_point(&self, x: f64, y: f64) -> (f64, f64) {
-        let (s, c) = self.theta.sin_cos();
+        self.transform_point_with(self.theta.sin_cos(), x, y)
+    }
+
+    /// [`Pose2::transform_point`] given `theta.sin_cos()`, for a caller that
+    /// keeps them from one point or tick to the next (a sensor's fixed
+    /// mounting angle, a heading that has not changed): the same bits
+    /// without the sine and cosine.
+    pub fn transform_point_with(&self, (s, c): (f64, f64), x: f64, y: f64) -> (f64, f64) {
         (self.x + c * x - s * y, self.y + s * x + c * y)
     }
 
@@ -104,6 +111,18 @@ mod tests {
         let pose = Pose2::new(1.0, 1.0, PI / 2.0);
         assert!(pose.bearing_to(1.0, 2.0).abs() < 1e-12);
         assert!((pose.bearing_to(0.0, 1.0) - PI / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_kept_sine_and_cosine_transform_as_the_heading_does() {
+        for theta in [0.0, -0.0, 0.3, -2.0, PI, -PI / 2.0] {
+            let pose = Pose2::new(1.5, -0.25, theta);
+            for (x, y) in [(0.0, 0.0), (2.0, -0.0), (-0.7, 0.3)] {
+                let (a, b) = pose.transform_point(x, y);
+                let (c, d) = pose.transform_point_with(theta.sin_cos(), x, y);
+                assert_eq!((a.to_bits(), b.to_bits()), (c.to_bits(), d.to_bits()));
+            }
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@ mod zigzag;
 pub use config::{ActionAidingConfig, DecisionObjective, Steer, Technique};
 pub use prediction::PredictionCheck;
 
-use crate::clearance::{echo_points, free_distance};
+use crate::clearance::{free_distance, EchoPoints};
 use crate::decision::{best_heading, best_look, DecisionRules, Objective};
 use crate::tracking::TrackingList;
 use phase::Phase;
@@ -40,7 +40,7 @@ pub struct ActionAiding {
     last_frame: u64,
     zigzag: ZigZag,
     positions: Vec<[f64; 3]>,
-    echoes: Vec<(f64, f64)>,
+    echoes: EchoPoints,
     decisions: u64,
     predictions: Predictions,
     /// Camera steering: where the camera is to look (world), once chosen.
@@ -91,7 +91,7 @@ impl ActionAiding {
             list,
             last_frame: 0,
             positions: Vec::new(),
-            echoes: Vec::new(),
+            echoes: EchoPoints::default(),
             decisions: 0,
             predictions: Predictions::default(),
             look: None,
@@ -128,7 +128,7 @@ impl ActionAiding {
 
     /// Whether the strip along the world `heading` is clear far enough.
     fn clear(&self, pose: &Pose2, heading: f64) -> bool {
-        strip_clear(&self.config, &self.echoes, pose, heading)
+        strip_clear(&self.config, self.echoes.points(), pose, heading)
     }
 
     /// The permitted headings around `centre`, centre first so that ties
@@ -291,7 +291,7 @@ impl ActionAiding {
                 }
             }
         }
-        echo_points(state, &mut self.echoes);
+        self.echoes.update(state);
         let tick = Tick { pose, goal: (goal.x, goal.y), to_goal, distance, time: state.time, vote: self.vote(state) };
         // Three passes at most: a finished phase hands over within the tick
         // (a step to the decision, the decision to a turn or a scan).
@@ -333,7 +333,7 @@ impl ActionAiding {
                 let heading = match technique {
                     Technique::None => to_goal,
                     Technique::ZigZag => {
-                        let (config, echoes) = (&self.config, &self.echoes);
+                        let (config, echoes) = (&self.config, self.echoes.points());
                         let (angle, max_offset) = (config.zigzag_angle_deg.to_radians(), config.zigzag_max_offset_m);
                         self.zigzag
                             .heading(&pose, goal, angle, max_offset, |leg| strip_clear(config, echoes, &pose, leg))

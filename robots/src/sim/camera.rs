@@ -3,8 +3,8 @@
 //! triangulated. Noise is never added to depths directly: the skewed,
 //! growing depth error of real stereo comes out of the triangulation.
 
+use super::descriptor::DescriptorCache;
 use super::geometry::Segment;
-use super::hash::splitmix;
 use super::pan_tilt::PanTiltConfig;
 use super::render::{RenderConfig, Renderer};
 use super::world::{World, WorldLandmark};
@@ -14,7 +14,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use std::sync::Arc;
 use ubf_core::config::{non_negative, positive, unit_interval, Check};
-use ubf_core::{Aim, CameraMount, Descriptor, LandmarkObservation, Pose2, StereoImages, StereoPixels};
+use ubf_core::{Aim, CameraMount, LandmarkObservation, Pose2, StereoImages, StereoPixels};
 use ubf_perception::features::StereoPipeline;
 use ubf_perception::StereoCamera;
 
@@ -135,28 +135,6 @@ impl Default for SimCameraConfig {
     }
 }
 
-/// The descriptor of `landmark` seen from `view` radians off its reference
-/// direction, without image noise.
-///
-/// Each of the 256 bits has its own threshold angle, spread evenly at random
-/// over ±90°; a bit flips once the view passes its threshold. Two views
-/// `Δ` apart then differ in about `256·Δ/180°` bits, whatever the views: 28
-/// bits at 20°, 43 at 30°. Descriptors change smoothly with viewpoint, as
-/// real ones do (the thesis's figure 3).
-pub fn descriptor_from(landmark: &WorldLandmark, view: f64) -> Descriptor {
-    let view_deg = view.to_degrees().clamp(-90.0, 90.0);
-    let mut words = landmark.descriptor.0;
-    for bit in 0..256u64 {
-        let h = splitmix(u64::from(landmark.id) << 8 | bit);
-        let threshold = (h >> 11) as f64 / (1u64 << 53) as f64 * 180.0 - 90.0;
-        let flipped = if threshold >= 0.0 { view_deg > threshold } else { view_deg < threshold };
-        if flipped {
-            words[(bit / 64) as usize] ^= 1 << (bit % 64);
-        }
-    }
-    Descriptor(words)
-}
-
 /// The camera on the simulated robot.
 #[derive(Clone, Debug)]
 pub struct SimCamera {
@@ -167,6 +145,8 @@ pub struct SimCamera {
     /// the world) and the pipeline, and the last pair.
     rendered: Option<(Renderer, StereoPipeline)>,
     last_images: Option<Arc<StereoImages>>,
+    /// The threshold angles of the landmarks seen so far.
+    descriptors: DescriptorCache,
 }
 
 /// The angle between two directions on the floor, signed, radians.
@@ -177,7 +157,14 @@ fn signed_angle(from: (f64, f64), to: (f64, f64)) -> f64 {
 impl SimCamera {
     /// A camera with these settings; its first frame is at time 0.
     pub fn new(config: SimCameraConfig) -> Self {
-        SimCamera { config, next_frame: 0.0, frames: 0, rendered: None, last_images: None }
+        SimCamera {
+            config,
+            next_frame: 0.0,
+            frames: 0,
+            rendered: None,
+            last_images: None,
+            descriptors: DescriptorCache::default(),
+        }
     }
 
     /// The settings.
@@ -241,7 +228,7 @@ impl SimCamera {
     }
 
     fn observe(
-        &self,
+        &mut self,
         landmark: &WorldLandmark,
         time: f64,
         pose: &Pose2,
@@ -292,7 +279,7 @@ impl SimCamera {
             return None;
         }
         let point_cam = stereo.triangulate(&pixels)?;
-        let mut descriptor = descriptor_from(landmark, view);
+        let mut descriptor = self.descriptors.descriptor(landmark, view);
         for _ in 0..c.descriptor_noise_bits {
             let bit = rng.random_range(0..256u32);
             descriptor.0[(bit / 64) as usize] ^= 1 << (bit % 64);
@@ -334,6 +321,7 @@ mod tests {
     use super::*;
     use crate::sim::world::{Anchor, WorldConfig};
     use rand::SeedableRng;
+    use ubf_core::Descriptor;
 
     /// x, y, z and the surface normal of a test landmark.
     type Spot = (f64, f64, f64, Option<(f64, f64)>);
@@ -426,21 +414,5 @@ mod tests {
             let predicted = cam.depth_sigma(depth, config.pixel_noise_px);
             assert!((sd / predicted - 1.0).abs() < 0.1, "at {depth} m: σ {sd} vs predicted {predicted}");
         }
-    }
-
-    #[test]
-    fn descriptors_drift_with_viewpoint() {
-        let world = world_with(vec![(0.0, 0.0, 0.0, None)]);
-        let lm = &world.landmarks[0];
-        let d0 = descriptor_from(lm, 0.0);
-        let d20 = descriptor_from(lm, 20f64.to_radians());
-        let d40 = descriptor_from(lm, 40f64.to_radians());
-        let d60 = descriptor_from(lm, 60f64.to_radians());
-        assert!(d0.hamming(&d20) < d0.hamming(&d40));
-        assert!(d0.hamming(&d40) < d0.hamming(&d60));
-        // Differences depend on the angle between the views, not on where
-        // they are: 20° apart is about 256·20/180 ≈ 28 bits either way.
-        assert!((15..45).contains(&d20.hamming(&d40)), "{}", d20.hamming(&d40));
-        assert!((15..45).contains(&d40.hamming(&d60)), "{}", d40.hamming(&d60));
     }
 }

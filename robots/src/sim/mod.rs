@@ -10,6 +10,7 @@
 
 mod body;
 mod camera;
+mod descriptor;
 pub mod geometry;
 mod hash;
 mod pan_tilt;
@@ -19,7 +20,8 @@ mod world;
 
 pub(crate) use body::approach;
 pub use body::{integrate, MotionProfile, OdometryErrors, StartPose};
-pub use camera::{descriptor_from, SimCameraConfig};
+pub use camera::SimCameraConfig;
+pub use descriptor::descriptor_from;
 pub use pan_tilt::{PanTiltConfig, SimPanTilt};
 pub use sonar::{Sonar, SonarConfig};
 pub use world::{
