@@ -174,9 +174,15 @@ impl Behavior for AvoidCollision {
         self.committed = Some(wrap_angle(state.pose.theta + target));
         let max_turn = c.max_turn_deg.to_radians();
         let limit = (ahead - c.stop_distance).max(0.0) * c.speed_per_metre;
-        Action::with_vote(c.vote * nearness)
-            .rot_velocity((c.turn_gain * target).clamp(-max_turn, max_turn))
-            .max_velocity(limit)
+        let mut turn = (c.turn_gain * target).clamp(-max_turn, max_turn);
+        if limit == 0.0 {
+            // Blocked, it turns at least half its top rate: a gentle turn
+            // towards a heading a few degrees off could be cancelled, in a
+            // fusing arbiter, by a go-to's turn back, and the robot stood
+            // still for good where no sonar noise tipped the balance.
+            turn = target.signum() * turn.abs().max(max_turn / 2.0);
+        }
+        Action::with_vote(c.vote * nearness).rot_velocity(turn).max_velocity(limit)
     }
 
     fn name(&self) -> &str {
@@ -290,6 +296,18 @@ mod tests {
         let mut s = state(&[(40.0, 1.0)]);
         s.goal = Some(ubf_core::Goal { x: 0.5, y: 0.3, tolerance: 0.2 });
         assert!(!avoid.gen_action(&s).is_voting());
+    }
+
+    #[test]
+    fn blocked_it_turns_firmly_even_towards_a_heading_a_few_degrees_off() {
+        let mut avoid = AvoidCollision::new(AvoidCollisionConfig::default());
+        // An echo 0.55 m ahead, 0.45 m right: no forward speed, and the
+        // nearest free heading is 10° left.
+        let echo = (0.55f64, -0.45f64);
+        let a = avoid.gen_action(&state(&[(echo.1.atan2(echo.0).to_degrees(), echo.0.hypot(echo.1))]));
+        assert_eq!(a.motion.max_velocity, Some(0.0));
+        let turn = a.motion.rot_velocity.unwrap();
+        assert!(turn >= 45f64.to_radians() / 2.0 - 1e-12, "{turn} rad/s");
     }
 
     #[test]
