@@ -74,8 +74,11 @@ pub fn gaussian_blur(image: &GrayImage, sigma: f64) -> GrayImage {
     let mut out = vec![0u8; src.len()];
     for y in 0..h {
         for x in 0..w {
-            let v: f64 =
-                kernel.iter().zip(-radius..=radius).map(|(k, dy)| k * rows[clamp(y + dy, h) * w as usize + x as usize]).sum();
+            let v: f64 = kernel
+                .iter()
+                .zip(-radius..=radius)
+                .map(|(k, dy)| k * rows[clamp(y + dy, h) * w as usize + x as usize])
+                .sum();
             out[(y * w + x) as usize] = v.round().clamp(0.0, 255.0) as u8;
         }
     }
@@ -109,7 +112,9 @@ pub fn perturb_sequence(
     for dir in ["image_0", "image_1"] {
         std::fs::create_dir_all(to.join(dir)).map_err(io(&to.join(dir)))?;
     }
-    let keep = |text: &str| text.lines().filter(|l| !l.trim().is_empty()).take(count).map(|l| format!("{l}\n")).collect::<String>();
+    let keep = |text: &str| {
+        text.lines().filter(|l| !l.trim().is_empty()).take(count).map(|l| format!("{l}\n")).collect::<String>()
+    };
     std::fs::write(to.join("times.txt"), keep(&times)).map_err(io(&to.join("times.txt")))?;
     std::fs::copy(from.join("calib.txt"), to.join("calib.txt")).map_err(io(&from.join("calib.txt")))?;
     let poses = from.join("poses.txt");

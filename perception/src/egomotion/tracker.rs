@@ -162,6 +162,13 @@ impl Tracker {
         self.covariance + self.extra
     }
 
+    /// The covariance of the latest pose as the estimator's own
+    /// information puts it, without what [`Tracker::pose_covariance`] adds
+    /// for failed and starving steps.
+    pub fn estimator_covariance(&self) -> Matrix3<f64> {
+        self.covariance
+    }
+
     /// The consistent landmarks the latest step rested on; `None` when it
     /// failed (or no step has been taken yet).
     pub fn step_landmarks(&self) -> Option<usize> {
