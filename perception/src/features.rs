@@ -29,6 +29,14 @@ pub struct FeatureConfig {
     /// FAST: a corner needs 9 contiguous pixels of its 16-pixel circle all
     /// brighter or all darker than it by this many grey levels.
     pub fast_threshold: u8,
+    /// Where the image has too little contrast for `fast_threshold` (blur,
+    /// a dim scene): every square cell of `cell_px` without a corner is
+    /// searched again at this lower threshold, and what it finds ranks
+    /// after the corners found at `fast_threshold`. Equal to
+    /// `fast_threshold` turns it off.
+    pub min_fast_threshold: u8,
+    /// The side of those cells, px.
+    pub cell_px: u32,
     /// At most this many corners per image, the strongest.
     pub max_features: usize,
     /// Largest Hamming distance of an accepted match, of 256 bits (eq. 10).
@@ -57,6 +65,15 @@ impl ubf_core::config::Check for FeatureConfig {
         if !(1..=100_000).contains(&self.max_features) {
             return Err(format!("max_features: {}; 1 to 100000", self.max_features));
         }
+        if self.min_fast_threshold > self.fast_threshold {
+            return Err(format!(
+                "min_fast_threshold: {}; at most fast_threshold ({})",
+                self.min_fast_threshold, self.fast_threshold
+            ));
+        }
+        if !(8..=4096).contains(&self.cell_px) {
+            return Err(format!("cell_px: {}; 8 to 4096", self.cell_px));
+        }
         if self.max_distance > 256 {
             return Err(format!("max_distance: {}; a descriptor has 256 bits", self.max_distance));
         }
@@ -81,6 +98,8 @@ impl Default for FeatureConfig {
     fn default() -> Self {
         FeatureConfig {
             fast_threshold: 20,
+            min_fast_threshold: 7,
+            cell_px: 32,
             max_features: 1000,
             max_distance: 64,
             ratio: 0.8,
@@ -279,9 +298,34 @@ fn smooth(image: &GrayImage) -> Vec<u8> {
     out
 }
 
+/// The corners [`extract`] describes: FAST at `fast_threshold`, strongest
+/// first, and when they are fewer than `max_features`, after them those
+/// found at `min_fast_threshold` in the cells of `cell_px` that had none
+/// (ORB-SLAM's scheme, Mur-Artal et al. 2015), strongest first.
+pub fn detect_adaptive(image: &GrayImage, config: &FeatureConfig) -> Vec<(u32, u32, u32)> {
+    let mut corners = detect(image, config.fast_threshold, config.max_features);
+    if corners.len() >= config.max_features || config.min_fast_threshold >= config.fast_threshold {
+        return corners;
+    }
+    let cell = config.cell_px;
+    let columns = image.width().div_ceil(cell) as usize;
+    let mut occupied = vec![false; columns * image.height().div_ceil(cell) as usize];
+    for &(x, y, _) in &corners {
+        occupied[(y / cell) as usize * columns + (x / cell) as usize] = true;
+    }
+    let room = config.max_features - corners.len();
+    corners.extend(
+        detect(image, config.min_fast_threshold, usize::MAX)
+            .into_iter()
+            .filter(|&(x, y, _)| !occupied[(y / cell) as usize * columns + (x / cell) as usize])
+            .take(room),
+    );
+    corners
+}
+
 /// Detects and describes the corners of `image`.
 pub fn extract(image: &GrayImage, config: &FeatureConfig) -> Vec<Feature> {
-    let corners = detect(image, config.fast_threshold, config.max_features);
+    let corners = detect_adaptive(image, config);
     if corners.is_empty() {
         return Vec::new();
     }
@@ -704,6 +748,33 @@ mod tests {
         // A flat image has none, and neither does a tiny one.
         assert!(detect(&GrayImage::from_pixel(120, 100, Luma([90])), 20, 100).is_empty());
         assert!(detect(&GrayImage::new(20, 20), 20, 100).is_empty());
+    }
+
+    #[test]
+    fn cells_without_corners_are_searched_again_at_the_lower_threshold() {
+        // One square of contrast 160, one of 15: the faint one's corners
+        // are under the threshold of 20 and over the fallback's 7.
+        let image = GrayImage::from_fn(160, 100, |x, y| {
+            let strong = (20..40).contains(&x) && (30..50).contains(&y);
+            let faint = (100..120).contains(&x) && (30..50).contains(&y);
+            Luma([if strong {
+                40
+            } else if faint {
+                185
+            } else {
+                200
+            }])
+        });
+        let fixed = FeatureConfig { min_fast_threshold: 20, ..FeatureConfig::default() };
+        assert_eq!(detect_adaptive(&image, &fixed).len(), 4);
+        let adaptive = detect_adaptive(&image, &FeatureConfig::default());
+        assert_eq!(adaptive.len(), 8, "{adaptive:?}");
+        // The strong square's corners rank first, and the faint square's
+        // cells only are searched again (the strong one's found none more).
+        assert!(adaptive[..4].iter().all(|&(x, _, _)| x < 60) && adaptive[4..].iter().all(|&(x, _, _)| x >= 99));
+        // Enough corners at the threshold: no second search.
+        let full = FeatureConfig { max_features: 4, ..FeatureConfig::default() };
+        assert_eq!(detect_adaptive(&image, &full), detect(&image, 20, 4));
     }
 
     #[test]
