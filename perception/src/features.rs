@@ -677,7 +677,8 @@ impl StereoPipeline {
     /// searched `max_row_offset_px` rows about `prior`, those within half
     /// the distance threshold taken as confident, each one's row
     /// difference refined to a fraction of a pixel by block matching, and
-    /// the median of them; `None` with fewer than [`OFFSET_MATCHES`].
+    /// the median of them; `None` with fewer than [`OFFSET_MATCHES`], or
+    /// when fewer than half lie within half a row of it.
     fn estimate_row_offset(
         &self,
         left: &GrayImage,
@@ -706,7 +707,14 @@ impl StereoPipeline {
             refine_row_offset(left, right, exposure, l.x, r.x, l.y, dy)
         })
         .collect();
-        (offsets.len() >= OFFSET_MATCHES).then(|| crate::median(&mut offsets))
+        if offsets.len() < OFFSET_MATCHES {
+            return None;
+        }
+        // Most of them must agree with the median to half a row, or the
+        // pair (too blurred, too few corners) says nothing.
+        let median = crate::median(&mut offsets);
+        let agreeing = offsets.iter().filter(|o| (*o - median).abs() <= 0.5).count();
+        (2 * agreeing >= offsets.len()).then_some(median)
     }
 }
 
