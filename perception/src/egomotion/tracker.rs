@@ -697,6 +697,46 @@ mod tests {
     }
 
     #[test]
+    fn steps_on_too_few_landmarks_and_failed_steps_raise_the_pose_uncertainty() {
+        // The same noisy frames, trusted at the estimator's word and with a
+        // bar above every step's landmarks.
+        let camera = StereoCamera::default();
+        let points = landmarks();
+        let drive = |trusted_landmarks: usize| {
+            let config = EgomotionConfig { trusted_landmarks, odometry_gate: None, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 3);
+            for k in 0..4u32 {
+                let pose = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+                let seen = disturbed(frame(&points, pose, &camera), u64::from(k), 0.02);
+                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen), &pose);
+            }
+            tracker
+        };
+        let trusting = drive(1);
+        assert!(!trusting.starving());
+        assert_eq!(trusting.pose_covariance(), trusting.estimator_covariance());
+        let wary = drive(points.len() * 4);
+        let n = wary.step_landmarks().unwrap();
+        assert!(wary.starving() && n < points.len() * 4);
+        // The same estimate, its uncertainty counted more than once over.
+        assert_eq!(wary.state().pose, trusting.state().pose);
+        assert_eq!(wary.estimator_covariance(), trusting.estimator_covariance());
+        assert!(
+            wary.pose_covariance()[(0, 0)] > 2.0 * wary.estimator_covariance()[(0, 0)],
+            "{}",
+            wary.pose_covariance()
+        );
+        // A failed step with no odometry gate: a step anywhere within the
+        // speed limit over its half second, σ = 0.6 · 0.5 / √3 m.
+        let mut failing = drive(1);
+        let before = failing.pose_covariance();
+        failing.update(&at(5, 2.0, Vec::new()), &Pose2::new(0.75, 0.0, 0.0));
+        assert!(failing.starving() && failing.step_landmarks().is_none());
+        let added = failing.pose_covariance() - before;
+        assert!((added[(0, 0)] - 0.09 / 3.0).abs() < 1e-9 && (added[(1, 1)] - 0.09 / 3.0).abs() < 1e-9, "{added}");
+    }
+
+    #[test]
     fn a_heading_error_becomes_a_position_error_along_the_motion() {
         // A pose known exactly but for its heading (σ 0.01 rad), facing +y,
         // then an exact 10 m step forward: the error lands across the step
