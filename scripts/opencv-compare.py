@@ -16,7 +16,10 @@ Per pair, OpenCV does what our pipeline does, on one thread:
   passing the ratio test; triangulation; matching the left descriptors to
   the previous pair's; and a rigid planar estimate of the motion with
   RANSAC (estimateAffinePartial2D on the floor-plane points).
-The median time per pair is compared with `ubf pipeline DIR --json`.
+The median time per pair is compared with `ubf pipeline DIR --json`. On a
+KITTI sequence with poses.txt, the motions are chained frame to frame and
+both pipelines' end-point drift (end-point error over the path length, in
+the ground plane) and failed steps are printed too.
 """
 import json
 import os
@@ -83,6 +86,10 @@ def main():
     orb = cv2.ORB_create(nfeatures=1000, fastThreshold=20)
     matcher = cv2.BFMatcher(cv2.NORM_HAMMING)
     times, counts, previous = [], [], None
+    # The left camera's pose in the first frame (4 × 4), its path in the
+    # floor plane (x right, z ahead), and the steps with no estimate.
+    pose, path, failed = np.eye(4), [(0.0, 0.0)], 0
+    intrinsics = np.array([[f, 0, cx], [0, f, cy], [0, 0, 1]], dtype=np.float64)
     for left, right in images:
         start = time.perf_counter()
         kl, dl = orb.detectAndCompute(left, None)
@@ -103,30 +110,54 @@ def main():
                 m = pair[0]
                 (ul, v), (ur, _) = kl[m.queryIdx].pt, kr[m.trainIdx].pt
                 depth = f * baseline / (ul - ur)
-                x = (ul - cx) * depth / f - baseline / 2
-                points.append((x, depth))
+                points.append(((ul - cx) * depth / f, (v - cy) * depth / f, depth))
                 descriptors.append(dl[m.queryIdx])
-        points = np.array(points, dtype=np.float32).reshape(-1, 2)
+        points = np.array(points, dtype=np.float64).reshape(-1, 3)
         descriptors = np.array(descriptors, dtype=np.uint8)
-        if previous is not None and len(points) >= 3 and len(previous[0]) >= 3:
-            matches = matcher.match(previous[1], descriptors)
-            if len(matches) >= 3:
-                a = np.float32([previous[0][m.queryIdx] for m in matches])
-                b = np.float32([points[m.trainIdx] for m in matches])
-                cv2.estimateAffinePartial2D(a, b, method=cv2.RANSAC, ransacReprojThreshold=0.1)
+        moved = None
+        if previous is not None and len(previous[0]) >= 6 and dl is not None and len(dl) >= 2:
+            good = [p[0] for p in matcher.knnMatch(previous[1], dl, k=2)
+                    if len(p) == 2 and p[0].distance <= 64 and p[0].distance < 0.8 * p[1].distance]
+            if len(good) >= 6:
+                objects = np.float64([previous[0][m.queryIdx] for m in good])
+                pixels = np.float64([kl[m.trainIdx].pt for m in good])
+                ok, rvec, tvec, inliers = cv2.solvePnPRansac(
+                    objects, pixels, intrinsics, None, iterationsCount=100, reprojectionError=1.0)
+                if ok and inliers is not None and len(inliers) >= 6:
+                    # The previous frame's points in this camera's frame:
+                    # the camera moved by the inverse.
+                    step = np.eye(4)
+                    step[:3, :3], step[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+                    moved = step
+        if previous is not None:
+            if moved is None:
+                failed += 1
+            else:
+                pose = pose @ np.linalg.inv(moved)
+            path.append((pose[0, 3], pose[2, 3]))
         previous = (points, descriptors)
         times.append((time.perf_counter() - start) * 1e3)
         counts.append(len(points))
     times.sort()
     theirs = times[len(times) // 2]
     ours = json.loads(subprocess.check_output([ubf, "pipeline", directory, "--json"]))
+    drift = None
+    poses = os.path.join(directory, "poses.txt")
+    if os.path.exists(poses):
+        # KITTI's poses: the left camera's 3 × 4 matrix; x right, z ahead.
+        truth = [[float(v) for v in line.split()] for line in open(poses) if line.strip()]
+        along = sum(np.hypot(b[3] - a[3], b[11] - a[11]) for a, b in zip(truth, truth[1:]))
+        end = truth[len(path) - 1]
+        drift = np.hypot(path[-1][0] - end[3], path[-1][1] - end[11]) / along * 100
     print(f"{len(images)} stereo pairs from {directory}, one thread each")
-    print(f"| pipeline | median ms per pair | pairs/s | landmarks per pair |")
-    print(f"| --- | --- | --- | --- |")
+    print(f"| pipeline | median ms per pair | pairs/s | landmarks per pair | drift % | failed steps |")
+    print(f"| --- | --- | --- | --- | --- | --- |")
+    ours_drift = f"{ours['endpoint_drift_pct']:.2f}" if "endpoint_drift_pct" in ours else "—"
     print(f"| ubf (FAST-9, 256-bit BRIEF, row matching, rigid RANSAC) | {ours['total_ms_median']:.2f} | "
-          f"{ours['frames_per_s']:.0f} | {ours['landmarks_mean']:.0f} |")
-    print(f"| OpenCV {cv2.__version__} (ORB, BFMatcher, estimateAffinePartial2D) | {theirs:.2f} | "
-          f"{1e3 / theirs:.0f} | {sum(counts) / len(counts):.0f} |")
+          f"{ours['frames_per_s']:.0f} | {ours['landmarks_mean']:.0f} | {ours_drift} | {ours['failures']} |")
+    theirs_drift = "—" if drift is None else f"{drift:.2f}"
+    print(f"| OpenCV {cv2.__version__} (ORB, BFMatcher, solvePnPRansac) | {theirs:.2f} | "
+          f"{1e3 / theirs:.0f} | {sum(counts) / len(counts):.0f} | {theirs_drift} | {failed} |")
     print(f"ubf's time is {ours['total_ms_median'] / theirs:.2f} of OpenCV's")
 
 

@@ -8,6 +8,8 @@
 //! - [`egomotion`]: frame matching and the two egomotion estimators.
 //! - [`features`]: landmarks from a pair of real images: corners,
 //!   descriptors, stereo matching, triangulation.
+//! - [`perturb`]: misalignment, blur and low contrast applied to stereo
+//!   pairs, to test the pipeline on what real cameras do.
 //! - [`source`]: where stereo pairs come from: a directory of images, the
 //!   simulator's renderer, and with the `v4l` feature two Video4Linux
 //!   cameras (`v4l_source`).
@@ -22,6 +24,7 @@ pub mod error_model;
 pub mod features;
 pub mod fusion;
 pub mod kitti;
+pub mod perturb;
 pub mod rectify;
 pub mod source;
 /// The stereo camera's geometry, which lives in `ubf-core` (frames carry

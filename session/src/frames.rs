@@ -205,9 +205,69 @@ pub struct PipelineReport {
     pub final_pose: [f64; 3],
     /// The egomotion limits used: top speed, m/s, and turn rate, °/s.
     pub limits: [f64; 2],
+    /// How far the right image sits below the left (negative: above), px:
+    /// the median of the pairs' estimates, which the pipeline corrects in
+    /// whole rows. `None` if no pair gave one.
+    pub row_offset_px: Option<f64>,
+    /// Frames whose egomotion step failed or rested on too few landmarks
+    /// to trust.
+    pub starving_frames: usize,
+    /// The end pose's position σ by egomotion's covariance, with failed
+    /// and starving steps counted at their larger uncertainty, m.
+    pub pose_sigma_m: f64,
+    /// What the user should know: a rig out of line, stretches of frames
+    /// with too few landmarks.
+    pub warnings: Vec<ReplayWarning>,
     /// With ground truth: the estimate's accuracy.
     #[serde(flatten)]
     pub accuracy: Option<Accuracy>,
+}
+
+/// Something a replay found that the user should know.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReplayWarning {
+    /// The first and last frame it concerns (1 the first pair), if it
+    /// concerns a stretch.
+    pub frames: Option<[u64; 2]>,
+    /// What it is, in words.
+    pub message: String,
+}
+
+/// From this vertical offset on, px, the rig is reported out of line (if
+/// five pairs or more gave an estimate).
+const RECALIBRATE_ROW_OFFSET_PX: f64 = 0.5;
+
+/// A stretch of starving frames being gathered: first and last frame, the
+/// fewest landmarks a pair had and a step rested on, failed steps.
+#[derive(Clone, Copy, Debug)]
+struct Starving {
+    frames: [u64; 2],
+    fewest_landmarks: usize,
+    fewest_consistent: Option<usize>,
+    failed: usize,
+}
+
+impl Starving {
+    fn warning(&self, trusted: usize) -> ReplayWarning {
+        let [first, last] = self.frames;
+        let span = if first == last { format!("frame {first}") } else { format!("frames {first}–{last}") };
+        let consistent = match self.fewest_consistent {
+            Some(n) => format!(", {n} consistent in a step at fewest"),
+            None => String::new(),
+        };
+        let failed = match self.failed {
+            0 => String::new(),
+            n => format!(", {n} failed step{}", if n == 1 { "" } else { "s" }),
+        };
+        ReplayWarning {
+            frames: Some(self.frames),
+            message: format!(
+                "{span}: too few landmarks to trust egomotion ({} a pair at fewest{consistent}{failed}; \
+                 {trusted} consistent are trusted); the pose's uncertainty is raised accordingly",
+                self.fewest_landmarks
+            ),
+        }
+    }
 }
 
 /// The layouts of a directory of stereo pairs that `ubf pipeline` reads.
@@ -379,15 +439,14 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         }
     };
     let mut number = 0;
+    let (mut row_offsets, mut warnings, mut starving, mut starving_frames) = (Vec::new(), Vec::new(), None, 0);
     while let Some(pair) = source.next_pair()? {
         number += 1;
         let started = Instant::now();
-        let observed = pipeline.process(&pair.left, &pair.right).map_err(|source| FramesError::Pair {
-            index: index.clone(),
-            number,
-            calibration: dir.join(layout.calibration()),
-            source,
+        let (observed, pair_report) = pipeline.process_pair(&pair.left, &pair.right).map_err(|source| {
+            FramesError::Pair { index: index.clone(), number, calibration: dir.join(layout.calibration()), source }
         })?;
+        row_offsets.extend(pair_report.row_offset_px);
         let processed = Instant::now();
         landmarks += observed.len();
         if let Some((log, path)) = &mut landmark_log {
@@ -406,8 +465,31 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         }
         let frame = StereoFrame { number, time: pair.time, landmarks: observed, calibration: None, images: None };
         let odometry = tracker.state().pose.unwrap_or_default();
+        let seen = frame.landmarks.len();
         tracker.update(&frame, &odometry);
         let done = Instant::now();
+        if tracker.starving() {
+            starving_frames += 1;
+            let consistent = tracker.step_landmarks();
+            let failed = usize::from(consistent.is_none());
+            let stretch = starving.get_or_insert(Starving {
+                frames: [number, number],
+                fewest_landmarks: seen,
+                fewest_consistent: consistent,
+                failed: 0,
+            });
+            stretch.frames[1] = number;
+            stretch.fewest_landmarks = stretch.fewest_landmarks.min(seen);
+            stretch.fewest_consistent = match (stretch.fewest_consistent, consistent) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            };
+            stretch.failed += failed;
+        } else if let Some(stretch) = starving.take() {
+            let warning = stretch.warning(config.trusted_landmarks);
+            eprintln!("warning: {}", warning.message);
+            warnings.push(warning);
+        }
         estimate.push(tracker.state().pose.unwrap_or_default());
         pipeline_ms.push((processed - started).as_secs_f64() * 1e3);
         egomotion_ms.push((done - processed).as_secs_f64() * 1e3);
@@ -421,6 +503,28 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
     if let Some((log, path)) = &mut landmark_log {
         log.flush().map_err(FramesError::file(path))?;
     }
+    if let Some(stretch) = starving.take() {
+        let warning = stretch.warning(config.trusted_landmarks);
+        eprintln!("warning: {}", warning.message);
+        warnings.push(warning);
+    }
+    let estimated = row_offsets.len();
+    let row_offset_px = (estimated > 0).then(|| ubf_perception::median(&mut row_offsets));
+    let confirmed = estimated >= 5;
+    if let Some(offset) = row_offset_px.filter(|o| confirmed && o.abs() >= RECALIBRATE_ROW_OFFSET_PX) {
+        let warning = ReplayWarning {
+            frames: None,
+            message: format!(
+                "the right image sits {:.2} px {} the left (median of {estimated} pairs): the rig is out of line and \
+                 needs recalibrating; the pipeline corrects it in whole rows meanwhile",
+                offset.abs(),
+                if offset > 0.0 { "below" } else { "above" }
+            ),
+        };
+        eprintln!("warning: {}", warning.message);
+        warnings.insert(0, warning);
+    }
+    let covariance = tracker.pose_covariance();
     let pose = tracker.state().pose.unwrap_or_default();
     let total = ubf_perception::median(&mut total_ms);
     let report = PipelineReport {
@@ -434,6 +538,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         failures: tracker.state().failures,
         final_pose: [pose.x, pose.y, pose.theta],
         limits,
+        row_offset_px,
+        starving_frames,
+        pose_sigma_m: (covariance[(0, 0)] + covariance[(1, 1)]).sqrt(),
+        warnings,
         accuracy: truth.as_deref().and_then(|truth| kitti::accuracy(&estimate, truth)),
     };
     Ok(Replay { report, estimate, truth })
@@ -476,6 +584,12 @@ impl std::fmt::Display for PipelineReport {
             self.limits[0],
             self.limits[1]
         )?;
+        if let Some(offset) = self.row_offset_px {
+            writeln!(f, "right image {offset:+.2} px below the left; end pose σ {:.2} m", self.pose_sigma_m)?;
+        }
+        for warning in &self.warnings {
+            writeln!(f, "warning: {}", warning.message)?;
+        }
         if let Some(a) = &self.accuracy {
             let lengths: Vec<String> = a.segment_lengths_m.iter().map(|l| format!("{l}")).collect();
             writeln!(f, "path {:.1} m; end point off by {:.2} % of it", a.path_m, a.endpoint_drift_pct)?;

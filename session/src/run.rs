@@ -233,7 +233,7 @@ pub fn run_until(
     let (egomotion, egomotion_sigma) = robot
         .tracker()
         .map(|t| {
-            let c = t.pose_covariance();
+            let c = t.estimator_covariance();
             (t.state(), (c[(0, 0)] + c[(1, 1)]).sqrt())
         })
         .unzip();

@@ -123,6 +123,13 @@ pub struct EgomotionConfig {
     /// next keyframe is tried and the best match kept.
     #[serde(deserialize_with = "at_least_one")]
     pub good_match_landmarks: usize,
+    /// A step resting on fewer consistent landmarks than this is not
+    /// trusted at its estimator's word: it is reported as starving
+    /// ([`crate::egomotion::Tracker::starving`]) and its covariance is
+    /// scaled up by this over the landmarks it has in the pose's
+    /// uncertainty ([`crate::egomotion::Tracker::pose_covariance`]).
+    #[serde(deserialize_with = "at_least_one")]
+    pub trusted_landmarks: usize,
     /// The robot's top speed: motions faster than this are impossible and
     /// rejected (thesis §4.4.6), m/s.
     #[serde(deserialize_with = "positive")]
@@ -167,6 +174,7 @@ impl Default for EgomotionConfig {
             keyframe_spacing_deg: 15.0,
             keyframe_range_m: 10.0,
             good_match_landmarks: 6,
+            trusted_landmarks: 20,
             max_speed: 0.6,
             max_turn_rate_deg: 100.0,
             odometry_gate: Some(OdometryGate::default()),

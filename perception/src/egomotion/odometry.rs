@@ -141,7 +141,7 @@ impl Default for OdometryNoise {
 impl OdometryNoise {
     /// The covariance (forward, left, yaw) of odometry's motion over a
     /// stretch of `driven` metres.
-    fn covariance(&self, driven: f64) -> Matrix3<f64> {
+    pub(super) fn covariance(&self, driven: f64) -> Matrix3<f64> {
         let position = self.position_m + self.position_share * driven;
         let heading2 =
             (self.heading_deg.powi(2) + self.heading_deg_per_sqrt_m.powi(2) * driven) * 1f64.to_radians().powi(2);

@@ -29,6 +29,9 @@ struct Keyframe {
     /// The covariance of its pose (x, y, heading) from the visual estimates
     /// chained into it.
     covariance: Matrix3<f64>,
+    /// What its pose's covariance lacks: the odometry bridges and the
+    /// steps on too few landmarks chained into it.
+    extra: Matrix3<f64>,
     /// Where the camera looked on the robot (a pan-tilt unit's measured
     /// angles), to lift its landmarks into the robot frame.
     mount: CameraMount,
@@ -82,8 +85,19 @@ pub struct Tracker {
     keyframes: Vec<Keyframe>,
     /// The newest frame taken in: its number, and the odometric pose then.
     newest: (u64, Pose2),
-    /// The covariance of the visual pose (x, y, heading).
+    /// The newest frame's time, s.
+    newest_time: f64,
+    /// The covariance of the visual pose (x, y, heading), as the
+    /// estimator's information puts it; keyframes are chosen by it.
     covariance: Matrix3<f64>,
+    /// The uncertainty of the pose that `covariance` leaves out: failed
+    /// steps bridged by odometry (or, with none, by standing still), and
+    /// steps on fewer than `trusted_landmarks` landmarks taken at more than
+    /// their estimator's word.
+    extra: Matrix3<f64>,
+    /// The consistent landmarks the latest step rested on; `None` when it
+    /// failed or there was none.
+    step_landmarks: Option<usize>,
     /// When the latest frame matched (or the first was taken), s.
     last_match: f64,
     /// When the current outage began, if one is under way.
@@ -118,7 +132,10 @@ impl Tracker {
             rng: ubf_core::seeds::rng(seed, ubf_core::seeds::Stream::Egomotion),
             keyframes: Vec::new(),
             newest: (0, Pose2::default()),
+            newest_time: 0.0,
             covariance: Matrix3::zeros(),
+            extra: Matrix3::zeros(),
+            step_landmarks: None,
             last_match: 0.0,
             outage_since: None,
             phase: MotionPhase::Still,
@@ -134,11 +151,34 @@ impl Tracker {
         self.state
     }
 
-    /// The covariance of the latest pose (x, y, heading) as the estimator's
-    /// own information puts it: the anchor keyframe's chained estimates and
-    /// the latest match to it.
+    /// The covariance of the latest pose (x, y, heading): the estimator's
+    /// own information over the anchor keyframe's chained estimates and the
+    /// latest match to it, plus what that leaves out: each failed step
+    /// bridged (by odometry's noise, or with no odometry gate by the
+    /// largest step the speed limits allow), and each step on fewer than
+    /// `trusted_landmarks` landmarks taken as `trusted_landmarks / n` times
+    /// as uncertain as its estimator says.
     pub fn pose_covariance(&self) -> Matrix3<f64> {
+        self.covariance + self.extra
+    }
+
+    /// The covariance of the latest pose as the estimator's own
+    /// information puts it, without what [`Tracker::pose_covariance`] adds
+    /// for failed and starving steps.
+    pub fn estimator_covariance(&self) -> Matrix3<f64> {
         self.covariance
+    }
+
+    /// The consistent landmarks the latest step rested on; `None` when it
+    /// failed (or no step has been taken yet).
+    pub fn step_landmarks(&self) -> Option<usize> {
+        self.step_landmarks
+    }
+
+    /// Whether the latest step is one not to trust: it failed, or rests on
+    /// fewer than `trusted_landmarks` consistent landmarks.
+    pub fn starving(&self) -> bool {
+        self.state.steps > 0 && self.step_landmarks.is_none_or(|n| n < self.config.trusted_landmarks)
     }
 
     /// Where the robot is now by egomotion, if it navigates by it
@@ -184,6 +224,7 @@ impl Tracker {
             return;
         }
         let previous_odometry = std::mem::replace(&mut self.newest, (frame.number, *odometry)).1;
+        let previous_time = std::mem::replace(&mut self.newest_time, frame.time);
         // The commands between the last frame and this one.
         self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
         let Some(pose) = self.state.pose else { return };
@@ -214,10 +255,17 @@ impl Tracker {
                     "egomotion matched"
                 );
                 let bridges = keyframe.bridges;
+                let trusted = self.config.trusted_landmarks;
+                let mut step_extra = Matrix3::zeros();
                 if let Some(motion_cov) = &estimate.covariance {
                     self.covariance =
                         composed_covariance(&keyframe.pose, &keyframe.covariance, &estimate.motion, motion_cov);
+                    if estimate.landmarks < trusted {
+                        step_extra = motion_cov * (trusted as f64 / estimate.landmarks.max(1) as f64 - 1.0);
+                    }
                 }
+                self.extra = composed_covariance(&keyframe.pose, &keyframe.extra, &estimate.motion, &step_extra);
+                self.step_landmarks = Some(estimate.landmarks);
                 self.state.pose = Some(pose);
                 self.state.last_step_cv = estimate.step_cv;
                 self.state.journey_cv += estimate.step_cv.unwrap_or(0.0) * driven / MODEL_STEP_M;
@@ -234,7 +282,16 @@ impl Tracker {
             None => {
                 // Carry the pose on by what odometry says the robot did
                 // since the last frame, and say so.
-                let pose = pose.compose(&odometry.relative_to(&previous_odometry));
+                let bridged = odometry.relative_to(&previous_odometry);
+                let step = PlanarMotion { forward: bridged.x, left: bridged.y, yaw: bridged.theta };
+                self.extra = composed_covariance(
+                    &pose,
+                    &self.extra,
+                    &step,
+                    &self.bridge_covariance(frame.time - previous_time, driven),
+                );
+                self.step_landmarks = None;
+                let pose = pose.compose(&bridged);
                 self.state.pose = Some(pose);
                 self.state.failures += 1;
                 self.state.last_step_cv = None;
@@ -254,6 +311,19 @@ impl Tracker {
                 }
             }
         }
+    }
+
+    /// The uncertainty of a step bridged over `driven` metres in `dt`
+    /// seconds: odometry's noise if the gate models it, else a step anywhere
+    /// within the speed and turn limits (uniform, variance a third of the
+    /// limit squared).
+    fn bridge_covariance(&self, dt: f64, driven: f64) -> Matrix3<f64> {
+        if let Some(noise) = self.config.odometry_gate.as_ref().and_then(|g| g.noise.as_ref()) {
+            return noise.covariance(driven);
+        }
+        let dt = dt.max(0.0);
+        let (step, turn) = (self.config.max_speed * dt, self.config.max_turn_rate_deg.to_radians() * dt);
+        Matrix3::from_diagonal(&nalgebra::Vector3::new(step * step, step * step, turn * turn)) / 3.0
     }
 
     /// Whether the estimator must work frame to frame (the simplified one
@@ -298,6 +368,7 @@ impl Tracker {
             odometry,
             bridges,
             covariance: self.covariance,
+            extra: self.extra,
             mount: self.mount_of(frame),
         });
     }
@@ -623,6 +694,46 @@ mod tests {
                 assert_eq!(now, None);
             }
         }
+    }
+
+    #[test]
+    fn steps_on_too_few_landmarks_and_failed_steps_raise_the_pose_uncertainty() {
+        // The same noisy frames, trusted at the estimator's word and with a
+        // bar above every step's landmarks.
+        let camera = StereoCamera::default();
+        let points = landmarks();
+        let drive = |trusted_landmarks: usize| {
+            let config = EgomotionConfig { trusted_landmarks, odometry_gate: None, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 3);
+            for k in 0..4u32 {
+                let pose = Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
+                let seen = disturbed(frame(&points, pose, &camera), u64::from(k), 0.02);
+                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen), &pose);
+            }
+            tracker
+        };
+        let trusting = drive(1);
+        assert!(!trusting.starving());
+        assert_eq!(trusting.pose_covariance(), trusting.estimator_covariance());
+        let wary = drive(points.len() * 4);
+        let n = wary.step_landmarks().unwrap();
+        assert!(wary.starving() && n < points.len() * 4);
+        // The same estimate, its uncertainty counted more than once over.
+        assert_eq!(wary.state().pose, trusting.state().pose);
+        assert_eq!(wary.estimator_covariance(), trusting.estimator_covariance());
+        assert!(
+            wary.pose_covariance()[(0, 0)] > 2.0 * wary.estimator_covariance()[(0, 0)],
+            "{}",
+            wary.pose_covariance()
+        );
+        // A failed step with no odometry gate: a step anywhere within the
+        // speed limit over its half second, σ = 0.6 · 0.5 / √3 m.
+        let mut failing = drive(1);
+        let before = failing.pose_covariance();
+        failing.update(&at(5, 2.0, Vec::new()), &Pose2::new(0.75, 0.0, 0.0));
+        assert!(failing.starving() && failing.step_landmarks().is_none());
+        let added = failing.pose_covariance() - before;
+        assert!((added[(0, 0)] - 0.09 / 3.0).abs() < 1e-9 && (added[(1, 1)] - 0.09 / 3.0).abs() < 1e-9, "{added}");
     }
 
     #[test]
