@@ -148,20 +148,19 @@ impl Behavior for AvoidCollision {
         // blocked: going silent the moment straight ahead is clear let a
         // go-to turn straight back into the obstacle, and the two took turns
         // every few ticks at its edge.
-        // An echo beyond the goal (the wall it stands by) is not in its way.
-        let beyond_goal = state.distance_to_goal().map_or(f64::INFINITY, |d| d - c.body_front);
-        let to_goal = self.free_distance(preferred_heading(state)) - c.body_front;
-        let holding = self.committed.is_some() && to_goal < c.slow_distance.min(beyond_goal);
-        if ahead >= c.slow_distance && !holding {
+        // Measured only while it has a heading to hold: the tick of a robot
+        // in the open stays one strip's work. An echo beyond the goal (the
+        // wall it stands by) is not in its way.
+        let to_goal = self.committed.map(|_| self.free_distance(preferred_heading(state)) - c.body_front);
+        let beyond_goal = || state.distance_to_goal().map_or(f64::INFINITY, |d| d - c.body_front);
+        let holding = to_goal.filter(|&clear| clear < c.slow_distance.min(beyond_goal()));
+        if ahead >= c.slow_distance && holding.is_none() {
             self.committed = None;
             return Action::none();
         }
         let nearness_at =
             |clear: f64| ((c.slow_distance - clear) / (c.slow_distance - c.stop_distance)).clamp(0.0, 1.0);
-        let nearness = match holding {
-            true => nearness_at(ahead).max(nearness_at(to_goal)),
-            false => nearness_at(ahead),
-        };
+        let nearness = holding.map_or(nearness_at(ahead), |clear| nearness_at(ahead).max(nearness_at(clear)));
         let needed = c.slow_distance + c.body_front;
         let kept = self
             .committed

@@ -472,15 +472,21 @@ fn refine_row_offset(
 ) -> Option<f64> {
     let cost = |d: i64| block_cost(left, right, exposure, i64::from(xl), i64::from(xr), i64::from(y), d);
     let (before, best, after) = (f64::from(cost(dy - 1)?), f64::from(cost(dy)?), f64::from(cost(dy + 1)?));
+    let offset = parabola_vertex(before, best, after).filter(|_| best <= before && best <= after)?;
+    Some(dy as f64 + offset)
+}
+
+/// Where a parabola through costs at −1, 0 and +1 has its minimum,
+/// relative to 0; `None` when the three do not curve upwards.
+fn parabola_vertex(before: f64, best: f64, after: f64) -> Option<f64> {
     let curvature = before - 2.0 * best + after;
-    (best <= before && best <= after && curvature > 0.0).then(|| dy as f64 + (before - after) / (2.0 * curvature))
+    (curvature > 0.0).then(|| (before - after) / (2.0 * curvature))
 }
 
 /// The disparity of a stereo match to a fraction of a pixel: block matching
-/// along the row (the right image's `dy` rows down) within two pixels of the matched corners' disparity (the
-/// right image brought to the left's exposure), then a parabola through
-/// the best cost and its neighbours.
-#[allow(clippy::too_many_arguments)]
+/// along the row (the right image's `dy` rows down) within two pixels of
+/// the matched corners' disparity (the right image brought to the left's
+/// exposure), then a parabola through the best cost and its neighbours.
 fn refine_disparity(
     left: &GrayImage,
     right: &GrayImage,
@@ -503,9 +509,7 @@ fn refine_disparity(
     let (Some(before), Some(after)) = (cost(best_d - 1), cost(best_d + 1)) else {
         return Some(best_d as f64);
     };
-    let (before, best, after) = (f64::from(before), f64::from(best), f64::from(after));
-    let curvature = before - 2.0 * best + after;
-    let offset = if curvature > 0.0 { (before - after) / (2.0 * curvature) } else { 0.0 };
+    let offset = parabola_vertex(f64::from(before), f64::from(best), f64::from(after)).unwrap_or(0.0);
     Some(best_d as f64 + offset.clamp(-0.5, 0.5))
 }
 

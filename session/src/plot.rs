@@ -86,13 +86,10 @@ pub fn equal_scale(bounds: (f64, f64, f64, f64), pixels: (u32, u32)) -> (Range<f
 /// `max_width` pixels in the plots' font at `size` points (a word longer
 /// than that stands alone).
 pub fn wrap_text(text: &str, size: f64, max_width: u32) -> Vec<String> {
-    register_font();
-    let font = ("sans-serif", size).into_font();
-    let width = |line: &str| font.box_size(line).map_or(0, |(w, _)| w);
     let mut lines: Vec<String> = Vec::new();
     for word in text.split_whitespace() {
         match lines.last_mut() {
-            Some(line) if width(&format!("{line} {word}")) <= max_width => {
+            Some(line) if text_width(&format!("{line} {word}"), size) <= max_width => {
                 line.push(' ');
                 line.push_str(word);
             }

@@ -1,7 +1,7 @@
 //! `ubf new`: a crate of one's own behaviours that starts right — a
 //! behaviour, a scenario that uses it, a test that runs it, and a profile
-//! that builds the simulator optimised — written from the templates beside
-//! this file.
+//! that builds the simulator optimised — written from
+//! `examples/my-behaviours`, which the suite builds and tests.
 
 use super::{CliError, Exit, Outcome};
 use std::path::{Path, PathBuf};
@@ -14,13 +14,19 @@ pub(super) enum UbfSource {
     Git(String),
 }
 
-/// The files of a new crate: where each goes and its template.
+/// The name the example crate's sources use, which a new crate's replaces.
+const EXAMPLE_NAME: &str = "my-behaviours";
+
+/// The files of a new crate: where each goes and what it holds. All but
+/// the manifest are `examples/my-behaviours`' own, which the suite builds
+/// and tests; its manifest is a workspace member's, so the new crate's is
+/// a template beside this file.
 const FILES: [(&str, &str); 5] = [
     ("Cargo.toml", include_str!("template/Cargo.toml.in")),
-    ("src/main.rs", include_str!("template/main.rs.in")),
-    ("tests/scenario.rs", include_str!("template/test.rs.in")),
-    ("{name}.ron", include_str!("template/scenario.ron.in")),
-    (".gitignore", include_str!("template/gitignore.in")),
+    ("src/main.rs", include_str!("../../examples/my-behaviours/src/main.rs")),
+    ("tests/scenario.rs", include_str!("../../examples/my-behaviours/tests/scenario.rs")),
+    ("my-behaviours.ron", include_str!("../../examples/my-behaviours/my-behaviours.ron")),
+    (".gitignore", include_str!("../../examples/my-behaviours/.gitignore")),
 ];
 
 /// Writes a new crate into `dir` (absent or empty), named after it.
@@ -59,8 +65,8 @@ pub(super) fn command(dir: &Path, source: Option<UbfSource>) -> Outcome {
         )));
     }
     for (file, template) in FILES {
-        let path = dir.join(file.replace("{name}", &name));
-        let body = template.replace("{name}", &name).replace("{ubf_dependencies}", &dependencies);
+        let path = dir.join(file.replace(EXAMPLE_NAME, &name));
+        let body = template.replace(EXAMPLE_NAME, &name).replace("{ubf_dependencies}", &dependencies);
         write(&path, &body)?;
     }
     // The versions of every crate ubf was tested with, so the new crate
