@@ -16,9 +16,8 @@ for line in centre:0.0:0.0:0 diagonal-up:-0.6:0.6:1.69 diagonal-down:0.6:-0.6:-1
     IFS=: read -r name from to heading <<< "$line"
     for fusion in Off Sideways; do
         route_line "$from" "$to" "$heading" \
-            | sed -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), odometry_fusion: $fusion)/" \
-            > "$work/$name~$fusion.ron"
-        grep -q "odometry_fusion" "$work/$name~$fusion.ron" || { echo "route-1-2.ron: the egomotion line did not match" >&2; exit 1; }
+            | sed -e "s/odometry_fusion: Off,/odometry_fusion: $fusion,/" > "$work/$name~$fusion.ron"
+        grep -q "odometry_fusion: $fusion," "$work/$name~$fusion.ron" || { echo "route-1-2.ron: the egomotion line did not match" >&2; exit 1; }
     done
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --trajectories --out "$work/runs" >&2

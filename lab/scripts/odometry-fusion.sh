@@ -24,11 +24,11 @@ for route in route-1-2 route-2-1 feature-poor; do
             veer) errors='slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05' ;;
         esac
         for fusion in Off Sideways Full SidewaysNavigating; do
-            settings="odometry_fusion: $fusion"
+            settings="odometry_fusion: $fusion, navigate: false"
             [ "$fusion" = SidewaysNavigating ] && settings='odometry_fusion: Sideways, navigate: true'
             for technique in None Tracking; do
                 sed -e "s/slip_deg_per_sqrt_m: 0.2/$errors/" \
-                    -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), $settings)/" \
+                    -e "s/odometry_fusion: Off, navigate: false/$settings/" \
                     -e "s/technique: None/technique: $technique/" \
                     "lab/scenarios/thesis/$route.ron" > "$work/$route~$odometry~$fusion~$technique.ron"
             done
@@ -36,8 +36,11 @@ for route in route-1-2 route-2-1 feature-poor; do
     done
 done
 # Every file must have taken every edit.
-for file in "$work"/*.ron; do
-    grep -q "odometry_fusion" "$file" || { echo "$file: the egomotion line did not match" >&2; exit 1; }
+for file in "$work"/*~Off~*.ron; do
+    grep -q "odometry_fusion: Off, navigate: false" "$file" || { echo "$file: the egomotion line did not match" >&2; exit 1; }
+done
+for file in "$work"/*~Sideways*~*.ron "$work"/*~Full~*.ron; do
+    ! grep -q "odometry_fusion: Off" "$file" || { echo "$file: the egomotion line did not match" >&2; exit 1; }
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
 python3 - "$work/runs" <<'EOF'

@@ -68,7 +68,7 @@ for model in Geometric Geometric3d; do
     for route in route-1-2 route-2-1 feature-poor; do
         for technique in None Tracking; do
             sed -e "s/technique: None/technique: $technique/" \
-                -e "s/egomotion: (estimator: Rigid())/egomotion: (estimator: Rigid(), model: $model)/" \
+                -e "s/egomotion: (estimator: Rigid(),/egomotion: (estimator: Rigid(), model: $model,/" \
                 "lab/scenarios/thesis/$route.ron" > "$variants/$route-$technique.ron"
         done
     done
@@ -82,11 +82,11 @@ done
 variants=$(mktemp -d)
 for technique in None ZigZag Scan Tracking; do
     for bank in bank frame-to-frame; do
-        egomotion='egomotion: (estimator: Rigid()),'
+        egomotion='egomotion: (estimator: Rigid(),'
         [ "$bank" = frame-to-frame ] && \
-            egomotion='egomotion: (estimator: Rigid(), keyframes: 1, keyframe_spacing_m: 0.01, keyframe_spacing_deg: 0.01),'
+            egomotion='egomotion: (estimator: Rigid(), keyframes: 1, keyframe_spacing_m: 0.01, keyframe_spacing_deg: 0.01,'
         sed -e "s/technique: None/technique: $technique, objective: Cv/" \
-            -e "s/        egomotion: (estimator: Rigid()),/        $egomotion/" \
+            -e "s/        egomotion: (estimator: Rigid(),/        $egomotion/" \
             lab/scenarios/thesis/route-1-2.ron > "$variants/$technique-$bank.ron"
     done
 done

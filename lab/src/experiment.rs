@@ -328,9 +328,9 @@ pub struct EndpointOptions {
     /// simplified estimator.
     pub profile: Option<MotionProfile>,
     /// What of odometry's motion the rigid estimator's visual motions are
-    /// combined with (`Off`: the purely visual egomotion the thesis
-    /// measured).
-    pub odometry_fusion: OdometryFusion,
+    /// combined with, in place of what the route files say (`Off`: the
+    /// purely visual egomotion the thesis measured); `None` keeps theirs.
+    pub odometry_fusion: Option<OdometryFusion>,
 }
 
 /// End-point egomotion error of every technique on every route with both
@@ -343,6 +343,7 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         ("simple2d", EstimatorKind::Simple2d(Simple2dConfig::default())),
     ];
     let mut scenarios = Vec::new();
+    let mut applied_fusion = OdometryFusion::Off;
     for (label, name, text, zigzag) in ROUTES {
         let mut base = load(registry, name, text)?;
         if let (true, Some(camera)) = (rendered, base.robot.camera.as_mut()) {
@@ -354,9 +355,10 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         if let Some(profile) = profile {
             base.robot.motion = profile;
         }
-        if let Some(egomotion) = base.robot.egomotion.as_mut() {
-            egomotion.odometry_fusion = odometry_fusion;
+        if let (Some(fusion), Some(egomotion)) = (odometry_fusion, base.robot.egomotion.as_mut()) {
+            egomotion.odometry_fusion = fusion;
         }
+        applied_fusion = base.robot.egomotion.as_ref().map_or(applied_fusion, |e| e.odometry_fusion);
         for (estimator, kind) in estimators {
             for aid in ENDPOINT_AIDS {
                 scenarios.push((
@@ -382,7 +384,7 @@ pub fn thesis_endpoint(registry: &Registry, options: &EndpointOptions) -> Result
         objective,
         model,
         profile,
-        odometry_fusion,
+        odometry_fusion: applied_fusion,
         camera,
         routes: BTreeMap::new(),
     };

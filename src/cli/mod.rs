@@ -566,11 +566,11 @@ enum ExperimentCommand {
         #[arg(long)]
         rotate_then_translate: bool,
         /// What of odometry's motion the rigid estimator's visual motions
-        /// are combined with: `off` (the purely visual egomotion the thesis
-        /// measured), `sideways` or `full` (see `odometry_fusion` in
-        /// docs/scenario-format.md).
-        #[arg(long, default_value = "off", value_parser = parse_fusion)]
-        odometry_fusion: OdometryFusion,
+        /// are combined with, in place of what the route files say (`off`,
+        /// as the thesis measured): `off`, `sideways` or `full` (see
+        /// `odometry_fusion` in docs/scenario-format.md).
+        #[arg(long, value_parser = parse_fusion)]
+        odometry_fusion: Option<OdometryFusion>,
     },
 }
 

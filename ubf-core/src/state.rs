@@ -88,6 +88,10 @@ pub struct EgomotionState {
     /// while bridging): with each keyframe's own anchor, the chain of
     /// estimates a pose rests on.
     pub anchor_frame: Option<u64>,
+    /// The covariance of [`EgomotionState::pose`] (x and y in m², heading
+    /// in rad², row by row): what the estimator's own information says,
+    /// plus each failed or starving step's share. `None` with no pose.
+    pub pose_covariance: Option<[[f64; 3]; 3]>,
 }
 
 /// Everything a behaviour may know this tick.

@@ -45,6 +45,12 @@ pub struct ActionAiding {
     predictions: Predictions,
     /// Camera steering: where the camera is to look (world), once chosen.
     look: Option<f64>,
+    /// What the scan budget is measured by: time spent scanning and
+    /// turning on the spot, and the state's time at the first tick and at
+    /// the last, s.
+    scanned_s: f64,
+    started_s: Option<f64>,
+    last_s: f64,
 }
 
 /// What every phase reads of the tick.
@@ -95,6 +101,9 @@ impl ActionAiding {
             decisions: 0,
             predictions: Predictions::default(),
             look: None,
+            scanned_s: 0.0,
+            started_s: None,
+            last_s: 0.0,
         }
     }
 
@@ -216,6 +225,21 @@ impl ActionAiding {
             .map_or(course, |d| d.heading)
     }
 
+    /// Whether a scan from `facing` through `edges` (world headings, the
+    /// first leg's end first) and the turn back to about the goal's bearing
+    /// `centre` stays within the scan budget: the time scans and turns
+    /// will have taken against the time spent driving so far. Judged with
+    /// the scan's own length, so that one scan cannot overrun the budget.
+    fn may_scan(&self, time: f64, facing: f64, edges: [f64; 2], centre: f64) -> bool {
+        let Some(share) = self.config.scan_budget else { return true };
+        let c = &self.config;
+        let sweep = angle_difference(edges[0], facing).abs() + angle_difference(edges[1], edges[0]).abs();
+        let scan_s = sweep / c.scan_rate_deg.to_radians()
+            + angle_difference(centre, edges[1]).abs() / c.max_turn_deg.to_radians();
+        let driving_s = time - self.started_s.unwrap_or(time) - self.scanned_s;
+        self.scanned_s + scan_s <= share * driving_s
+    }
+
     fn turn_towards(&self, pose: &Pose2, heading: f64) -> f64 {
         let max = self.config.max_turn_deg.to_radians();
         (self.config.turn_gain * angle_difference(heading, pose.theta)).clamp(-max, max)
@@ -252,6 +276,8 @@ impl Behavior for ActionAiding {
         self.zigzag.restart();
         self.last_frame = 0;
         self.decisions = 0;
+        self.scanned_s = 0.0;
+        self.started_s = None;
     }
 }
 
@@ -266,6 +292,13 @@ impl ActionAiding {
         let pose = state.pose;
         let to_goal = (goal.y - pose.y).atan2(goal.x - pose.x);
         let distance = pose.distance_to(goal.x, goal.y);
+        self.started_s.get_or_insert(state.time);
+        // A scan's cost is the sweep and the turn on the spot to the heading
+        // it chose: the time the robot stands instead of driving.
+        if matches!(self.phase, Phase::Scan { .. } | Phase::Turn { .. }) {
+            self.scanned_s += state.time - self.last_s;
+        }
+        self.last_s = state.time;
         let frame = &state.stereo;
         if frame.number != self.last_frame {
             self.last_frame = frame.number;
@@ -344,8 +377,12 @@ impl ActionAiding {
                         // limits and clear of walls.
                         let offsets = self.candidates(&pose, to_goal).into_iter().map(|h| h - to_goal);
                         let (low, high) = offsets.fold((0.0_f64, 0.0_f64), |(l, h), o| (l.min(o), h.max(o)));
-                        self.list.clear();
-                        return Pass::Hand(Phase::scan([to_goal + high, to_goal + low], to_goal, pose.theta));
+                        let edges = [to_goal + high, to_goal + low];
+                        if self.may_scan(time, pose.theta, edges, to_goal) {
+                            self.list.clear();
+                            return Pass::Hand(Phase::scan(edges, to_goal, pose.theta));
+                        }
+                        to_goal
                     }
                 };
                 Pass::Hand(Phase::turn(heading))

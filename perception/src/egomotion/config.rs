@@ -147,11 +147,14 @@ pub struct EgomotionConfig {
     /// combined with odometry's over the same stretch, weighed by the
     /// estimator's covariance and the gate's `noise` model (the rigid
     /// estimator only; without a gate or its `noise` nothing is combined).
+    /// `Sideways` by default; `Off` keeps egomotion purely visual.
     pub odometry_fusion: OdometryFusion,
     /// Navigate by egomotion: the robot's pose that behaviours steer by
     /// becomes egomotion's pose at the newest frame, carried on by what
-    /// odometry says the robot did since, instead of odometry alone. Off
-    /// by default: the thesis's robot navigated by odometry.
+    /// odometry says the robot did since, instead of odometry alone. On by
+    /// default, so that behaviours steer by the best estimate there is; the
+    /// thesis's robot navigated by odometry (`false`), and a veer odometry
+    /// does not see then walks the robot off its line.
     pub navigate: bool,
 }
 
@@ -178,8 +181,8 @@ impl Default for EgomotionConfig {
             max_speed: 0.6,
             max_turn_rate_deg: 100.0,
             odometry_gate: Some(OdometryGate::default()),
-            odometry_fusion: OdometryFusion::Off,
-            navigate: false,
+            odometry_fusion: OdometryFusion::Sideways,
+            navigate: true,
         }
     }
 }

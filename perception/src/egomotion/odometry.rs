@@ -11,13 +11,15 @@ use ubf_core::{angle_difference, Pose2};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 pub enum OdometryFusion {
     /// Nothing: egomotion stays purely visual, as the thesis measured it.
-    #[default]
     Off,
     /// Odometry's sideways motion only. Matched mostly to far landmarks, a
     /// visual motion cannot tell a sideways slide from a slight turn (both
     /// move a far bearing alike), while the wheels barely err sideways over
     /// a few metres; a wheel scale error, which odometry's distance and
-    /// turns carry, leaves its sideways motion alone.
+    /// turns carry, leaves its sideways motion alone. The default: it
+    /// measured best over held-out layouts and stayed better than no
+    /// fusion with wheels 1 % off in scale or veering unseen.
+    #[default]
     Sideways,
     /// Forward, sideways and heading: better still where odometry errs only
     /// at random, as the gate's `noise` says, and worse than none where its

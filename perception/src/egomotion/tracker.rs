@@ -148,7 +148,9 @@ impl Tracker {
 
     /// What egomotion has made of the frames so far.
     pub fn state(&self) -> EgomotionState {
-        self.state
+        // Symmetric, so nalgebra's columns are its rows too.
+        let covariance = self.state.pose.map(|_| self.pose_covariance().into());
+        EgomotionState { pose_covariance: covariance, ..self.state }
     }
 
     /// The covariance of the latest pose (x, y, heading): the estimator's
