@@ -181,6 +181,22 @@ fn has_arc_of_nine(mask: u32) -> bool {
 /// FAST-9 corners with their scores, after 3×3 non-maximum suppression,
 /// strongest first, at most `max` of them, none within the border margin.
 pub fn detect(image: &GrayImage, threshold: u8, max: usize) -> Vec<(u32, u32, u32)> {
+    detect_in(image, threshold, max, None)
+}
+
+/// Square cells of an image, those marked `true` taken (row by row,
+/// `columns` to a row).
+struct Cells<'a> {
+    side: u32,
+    columns: usize,
+    taken: &'a [bool],
+}
+
+/// [`detect`], within the free `cells` only (if given) and the pixel
+/// around them that their corners' suppression compares with: their
+/// corners are those [`detect`] finds in them, without the cost of the
+/// rest of the image.
+fn detect_in(image: &GrayImage, threshold: u8, max: usize, cells: Option<Cells>) -> Vec<(u32, u32, u32)> {
     let (w, h) = image.dimensions();
     if w <= 2 * BORDER || h <= 2 * BORDER {
         return Vec::new();
@@ -192,57 +208,96 @@ pub fn detect(image: &GrayImage, threshold: u8, max: usize) -> Vec<(u32, u32, u3
     let mut scores = vec![0u32; (w * h) as usize];
     let mut corners = Vec::new();
     let (x0, x1) = (BORDER as usize, (w - BORDER) as usize);
-    let mut candidate = vec![false; x1 - x0];
+    let mut candidate = vec![0u8; x1 - x0];
+    // Per row of cells, the columns within a pixel of a free cell of it.
+    let near_free: Vec<Vec<u8>> = cells.as_ref().map_or_else(Vec::new, |cells| {
+        cells
+            .taken
+            .chunks(cells.columns)
+            .map(|taken| {
+                let free = |x: usize| u8::from(!taken[x / cells.side as usize]);
+                (x0..x1).map(|x| free(x - 1) | free(x) | free((x + 1).min(w as usize - 1))).collect()
+            })
+            .collect()
+    });
+    let mut allowed = vec![1u8; x1 - x0];
     for y in BORDER..h - BORDER {
         let row = (y * w) as usize;
+        if let Some(cells) = &cells {
+            // Within a pixel of a free cell, in this row or the next one
+            // up or down.
+            let band = |y: u32| &near_free[(y / cells.side) as usize];
+            for (((out, a), b), c) in allowed.iter_mut().zip(band(y - 1)).zip(band(y)).zip(band(y + 1)) {
+                *out = a | b | c;
+            }
+            if allowed.iter().all(|&a| a == 0) {
+                continue;
+            }
+        }
         // First, for the whole row at once (the compiler vectorises this
-        // loop): an arc of nine of the sixteen ring points holds one of the
-        // top and bottom points and one of the left and right ones, so a
-        // pixel can only be a corner if one of each pair is brighter (or
-        // one of each darker) than it by the threshold. On a textured image
-        // this leaves a few per cent of the pixels.
-        let at_offset = |dy: isize, dx: isize| {
-            let start = (row as isize + x0 as isize + dy * w as isize + dx) as usize;
+        // loop): an arc of nine of the sixteen ring points holds four
+        // consecutive even-numbered ones, one of each opposite pair
+        // (0 and 8, 2 and 10, 4 and 12, 6 and 14), so a pixel can only be
+        // a corner if one of each of those pairs is brighter (or one of
+        // each darker) than it by the threshold. On a textured image this
+        // leaves a few per cent of the pixels, and the full ring is read
+        // for those only.
+        let at_offset = |(dx, dy): (i32, i32)| {
+            let start = (row as isize + x0 as isize + dy as isize * stride + dx as isize) as usize;
             &pixels[start..start + (x1 - x0)]
         };
-        let (north, south, east, west) = (at_offset(-3, 0), at_offset(3, 0), at_offset(0, 3), at_offset(0, -3));
+        let [p0, p2, p4, p6, p8, p10, p12, p14] = [0, 2, 4, 6, 8, 10, 12, 14].map(|k| at_offset(CIRCLE[k]));
         let centre = &pixels[row + x0..row + x1];
-        for (((((c, n), s), e), west), out) in
-            centre.iter().zip(north).zip(south).zip(east).zip(west).zip(candidate.iter_mut())
-        {
-            let brighter = |p: &u8| p.saturating_sub(threshold) > *c;
-            let darker = |p: &u8| p.saturating_add(threshold) < *c;
-            *out = ((brighter(n) | brighter(s)) & (brighter(e) | brighter(west)))
-                | ((darker(n) | darker(s)) & (darker(e) | darker(west)));
+        for (i, (out, &allowed)) in candidate.iter_mut().zip(&allowed).enumerate() {
+            let c = centre[i];
+            let brighter = |p: &[u8]| p[i].saturating_sub(threshold) > c;
+            let darker = |p: &[u8]| p[i].saturating_add(threshold) < c;
+            let bright = (brighter(p0) | brighter(p8))
+                & (brighter(p4) | brighter(p12))
+                & (brighter(p2) | brighter(p10))
+                & (brighter(p6) | brighter(p14));
+            let dark = (darker(p0) | darker(p8))
+                & (darker(p4) | darker(p12))
+                & (darker(p2) | darker(p10))
+                & (darker(p6) | darker(p14));
+            *out = u8::from(bright | dark) & allowed;
         }
-        for (i, _) in candidate.iter().enumerate().filter(|(_, &c)| c) {
-            let x = (x0 + i) as u32;
-            let at = row + x0 + i;
-            let centre = i32::from(pixels[at]);
-            let ring = |k: usize| i32::from(pixels[(at as isize + offsets[k]) as usize]);
-            let (bright, dark) = (centre + t, centre - t);
-            let (mut bright_mask, mut dark_mask, mut bright_sum, mut dark_sum) = (0u32, 0u32, 0u32, 0u32);
-            for k in 0..16 {
-                let p = ring(k);
-                if p > bright {
-                    bright_mask |= 1 << k;
-                    bright_sum += (p - bright) as u32;
-                } else if p < dark {
-                    dark_mask |= 1 << k;
-                    dark_sum += (dark - p) as u32;
+        // Eight flags at a time: most words of a row are all zero.
+        for (chunk, flags) in candidate.chunks(8).enumerate() {
+            let mut word = [0u8; 8];
+            word[..flags.len()].copy_from_slice(flags);
+            let mut bits = u64::from_le_bytes(word);
+            while bits != 0 {
+                let i = chunk * 8 + bits.trailing_zeros() as usize / 8;
+                bits &= bits - 1;
+                let x = (x0 + i) as u32;
+                let at = row + x0 + i;
+                let centre = i32::from(pixels[at]);
+                let ring: [i32; 16] = offsets.map(|o| i32::from(pixels[(at as isize + o) as usize]));
+                let (bright, dark) = (centre + t, centre - t);
+                // Without branches: which side each ring point falls on
+                // is what no branch predictor guesses. A point cannot be
+                // both brighter and darker, so the two sums are those of
+                // the points on either side.
+                let (mut bright_mask, mut dark_mask, mut bright_sum, mut dark_sum) = (0u32, 0u32, 0u32, 0u32);
+                for (k, &p) in ring.iter().enumerate() {
+                    bright_mask |= u32::from(p > bright) << k;
+                    dark_mask |= u32::from(p < dark) << k;
+                    bright_sum += (p - bright).max(0) as u32;
+                    dark_sum += (dark - p).max(0) as u32;
                 }
+                // Nine of sixteen cannot be both brighter and darker.
+                let score = if has_arc_of_nine(bright_mask) {
+                    bright_sum
+                } else if has_arc_of_nine(dark_mask) {
+                    dark_sum
+                } else {
+                    continue;
+                };
+                // Zero would read as "no corner" in the suppression.
+                scores[at] = score + 1;
+                corners.push((x, y));
             }
-            // Nine of sixteen cannot be both brighter and darker.
-            let score = if has_arc_of_nine(bright_mask) {
-                bright_sum
-            } else if has_arc_of_nine(dark_mask) {
-                dark_sum
-            } else {
-                continue;
-            };
-            // Zero would read as "no corner" in the suppression.
-            scores[at] = score + 1;
-            corners.push((x, y));
         }
     }
     let mut kept: Vec<(u32, u32, u32)> = corners
@@ -312,18 +367,31 @@ pub fn noise_sigma(image: &GrayImage) -> f64 {
         return 0.0;
     }
     let p = image.as_raw();
-    let at = |x: usize, y: usize| i32::from(p[y * w + x]);
-    let mut responses: Vec<u32> = Vec::with_capacity((w / 2) * (h / 2));
+    // A response is at most 16 · 255, so their median is read off a
+    // histogram rather than by sorting.
+    let mut histogram = vec![0u32; 16 * 255 + 1];
+    let mut count = 0usize;
     for y in (1..h - 1).step_by(2) {
+        let (above, here, below) = (&p[(y - 1) * w..y * w], &p[y * w..(y + 1) * w], &p[(y + 1) * w..(y + 2) * w]);
+        let at = |row: &[u8], x: usize| i32::from(row[x]);
         for x in (1..w - 1).step_by(2) {
-            let r = at(x - 1, y - 1) + at(x + 1, y - 1) + at(x - 1, y + 1) + at(x + 1, y + 1)
-                - 2 * (at(x, y - 1) + at(x, y + 1) + at(x - 1, y) + at(x + 1, y))
-                + 4 * at(x, y);
-            responses.push(r.unsigned_abs());
+            let r = at(above, x - 1) + at(above, x + 1) + at(below, x - 1) + at(below, x + 1)
+                - 2 * (at(above, x) + at(below, x) + at(here, x - 1) + at(here, x + 1))
+                + 4 * at(here, x);
+            histogram[r.unsigned_abs() as usize] += 1;
+            count += 1;
         }
     }
-    let middle = responses.len() / 2;
-    let median = *responses.select_nth_unstable(middle).1;
+    // The response of sorted rank count / 2.
+    let middle = count / 2;
+    let mut below = 0usize;
+    let median = histogram
+        .iter()
+        .position(|&n| {
+            below += n as usize;
+            below > middle
+        })
+        .unwrap_or(0) as u32;
     // The median of |N(0, 6σ)| is 0.6745 · 6σ.
     f64::from(median) / (0.6745 * 6.0)
 }
@@ -355,7 +423,7 @@ pub fn detect_adaptive(image: &GrayImage, config: &FeatureConfig) -> Vec<(u32, u
     }
     let room = config.max_features - corners.len();
     corners.extend(
-        detect(image, lower, usize::MAX)
+        detect_in(image, lower, usize::MAX, Some(Cells { side: cell, columns, taken: &occupied }))
             .into_iter()
             .filter(|&(x, y, _)| !occupied[(y / cell) as usize * columns + (x / cell) as usize])
             .take(room),
@@ -827,6 +895,27 @@ mod tests {
         // Enough corners at the threshold: no second search.
         let full = FeatureConfig { max_features: 4, ..FeatureConfig::default() };
         assert_eq!(detect_adaptive(&image, &full), detect(&image, 20, 4));
+    }
+
+    #[test]
+    fn a_search_within_free_cells_finds_what_the_whole_image_has_in_them() {
+        // Texture everywhere, every third cell taken: the corners of the
+        // free cells, scores and suppression included, are the same.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let image = GrayImage::from_fn(200, 150, |x, y| {
+            let texture = 100.0 + 40.0 * (0.4 * f64::from(x)).sin() * (0.3 * f64::from(y)).cos();
+            Luma([(texture + rng.random_range(-12.0..12.0)).clamp(0.0, 255.0) as u8])
+        });
+        let (side, columns) = (32, 200u32.div_ceil(32) as usize);
+        let taken: Vec<bool> = (0..columns * 150usize.div_ceil(32)).map(|i| i % 3 == 0).collect();
+        let free = |&(x, y, _): &(u32, u32, u32)| !taken[(y / side) as usize * columns + (x / side) as usize];
+        let whole: Vec<_> = detect(&image, 7, usize::MAX).into_iter().filter(free).collect();
+        let within: Vec<_> = detect_in(&image, 7, usize::MAX, Some(Cells { side, columns, taken: &taken }))
+            .into_iter()
+            .filter(free)
+            .collect();
+        assert!(whole.len() > 50, "{}", whole.len());
+        assert_eq!(within, whole);
     }
 
     #[test]

@@ -15,6 +15,7 @@ impl Descriptor {
     pub const BITS: u32 = 256;
 
     /// Number of differing bits.
+    #[inline]
     pub fn hamming(&self, other: &Descriptor) -> u32 {
         self.0.iter().zip(&other.0).map(|(a, b)| (a ^ b).count_ones()).sum()
     }
