@@ -720,8 +720,10 @@ mod tests {
         let wary = drive(points.len() * 4);
         let n = wary.step_landmarks().unwrap();
         assert!(wary.starving() && n < points.len() * 4);
-        // The same estimate, its uncertainty counted more than once over.
+        // The same estimate, its uncertainty counted more than once over,
+        // and the state the behaviours read carries the larger one.
         assert_eq!(wary.state().pose, trusting.state().pose);
+        assert_eq!(wary.state().pose_covariance, Some(wary.pose_covariance().into()));
         assert_eq!(wary.estimator_covariance(), trusting.estimator_covariance());
         assert!(
             wary.pose_covariance()[(0, 0)] > 2.0 * wary.estimator_covariance()[(0, 0)],
