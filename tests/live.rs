@@ -103,6 +103,27 @@ fn a_foxglove_client_watches_a_run_live() {
 }
 
 #[test]
+fn a_viewer_is_shown_at_most_twenty_ticks_a_second() {
+    // At ten times real time the run ticks 100 times a second; a viewer is
+    // shown one tick in each `SHOW_EVERY` (50 ms), so each tick's topics
+    // come at most 20 times a second. (The log keeps every tick:
+    // tests/mcap.rs.)
+    let args = ["run", "scenarios/corridor-box.ron", "--live", "127.0.0.1:0", "--speed", "10"];
+    let (mut run, url, _err) = start_live(&args);
+    let seconds = 2.0;
+    let seen = watch(&url, seconds, false);
+    // One more for the tick shown first, and a few for ticks that added a
+    // collision, which are shown whatever the time.
+    let most = (seconds / ubf::live::SHOW_EVERY.as_secs_f64()).round() as u64 + 5;
+    for topic in ["/pose/true", "/pose/odometry", "/tree", "/ranges"] {
+        let received = seen["received"][topic].as_u64().unwrap_or(0);
+        assert!(received > 0 && received <= most, "{received} on {topic} in {seconds} s, at most {most}: {seen}");
+    }
+    let status = wait_for(&mut run, 120.0).expect("the run ends");
+    assert!(status.success(), "{status}");
+}
+
+#[test]
 fn a_viewer_that_stops_reading_slows_nothing() {
     // A camera that renders pairs, watched at ten times real time by a
     // viewer that reads one message and then nothing: its queue fills, and

@@ -303,9 +303,8 @@ impl JsonTopics {
     }
 
     /// Takes what `record` says has happened as known, without making
-    /// messages of it: ticks in between were not shown (nobody watched, or
-    /// a slow viewer's records were dropped), and a collision that happened
-    /// then is not news now.
+    /// messages of it: ticks before it were not shown because nobody
+    /// watched, and a collision that happened then is not news now.
     pub fn catch_up(&mut self, record: &TickRecord) {
         if let Some(truth) = &record.truth {
             self.collisions = truth.collisions;

@@ -14,13 +14,16 @@
 //! 20 ms), and the server keeps a bounded queue per client, dropping that
 //! client's oldest messages when it cannot keep up. While nobody watches,
 //! no record is handed over; messages of a topic nobody has subscribed to
-//! are not made.
+//! are not made. A viewer is shown at most 20 ticks a second
+//! ([`SHOW_EVERY`]), and every tick that adds a collision; a run's log
+//! keeps every tick.
 
 use crate::json_topics::{nanos, JsonChannels, JsonTopics, RunMessage, WorldMessage};
 use foxglove::WebSocketServerHandle;
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use ubf_core::{BackgroundSink, TickRecord, TickSink, TreeLayout};
@@ -119,11 +122,28 @@ impl LiveServer {
         let now = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64);
         let channels = LiveChannels { epoch_ns: now, ..self.channels.clone() };
         let watchable: Vec<Arc<RawChannel>> = channels.channels.values().cloned().collect();
-        let view =
-            LiveView { channels, topics: JsonTopics::default(), run, world, described_at: None, last_tick: None };
+        let watched_from = Arc::new(AtomicU64::new(0));
+        let view = LiveView {
+            channels,
+            topics: JsonTopics::default(),
+            run,
+            world,
+            described_at: None,
+            last_tick: None,
+            watched_from: watched_from.clone(),
+        };
         let background = BackgroundSink::spawn_batched("live view", view, QUEUE, BATCH_EVERY)
             .map_err(|e| LiveError { address: self.address, message: format!("starting its thread: {e}") })?;
-        Ok(LiveSink { background, channels: watchable, watched: false, ask_at: Instant::now() })
+        let now = Instant::now();
+        Ok(LiveSink {
+            background,
+            channels: watchable,
+            watched: false,
+            ask_at: now,
+            show_at: now,
+            collisions: 0,
+            watched_from,
+        })
     }
 }
 
@@ -162,6 +182,15 @@ const ASK_EVERY: Duration = Duration::from_millis(100);
 /// sees the robot 20 ms late at most, and the tick never wakes a thread.
 const BATCH_EVERY: Duration = Duration::from_millis(20);
 
+/// The least wall time between two ticks the view shows: a viewer gets at
+/// most 20 ticks a second, about as often as a screen can show a change
+/// worth seeing, while the log gets every one. A robot ticking at 10 Hz in
+/// real time is shown whole; a run at `--speed 10` (100 ticks a second) is
+/// shown every fifth tick. Handing a record to the view's thread is most
+/// of what a viewer costs a tick (its copy lands in memory the other core
+/// last held), so the ticks not shown cost no more than an unwatched view.
+pub const SHOW_EVERY: Duration = Duration::from_millis(50);
+
 /// Seconds of controller time between repeats of what the session is (its
 /// run, world, goal and scene): the protocol keeps no message for a viewer
 /// that connects later, so they are said again.
@@ -178,6 +207,14 @@ pub struct LiveSink {
     /// asking costs more than a tick can spare (the `live_view` bench).
     watched: bool,
     ask_at: Instant,
+    /// When the next tick may be shown ([`SHOW_EVERY`]).
+    show_at: Instant,
+    /// The collisions so far, as of the last tick: a tick that adds one is
+    /// shown whatever the time, so that the viewer sees where it happened.
+    collisions: u32,
+    /// The tick from which the current viewers have watched, for the view
+    /// to tell a gap nobody watched from ticks left out by [`SHOW_EVERY`].
+    watched_from: Arc<AtomicU64>,
 }
 
 impl TickSink for LiveSink {
@@ -189,19 +226,32 @@ impl TickSink for LiveSink {
         self.background.tree_changed(layout)
     }
 
-    /// Hands the record over if anyone watches. A first viewer is told
-    /// what the session is with the first record it gets: the view says
-    /// it again when a second has passed since it last did.
+    /// Hands the record over if anyone watches and [`SHOW_EVERY`] has
+    /// passed since the last one, or if the tick added a collision. A first
+    /// viewer is told what the session is with the first record it gets:
+    /// the view says it again when a second has passed since it last did.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         let now = Instant::now();
         if now >= self.ask_at {
             self.ask_at = now + ASK_EVERY;
-            self.watched = self.channels.iter().any(|c| c.has_sinks());
+            let watched = self.channels.iter().any(|c| c.has_sinks());
+            if watched && !self.watched {
+                self.watched_from.store(record.tick, Ordering::Relaxed);
+            }
+            self.watched = watched;
         }
-        match self.watched {
-            true => self.background.record(record),
-            false => Ok(()),
+        let collisions = record.truth.map_or(0, |t| t.collisions);
+        let collided = collisions > self.collisions;
+        self.collisions = collisions;
+        if !self.watched || (now < self.show_at && !collided) {
+            return Ok(());
         }
+        // On the schedule while ticks keep up with it, so that 100 ticks a
+        // second are shown every fifth rather than every sixth; after a
+        // pause, from now.
+        let next = self.show_at + SHOW_EVERY;
+        self.show_at = if next > now { next } else { now + SHOW_EVERY };
+        self.background.record(record)
     }
 
     fn finish(&mut self) -> std::io::Result<()> {
@@ -219,6 +269,9 @@ struct LiveView {
     described_at: Option<f64>,
     /// The last tick shown.
     last_tick: Option<u64>,
+    /// The tick from which the current viewers have watched
+    /// ([`LiveSink`] sets it).
+    watched_from: Arc<AtomicU64>,
 }
 
 impl TickSink for LiveView {
@@ -238,8 +291,12 @@ impl TickSink for LiveView {
     /// loses messages, and the tick goes on.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         let time = record.time();
-        if self.last_tick.is_some_and(|last| record.tick != last + 1) {
-            // Ticks went by unwatched or dropped: what they did is not news.
+        // Ticks left out between two shown are no gap: a tick that added a
+        // collision is shown (or, dropped by a view far behind, its
+        // collision comes with the next). Ticks nobody watched are: what
+        // they did is not news to a viewer who has just come.
+        let from = self.watched_from.load(Ordering::Relaxed);
+        if self.last_tick.is_none_or(|last| from > last) {
             self.topics.catch_up(record);
         }
         self.last_tick = Some(record.tick);
