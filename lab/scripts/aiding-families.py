@@ -69,6 +69,9 @@ def main():
             'layouts': len(cell),
             'runs': len(reports),
             'error_m': round(mean(measure(r, 'error') for r in reports), 4),
+            # The pose the behaviours steered by, at the end, against the
+            # truth: what the robot believed when it stopped.
+            'steered_pose_error_m': round(mean(r['estimate_error_m'] for r in reports), 4),
             'time_s': round(mean(measure(r, 'time') for r in reports), 1),
             'failed_frames': round(mean(measure(r, 'failures') for r in reports), 2),
             'time_limit_runs': sum(r['end'] == 'time_limit' for r in reports),

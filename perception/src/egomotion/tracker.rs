@@ -7,9 +7,11 @@ use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion
 use crate::error_model::{CvTable, MODEL_STEP_M};
 use crate::fusion::fuse_cv;
 use crate::stereo::StereoCamera;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use rand_chacha::ChaCha8Rng;
-use ubf_core::{angle_difference, CameraMount, Command, EgomotionState, LandmarkObservation, Pose2, StereoFrame};
+use ubf_core::{
+    angle_difference, wrap_angle, CameraMount, Command, EgomotionState, LandmarkObservation, Pose2, StereoFrame,
+};
 
 /// A reference frame new frames are matched against.
 #[derive(Clone, Debug)]
@@ -100,6 +102,14 @@ pub struct Tracker {
     step_landmarks: Option<usize>,
     /// When the latest frame matched (or the first was taken), s.
     last_match: f64,
+    /// Metres odometry has driven from the start to the newest frame: what
+    /// the uncertainty of its own pose grows with.
+    odometry_driven_m: f64,
+    /// Where the tracker started, and odometry's pose then: odometry's
+    /// frame may be its own, and its pose is carried into the tracker's
+    /// from these.
+    start: Pose2,
+    odometry_origin: Option<Pose2>,
     /// When the current outage began, if one is under way.
     outage_since: Option<f64>,
     /// What the robot was commanded to do since the newest frame.
@@ -137,6 +147,9 @@ impl Tracker {
             extra: Matrix3::zeros(),
             step_landmarks: None,
             last_match: 0.0,
+            odometry_driven_m: 0.0,
+            start,
+            odometry_origin: None,
             outage_since: None,
             phase: MotionPhase::Still,
             commanded: MotionPhase::Still,
@@ -189,11 +202,36 @@ impl Tracker {
     /// the robot did since. Frames come a few times a second; a controller
     /// ticking faster steers by this rather than by a pose that stands
     /// still between frames.
+    ///
+    /// With an odometry gate's `noise`, that pose and odometry's own are
+    /// taken for two estimates of the same pose and combined by their
+    /// covariances (egomotion's [`Tracker::pose_covariance`], odometry's by
+    /// its noise model over the distance driven since the start): while
+    /// egomotion holds, its pose leads; where it has starved or failed for
+    /// long, its covariance grows past odometry's and the robot leans on
+    /// odometry instead of steering by a pose gone astray. (The two are
+    /// not independent, as egomotion bridges its failures by odometry, so
+    /// the combination counts that part twice.)
     pub fn navigation_pose(&self, odometry: &Pose2) -> Option<Pose2> {
         if !self.config.navigate || self.newest.0 == 0 {
             return None;
         }
-        Some(self.state.pose?.compose(&odometry.relative_to(&self.newest.1)))
+        let visual = self.state.pose?.compose(&odometry.relative_to(&self.newest.1));
+        let (Some(noise), Some(origin)) = (self.config.odometry_gate.and_then(|gate| gate.noise), self.odometry_origin)
+        else {
+            return Some(visual);
+        };
+        let by_odometry = self.start.compose(&odometry.relative_to(&origin));
+        let driven = self.odometry_driven_m + odometry.distance_to(self.newest.1.x, self.newest.1.y);
+        let odometric = noise.covariance(driven);
+        let Some(inverse) = (odometric + self.pose_covariance()).try_inverse() else { return Some(visual) };
+        let apart = Vector3::new(
+            visual.x - by_odometry.x,
+            visual.y - by_odometry.y,
+            angle_difference(visual.theta, by_odometry.theta),
+        );
+        let step = odometric * inverse * apart;
+        Some(Pose2::new(by_odometry.x + step.x, by_odometry.y + step.y, wrap_angle(by_odometry.theta + step.z)))
     }
 
     /// The error model's look-up table the tracker weighs landmarks with.
@@ -222,6 +260,7 @@ impl Tracker {
     /// journey CV, eq. 7 per metre), keeps keyframes apart, and bridges
     /// outages; it never enters a visual estimate.
     pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
+        self.odometry_origin.get_or_insert(*odometry);
         if frame.number == 0 || frame.number == self.newest.0 {
             return;
         }
@@ -237,6 +276,7 @@ impl Tracker {
         }
         self.keyframes.retain(|k| k.odometry.distance_to(odometry.x, odometry.y) <= self.config.keyframe_range_m);
         let driven = previous_odometry.distance_to(odometry.x, odometry.y);
+        self.odometry_driven_m += driven;
         self.state.steps += 1;
         match self.best_estimate(frame, odometry) {
             Some((anchor, estimate)) => {
@@ -503,6 +543,7 @@ impl Tracker {
 mod tests {
     use super::*;
     use crate::egomotion::testing::{at, disturbed, frame, landmarks};
+    use crate::egomotion::OdometryFusion;
 
     #[test]
     fn a_camera_panning_on_a_robot_driving_straight_is_not_read_as_a_turn() {
@@ -591,7 +632,10 @@ mod tests {
         // matches a keyframe from before it, so the visual estimate replaces
         // the bridge.
         let camera = StereoCamera::default();
-        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+        // Purely visual: a fused estimate would take some of odometry's
+        // shortfall.
+        let config = EgomotionConfig { odometry_fusion: OdometryFusion::Off, ..EgomotionConfig::default() };
+        let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
         let start = Pose2::default();
         tracker.update(&at(1, 0.0, frame(&landmarks(), start, &camera)), &start);
         let end = Pose2::new(2.0, 0.1, 0.1);
@@ -672,6 +716,27 @@ mod tests {
     }
 
     #[test]
+    fn a_navigating_tracker_leans_on_odometry_where_egomotion_is_not_to_be_trusted() {
+        // The same frames and odometry (2 % short), egomotion trusted at its
+        // estimator's word, and held to be starving on every step: its
+        // covariance is then counted many times over, and the pose steered
+        // by moves towards odometry's.
+        let camera = StereoCamera::default();
+        let navigated = |trusted_landmarks: usize| {
+            let config = EgomotionConfig { trusted_landmarks, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+            tracker.update(&at(1, 0.0, frame(&landmarks(), Pose2::default(), &camera)), &Pose2::default());
+            let (truth, odometry) = (Pose2::new(1.0, 0.0, 0.0), Pose2::new(0.98, 0.0, 0.0));
+            tracker.update(&at(2, 2.0, frame(&landmarks(), truth, &camera)), &odometry);
+            tracker.navigation_pose(&odometry).unwrap()
+        };
+        let (trusted, starving) = (navigated(1), navigated(1_000_000));
+        // Trusted, egomotion's σ of about a centimetre leads odometry's 3.
+        assert!((trusted.x - 1.0).abs() < 5e-3, "{trusted:?}");
+        assert!(starving.x < 0.99, "{starving:?}");
+    }
+
+    #[test]
     fn a_navigating_tracker_carries_its_pose_on_by_odometry_between_frames() {
         let camera = StereoCamera::default();
         let start = Pose2::new(1.0, 2.0, 0.0);
@@ -690,8 +755,10 @@ mod tests {
             assert_eq!(tracker.state().failures, 0);
             let now = tracker.navigation_pose(&Pose2::new(moved.x + 0.3, 0.0, 0.0));
             if navigate {
+                // Odometry's own pose, 5 mm behind, counts for a little
+                // beside egomotion's.
                 let now = now.unwrap();
-                assert!(now.distance_to(1.55, 2.0) < 1e-6 && now.theta.abs() < 1e-9, "{now:?}");
+                assert!(now.distance_to(1.55, 2.0) < 2e-3 && now.theta.abs() < 1e-3, "{now:?}");
             } else {
                 assert_eq!(now, None);
             }
