@@ -214,11 +214,18 @@ fn every_ron_block_loads() {
                 panic!("{}: {e}", block.place);
             }
         } else if text.starts_with("RobotConfig(") {
-            // Beside the repository's robots/, where its model is found.
-            let file = root().join("robots/config").join(format!("docs-{}.ron", std::process::id()));
+            // In a robots/ of its own beside links to the repository's
+            // models, where its model is found: written into the
+            // repository's robots/config/, it was there for the scratch
+            // copy of another test to list and then miss.
+            let robots = dir.path().join("robots");
+            std::fs::create_dir_all(robots.join("config")).unwrap();
+            if !robots.join("models").exists() {
+                link_entries(&root().join("robots"), &robots, &["config"]);
+            }
+            let file = robots.join("config/docs.ron");
             std::fs::write(&file, text).unwrap();
             let result = ubf::drive::DriveConfig::load(&registry, &file);
-            std::fs::remove_file(&file).unwrap();
             if let Err(e) = result {
                 panic!("{}: {e}", block.place);
             }

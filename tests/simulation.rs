@@ -487,9 +487,6 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
 }
 
-/// Route 2->1's edits for a veer odometry does not see, on layout 2121:
-/// with seed 104's slip, a robot steering by odometry ends pinned beside a
-/// wall.
 #[test]
 fn a_scan_budget_bounds_the_time_scanning_adds() {
     // Scanning before every step, the robot stands sweeping and turning
@@ -508,6 +505,9 @@ fn a_scan_budget_bounds_the_time_scanning_adds() {
     assert!((1.1..1.5).contains(&budgeted), "a budget of 0.5 took {budgeted:.2}× straight driving's time");
 }
 
+/// Route 2->1's edits for a veer odometry does not see, on layout 2121:
+/// with seed 104's slip, a robot steering by odometry ends pinned beside a
+/// wall.
 const VEER: (&str, &str) = ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05");
 const LAYOUT_2121: (&str, &str) = ("seed: 21)", "seed: 2121)");
 

@@ -4,7 +4,8 @@ says: per family, estimate and aid, the mean end-point error, time and
 failed frames, and each one's ratio to straight driving (the same family,
 estimate and wheels) with a 95 % interval from a bootstrap over layouts
 (seeds kept with their layout: layouts are what the claims generalise
-over), and the same per layout. Prints JSON.
+over; and, as a second interval, layouts and seeds resampled apart), and
+the same per layout. Prints JSON.
 
     python3 lab/scripts/aiding-families.py RUNS
 """
@@ -37,20 +38,34 @@ def measure(report, what):
 
 
 def ratio(cell, base, what, rng):
-    """Ratio of means over every run, its bootstrap interval over layouts,
-    and each layout's ratio."""
+    """Ratio of means over every run and each layout's ratio, with two 95 %
+    intervals: the protocol's, from resampling layouts (each with its
+    seeds), and one from resampling layouts and run seeds independently,
+    since every layout is run with the same seeds and a seed's share of
+    the error is then common to all of them."""
     layouts = sorted(set(cell) & set(base))
+    by_seed = lambda runs: {r['seed']: measure(r, what) for r in runs}  # noqa: E731
+    top = {l: by_seed(cell[l]) for l in layouts}
+    bottom = {l: by_seed(base[l]) for l in layouts}
+    seeds = sorted(set.intersection(*(set(top[l]) & set(bottom[l]) for l in layouts)))
 
-    def pooled(chosen):
-        top = [measure(r, what) for l in chosen for r in cell[l]]
-        bottom = [measure(r, what) for l in chosen for r in base[l]]
-        return mean(top) / mean(bottom) if mean(bottom) > 0 else float('nan')
+    def pooled(chosen_layouts, chosen_seeds):
+        a = sum(top[l][s] for l in chosen_layouts for s in chosen_seeds)
+        b = sum(bottom[l][s] for l in chosen_layouts for s in chosen_seeds)
+        return a / b if b > 0 else float('inf')
 
-    point = pooled(layouts)
-    draws = sorted(pooled([rng.choice(layouts) for _ in layouts]) for _ in range(RESAMPLES))
-    low, high = draws[int(0.025 * RESAMPLES)], draws[int(0.975 * RESAMPLES) - 1]
-    per_layout = {l: round(pooled([l]), 3) for l in layouts}
-    return {'ratio': round(point, 3), 'ci95': [round(low, 3), round(high, 3)], 'per_layout': per_layout}
+    def interval(draw):
+        draws = sorted(draw() for _ in range(RESAMPLES))
+        return [round(draws[int(0.025 * RESAMPLES)], 3), round(draws[int(0.975 * RESAMPLES) - 1], 3)]
+
+    resample = lambda xs: [rng.choice(xs) for _ in xs]  # noqa: E731
+    return {
+        'ratio': round(pooled(layouts, seeds), 3),
+        'ci95': interval(lambda: pooled(resample(layouts), seeds)),
+        'ci95_layouts_and_seeds': interval(lambda: pooled(resample(layouts), resample(seeds))),
+        # Unrounded, so that a bound is tested on the ratio itself.
+        'per_layout': {l: pooled([l], seeds) for l in layouts},
+    }
 
 
 def main():
@@ -69,12 +84,12 @@ def main():
             'layouts': len(cell),
             'runs': len(reports),
             'error_m': round(mean(measure(r, 'error') for r in reports), 4),
-            # The pose the behaviours steered by, at the end, against the
-            # truth: what the robot believed when it stopped.
-            'steered_pose_error_m': round(mean(r['estimate_error_m'] for r in reports), 4),
             'time_s': round(mean(measure(r, 'time') for r in reports), 1),
             'failed_frames': round(mean(measure(r, 'failures') for r in reports), 2),
             'time_limit_runs': sum(r['end'] == 'time_limit' for r in reports),
+            # Any other end than the goal or the time limit (no progress, a
+            # behaviour's failure), by its name.
+            'other_ends': sorted({r['end'] for r in reports} - {'goal_reached', 'time_limit'}),
             'missed_goal_runs': sum(not r['reached_goal'] for r in reports),
             'collisions': sum(r['collisions'] for r in reports),
         }

@@ -110,9 +110,9 @@ pub struct ActionAidingConfig {
     /// Turn rate while scanning, °/s: slow enough for the camera to look.
     #[serde(default = "ActionAidingConfig::default_scan_rate", deserialize_with = "positive")]
     pub scan_rate_deg: f64,
-    /// Scan: the most time scanning (the sweep and the turn on the spot
-    /// after it) may take, as a share of the time spent driving since the
-    /// start. A decision that finds the budget spent drives on at the goal
+    /// Scan: the most time the robot may spend turning on the spot (the
+    /// scans' sweeps and every turn to a heading), as a share of the time
+    /// spent driving since the start. A decision that finds the budget spent drives on at the goal
     /// without scanning, so a run takes about `1 + scan_budget` times as
     /// long as driving straight. `None` scans before every step, as the
     /// thesis did (about 5 times as long on its routes).
@@ -338,8 +338,9 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "",
                 "None",
                 "≥ 0",
-                "the most time scans and the turns after them may take, as a share of the time driving; once spent, \
-                 a decision drives on at the goal without scanning (`None`: scan before every step, the thesis's)",
+                "the most time the robot may spend turning on the spot (scans and turns to headings), as a share of \
+                 the time driving; once spent, a decision drives on at the goal without scanning (`None`: scan \
+                 before every step, the thesis's)",
             ),
             Field::new("heading_tolerance_deg", "number", "°", "2", "> 0", "a turn counts as done within this"),
             Field::new("turn_gain", "number", "1/s", "2.0", "> 0", "turn rate per radian of heading error"),

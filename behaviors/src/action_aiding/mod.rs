@@ -229,7 +229,10 @@ impl ActionAiding {
     /// first leg's end first) and the turn back to about the goal's bearing
     /// `centre` stays within the scan budget: the time scans and turns
     /// will have taken against the time spent driving so far. Judged with
-    /// the scan's own length, so that one scan cannot overrun the budget.
+    /// the scan's predicted length (at the scan rate and the top turn
+    /// rate), so that a scan the budget cannot pay for is not begun; the
+    /// slow end of each leg, a turn to a heading beyond the goal's bearing
+    /// or a stalled turn can still overrun it a little.
     fn may_scan(&self, time: f64, facing: f64, edges: [f64; 2], centre: f64) -> bool {
         let Some(share) = self.config.scan_budget else { return true };
         let c = &self.config;

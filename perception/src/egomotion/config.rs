@@ -151,10 +151,12 @@ pub struct EgomotionConfig {
     pub odometry_fusion: OdometryFusion,
     /// Navigate by egomotion: the robot's pose that behaviours steer by
     /// becomes egomotion's pose at the newest frame, carried on by what
-    /// odometry says the robot did since, instead of odometry alone. On by
-    /// default, so that behaviours steer by the best estimate there is; the
-    /// thesis's robot navigated by odometry (`false`), and a veer odometry
-    /// does not see then walks the robot off its line.
+    /// odometry says the robot did since, combined with odometry's own by
+    /// their covariances ([`crate::egomotion::Tracker::navigation_pose`]),
+    /// instead of odometry alone. On by default, so that behaviours steer
+    /// by the best estimate there is; the thesis's robot navigated by
+    /// odometry (`false`), and a veer odometry does not see then walks the
+    /// robot off its line.
     pub navigate: bool,
 }
 

@@ -1,7 +1,7 @@
 //! The keyframe tracker: integrates egomotion over a run, frame by frame,
 //! against a bank of keyframes, and bridges failed frames by odometry.
 
-use super::config::EgomotionConfig;
+use super::config::{EgomotionConfig, EstimatorKind};
 use super::matching::match_frames;
 use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion};
 use crate::error_model::{CvTable, MODEL_STEP_M};
@@ -105,9 +105,9 @@ pub struct Tracker {
     /// Metres odometry has driven from the start to the newest frame: what
     /// the uncertainty of its own pose grows with.
     odometry_driven_m: f64,
-    /// Where the tracker started, and odometry's pose then: odometry's
-    /// frame may be its own, and its pose is carried into the tracker's
-    /// from these.
+    /// Where the tracker started, and odometry's pose at the first
+    /// keyframe, where egomotion's pose starts: odometry's frame may be its
+    /// own, and its pose is carried into the tracker's from these.
     start: Pose2,
     odometry_origin: Option<Pose2>,
     /// When the current outage began, if one is under way.
@@ -203,21 +203,27 @@ impl Tracker {
     /// ticking faster steers by this rather than by a pose that stands
     /// still between frames.
     ///
-    /// With an odometry gate's `noise`, that pose and odometry's own are
-    /// taken for two estimates of the same pose and combined by their
-    /// covariances (egomotion's [`Tracker::pose_covariance`], odometry's by
+    /// With the rigid estimator and an odometry gate's `noise`, that pose
+    /// and odometry's own are taken for two estimates of the same pose and
+    /// combined by their covariances (egomotion's [`Tracker::pose_covariance`], odometry's by
     /// its noise model over the distance driven since the start): while
     /// egomotion holds, its pose leads; where it has starved or failed for
     /// long, its covariance grows past odometry's and the robot leans on
     /// odometry instead of steering by a pose gone astray. (The two are
     /// not independent, as egomotion bridges its failures by odometry, so
-    /// the combination counts that part twice.)
+    /// the combination counts that part twice; and the weights are taken
+    /// afresh at each call, so the pose steps when egomotion's covariance
+    /// does, as a starving step raises it and the next good match lowers
+    /// it.)
     pub fn navigation_pose(&self, odometry: &Pose2) -> Option<Pose2> {
         if !self.config.navigate || self.newest.0 == 0 {
             return None;
         }
         let visual = self.state.pose?.compose(&odometry.relative_to(&self.newest.1));
-        let (Some(noise), Some(origin)) = (self.config.odometry_gate.and_then(|gate| gate.noise), self.odometry_origin)
+        // Only the rigid estimator gives a covariance to weigh its pose by.
+        let rigid = matches!(self.config.estimator, EstimatorKind::Rigid(_));
+        let (true, Some(noise), Some(origin)) =
+            (rigid, self.config.odometry_gate.and_then(|gate| gate.noise), self.odometry_origin)
         else {
             return Some(visual);
         };
@@ -260,7 +266,6 @@ impl Tracker {
     /// journey CV, eq. 7 per metre), keeps keyframes apart, and bridges
     /// outages; it never enters a visual estimate.
     pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
-        self.odometry_origin.get_or_insert(*odometry);
         if frame.number == 0 || frame.number == self.newest.0 {
             return;
         }
@@ -271,6 +276,9 @@ impl Tracker {
         let Some(pose) = self.state.pose else { return };
         if self.keyframes.is_empty() {
             self.last_match = frame.time;
+            // Egomotion's pose starts here, so odometry's is carried into
+            // the tracker's frame from here too.
+            self.odometry_origin.get_or_insert(*odometry);
             self.add_keyframe(frame, pose, *odometry, 0);
             return;
         }
