@@ -13,6 +13,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 . lab/scripts/layouts-and-seeds.sh
+. lab/scripts/wheels.sh
 families=${FAMILIES:-ordinary-far ordinary-near feature-poor featureless-20 featureless-30 range-20 noise-1px fov-32}
 aids=${AIDS:-none scan triggered-scan camera}
 estimates=${ESTIMATES:-default visual}
@@ -54,11 +55,7 @@ aid() {
     esac
 }
 odometry() {
-    case $1 in
-        exact) cat ;;
-        scale) sed -e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: 0.2, left_scale: 1.01, right_scale: 1.01/" ;;
-        veer) sed -e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05/" ;;
-    esac
+    sed -e "s/slip_deg_per_sqrt_m: 0.2/$(wheel_errors "$1")/"
 }
 for f in $families; do
     for e in $estimates; do

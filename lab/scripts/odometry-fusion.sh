@@ -16,13 +16,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 . lab/scripts/layouts-and-seeds.sh
+. lab/scripts/wheels.sh
 for route in route-1-2 route-2-1 feature-poor; do
     for odometry in exact scale veer; do
-        case $odometry in
-            exact) errors='slip_deg_per_sqrt_m: 0.2' ;;
-            scale) errors='slip_deg_per_sqrt_m: 0.2, left_scale: 1.01, right_scale: 1.01' ;;
-            veer) errors='slip_deg_per_sqrt_m: 0.2, veer_deg_per_m: -0.05' ;;
-        esac
+        errors=$(wheel_errors "$odometry")
         for fusion in Off Sideways Full SidewaysNavigating; do
             settings="odometry_fusion: $fusion, navigate: false"
             [ "$fusion" = SidewaysNavigating ] && settings='odometry_fusion: Sideways, navigate: true'
