@@ -60,6 +60,10 @@ fn predict(camera: &StereoCamera, mounts: &Mounts, g: &Vector4<f64>, l: &Landmar
     Some(Vector4::new(before.u_left, before.u_right, after.u_left, after.u_right))
 }
 
+/// One landmark's share of the normal equations: the inverse of its own
+/// 2 × 2 information, its coupling to the motion and offset, its gradient.
+type Share = (Matrix2<f64>, Matrix2x4<f64>, Vector2<f64>);
+
 /// Pixel columns seen, before and after, in the order [`predict`] gives.
 fn columns(pixels: &[StereoPixels; 2]) -> Vector4<f64> {
     Vector4::new(pixels[0].u_left, pixels[0].u_right, pixels[1].u_left, pixels[1].u_right)
@@ -99,15 +103,14 @@ pub(super) fn read(
     }
     let (observed, mut landmarks): (Vec<Vector4<f64>>, Vec<Landmark>) = seen.into_iter().unzip();
     let mut g = Vector4::new(motion.forward, motion.left, motion.yaw, 0.0);
-    // Finite-difference steps: a micrometre, a microradian, a millionth of
-    // a pixel, a millionth of the inverse depth; far below what moves a
-    // column by the noise, far above rounding.
+    // Finite-difference steps for the motion and the offset: a micrometre,
+    // a microradian, a millionth of a pixel (and for a landmark, 10⁻⁷ of
+    // its line's slope and a millionth of its inverse depth): far below
+    // what moves a column by the noise, far above rounding.
     const STEPS: [f64; 4] = [1e-6, 1e-6, 1e-6, 1e-6];
     let mut information = Matrix4::zeros();
     let mut cost = 0.0;
-    // Each landmark's share of the normal equations: its own 2 × 2
-    // information's inverse, its coupling to the globals, its gradient.
-    let mut shares: Vec<Option<(Matrix2<f64>, Matrix2x4<f64>, Vector2<f64>)>> = vec![None; landmarks.len()];
+    let mut shares: Vec<Option<Share>> = vec![None; landmarks.len()];
     for iteration in 0..8 {
         let (mut reduced, mut gradient) = (Matrix4::zeros(), Vector4::zeros());
         cost = 0.0;
@@ -144,7 +147,7 @@ pub(super) fn read(
             *share = Some((own_inverse, coupling, own_gradient));
         }
         information = reduced;
-        let Some(step) = reduced.lu().solve(&(-gradient)) else { return None };
+        let step = reduced.lu().solve(&(-gradient))?;
         g += step;
         for (l, share) in landmarks.iter_mut().zip(&shares) {
             let Some((own_inverse, coupling, own_gradient)) = share else { continue };

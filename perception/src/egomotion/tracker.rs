@@ -244,6 +244,15 @@ impl Tracker {
         {
             self.offset_applied = self.disparity_offset().map_or(0.0, |e| e.px);
         }
+        // How the estimate settles, for `-vv` (evaluated only then).
+        tracing::debug!(
+            frame = self.newest.0,
+            reading = self.offset_readings.back().map(|r| r.px),
+            sigma = reading.variance.sqrt(),
+            estimate = ?self.disparity_offset().map(|e| e.px),
+            applied = self.offset_applied,
+            "disparity offset read"
+        );
     }
 
     /// The tracker's camera with the disparity offset the landmarks are
