@@ -16,7 +16,7 @@ use std::time::Instant;
 use ubf_core::{
     BuildContext, Controller, Ends, Pose2, Session, SessionEnd, SimClock, StereoFrame, TickRecord, TickSink,
 };
-use ubf_perception::egomotion::{EgomotionConfig, Tracker};
+use ubf_perception::egomotion::{DisparityOffsetEstimate, EgomotionConfig, Tracker};
 use ubf_perception::features::{FeatureConfig, StereoPipeline};
 use ubf_perception::kitti::{self, Accuracy};
 use ubf_perception::rectify::Rectified;
@@ -209,6 +209,19 @@ pub struct PipelineReport {
     /// the median of the pairs' estimates, which the pipeline corrects in
     /// whole rows. `None` if no pair gave one.
     pub row_offset_px: Option<f64>,
+    /// The rig's disparity offset as the frames put it, px: the
+    /// calibration's plus what egomotion read from the steps (the median of
+    /// the steps' readings weighed by their precision). The value to put in
+    /// `camera.ron` as `disparity_offset_px` if other drives agree. `None`
+    /// if no step gave a reading.
+    pub disparity_offset_px: Option<f64>,
+    /// The calibration's disparity offset (or `--disparity-offset`'s), px.
+    pub calibrated_disparity_offset_px: f64,
+    /// Steps whose readings [`PipelineReport::disparity_offset_px`] rests on.
+    pub disparity_offset_steps: usize,
+    /// Whether the landmarks were corrected by the estimate as it settled
+    /// (`--self-calibrate`), or only the estimate reported.
+    pub disparity_offset_corrected: bool,
     /// Frames whose egomotion step failed or rested on too few landmarks
     /// to trust.
     pub starving_frames: usize,
@@ -236,6 +249,13 @@ pub struct ReplayWarning {
 /// From this vertical offset on, px, the rig is reported out of line (if
 /// five pairs or more gave an estimate).
 const RECALIBRATE_ROW_OFFSET_PX: f64 = 0.5;
+
+/// From this difference between the disparity offset the frames read and
+/// the calibration's on, px, the user is told to recalibrate (if twenty
+/// steps or more gave a reading): a landmark 10 px of disparity off (30 m
+/// on KITTI) is then 1 % too near or too far, the size of KITTI's whole
+/// error budget.
+const RECALIBRATE_DISPARITY_OFFSET_PX: f64 = 0.1;
 
 /// A stretch of starving frames being gathered: first and last frame, the
 /// fewest landmarks a pair had and a step rested on, failed steps.
@@ -326,6 +346,10 @@ pub struct ReplayOptions {
     pub keyframe_range_m: Option<f64>,
     /// Replaces the calibration's disparity offset, px.
     pub disparity_offset_px: Option<f64>,
+    /// Estimate the disparity offset from the frames and correct the
+    /// landmarks by it as it settles (egomotion's `disparity_offset:
+    /// Correct`); without, it is only estimated and reported.
+    pub self_calibrate: bool,
     /// Write every landmark of every pair here (CSV): pair, pixels (the
     /// first pixel's centre at (0, 0), as calibration tools count),
     /// disparity, and the point in the camera frame.
@@ -420,6 +444,11 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         max_turn_rate_deg: limits[1],
         odometry_gate: None,
         keyframe_range_m: options.keyframe_range_m.unwrap_or(EgomotionConfig::default().keyframe_range_m),
+        disparity_offset: if options.self_calibrate {
+            DisparityOffsetEstimate::Correct
+        } else {
+            DisparityOffsetEstimate::Report
+        },
         ..EgomotionConfig::default()
     };
     let index = dir.join(layout.index());
@@ -524,6 +553,25 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         eprintln!("warning: {}", warning.message);
         warnings.insert(0, warning);
     }
+    let read = tracker.disparity_offset();
+    let disparity_offset_steps = read.map_or(0, |r| r.readings);
+    let disparity_offset_px = read.map(|r| camera.disparity_offset_px + r.px);
+    if let Some(px) = disparity_offset_px.filter(|px| {
+        disparity_offset_steps >= 20 && (px - camera.disparity_offset_px).abs() >= RECALIBRATE_DISPARITY_OFFSET_PX
+    }) {
+        let warning = ReplayWarning {
+            frames: None,
+            message: format!(
+                "the frames put the rig's disparity offset at {px:+.2} px, the calibration at {:+.2} px (median of \
+                 {disparity_offset_steps} steps): put `disparity_offset_px: {px:.2}` in {CAMERA_FILE} if other drives \
+                 agree{}",
+                camera.disparity_offset_px,
+                if options.self_calibrate { "; the landmarks were corrected by it as it settled" } else { "" }
+            ),
+        };
+        eprintln!("warning: {}", warning.message);
+        warnings.push(warning);
+    }
     let covariance = tracker.pose_covariance();
     let pose = tracker.state().pose.unwrap_or_default();
     let total = ubf_perception::median(&mut total_ms);
@@ -539,6 +587,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         final_pose: [pose.x, pose.y, pose.theta],
         limits,
         row_offset_px,
+        disparity_offset_px,
+        calibrated_disparity_offset_px: camera.disparity_offset_px,
+        disparity_offset_steps,
+        disparity_offset_corrected: options.self_calibrate,
         starving_frames,
         pose_sigma_m: (covariance[(0, 0)] + covariance[(1, 1)]).sqrt(),
         warnings,
@@ -586,6 +638,15 @@ impl std::fmt::Display for PipelineReport {
         )?;
         if let Some(offset) = self.row_offset_px {
             writeln!(f, "right image {offset:+.2} px below the left; end pose σ {:.2} m", self.pose_sigma_m)?;
+        }
+        if let Some(offset) = self.disparity_offset_px {
+            writeln!(
+                f,
+                "disparity offset by the frames {offset:+.2} px (calibration {:+.2}, {} steps; {})",
+                self.calibrated_disparity_offset_px,
+                self.disparity_offset_steps,
+                if self.disparity_offset_corrected { "corrected" } else { "reported only" }
+            )?;
         }
         for warning in &self.warnings {
             writeln!(f, "warning: {}", warning.message)?;

@@ -371,6 +371,12 @@ enum Command {
         /// rectification leaves a disparity bias. Negative values allowed.
         #[arg(long, value_name = "PX", allow_negative_numbers = true, value_parser = parse_offset)]
         disparity_offset: Option<f64>,
+        /// Correct the landmarks by the disparity offset egomotion reads
+        /// from the frames, once it has settled (over ten steps); without
+        /// this flag it is only estimated and reported, as
+        /// `disparity_offset_px` in the JSON.
+        #[arg(long)]
+        self_calibrate: bool,
         /// Draw the estimated path (over the true one, if known) here (PNG).
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
@@ -769,6 +775,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             max_turn_rate,
             keyframe_range,
             disparity_offset,
+            self_calibrate,
             plot,
             landmarks,
         } => {
@@ -779,6 +786,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 poses,
                 keyframe_range_m: keyframe_range,
                 disparity_offset_px: disparity_offset,
+                self_calibrate,
                 landmarks,
             };
             images::pipeline(&dir, &options, json, plot.as_deref())

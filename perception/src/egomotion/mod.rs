@@ -26,18 +26,19 @@
 mod config;
 mod matching;
 mod odometry;
+mod offset;
 mod rigid;
 mod simple2d;
 mod step;
 mod tracker;
 
-pub use config::{EgomotionConfig, EstimatorKind, RigidConfig, Simple2dConfig};
+pub use config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind, RigidConfig, Simple2dConfig};
 pub use matching::{match_frames, MatchConfig};
 pub use odometry::{OdometryFusion, OdometryGate, OdometryNoise};
 pub use rigid::Rigid;
 pub use simple2d::Simple2d;
 pub use step::{MotionPhase, PlanarMotion};
-pub use tracker::Tracker;
+pub use tracker::{OffsetEstimate, Tracker};
 
 #[cfg(test)]
 mod testing;

@@ -140,10 +140,10 @@ impl Rigid {
     }
 
     /// The motion between the frames of `pairs`, the landmarks it rests
-    /// on and its covariance. `turned` is the turn between the frames as
-    /// odometry measured it (or, without odometry, as egomotion last put
-    /// it): it lays each landmark's later line of sight in the earlier
-    /// frame. The visual estimate's own turn would not do: far landmarks
+    /// on (the consistent ones) and its covariance. `turned` is the turn
+    /// between the frames as odometry measured it (or, without odometry, as
+    /// egomotion last put it): it lays each landmark's later line of sight
+    /// in the earlier frame. The visual estimate's own turn would not do: far landmarks
     /// leave it coupled with the sideways motion, and a tenth of a degree
     /// off tilts a far landmark's depth error into a false bearing.
     ///
@@ -163,7 +163,7 @@ impl Rigid {
         max_step: f64,
         turned: f64,
         rng: &mut ChaCha8Rng,
-    ) -> Option<(PlanarMotion, usize, Matrix3<f64>)> {
+    ) -> Option<(PlanarMotion, Vec<Pair>, Matrix3<f64>)> {
         if pairs.len() < 3 {
             return None;
         }
@@ -199,11 +199,10 @@ impl Rigid {
         let (yaw, t) = Self::refine(&chosen, &chosen_info, yaw, t);
         let motion = PlanarMotion { forward: t[0], left: t[1], yaw };
         let covariance = Self::covariance(&chosen, &chosen_info, yaw, t)?;
-        (motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()).then_some((
-            motion,
-            inliers.len(),
-            covariance,
-        ))
+        if !(motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()) {
+            return None;
+        }
+        Some((motion, chosen, covariance))
     }
 }
 
@@ -218,12 +217,18 @@ impl StepEstimator for RigidConfig {
 
     /// It works in the robot frame.
     fn pair(&self, before: [f64; 3], after: [f64; 3], mounts: &Mounts, cv: f64) -> Pair {
-        Pair { before: mounts.before.cam_to_robot(before), after: mounts.after.cam_to_robot(after), cv }
+        Pair::new(mounts.before.cam_to_robot(before), mounts.after.cam_to_robot(after), cv)
     }
 
     fn estimate(&self, pairs: &[Pair], input: StepInput<'_>) -> Option<StepMotion> {
-        Rigid::estimate(self, input.camera, pairs, input.max_step_m, input.turned_rad, input.rng)
-            .map(|(motion, landmarks, covariance)| StepMotion { motion, landmarks, covariance: Some(covariance) })
+        Rigid::estimate(self, input.camera, pairs, input.max_step_m, input.turned_rad, input.rng).map(
+            |(motion, inliers, covariance)| StepMotion {
+                motion,
+                landmarks: inliers.len(),
+                covariance: Some(covariance),
+                inliers,
+            },
+        )
     }
 }
 
@@ -377,8 +382,7 @@ mod tests {
                     .collect()
             };
             let (a, b) = (seen(&before), seen(&after));
-            let pairs: Vec<Pair> =
-                a.into_iter().zip(b).map(|(before, after)| Pair { before, after, cv: 1.0 }).collect();
+            let pairs: Vec<Pair> = a.into_iter().zip(b).map(|(before, after)| Pair::new(before, after, 1.0)).collect();
             let turned = turned_deg.to_radians();
             let Some((motion, _, _)) = Rigid::estimate(&config, &camera, &pairs, 10.0, turned, &mut rng) else {
                 continue;

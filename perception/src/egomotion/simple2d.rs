@@ -115,18 +115,18 @@ impl StepEstimator for Simple2dConfig {
     /// It reads motion in the frame of a camera looking straight ahead.
     fn pair(&self, before: [f64; 3], after: [f64; 3], mounts: &Mounts, cv: f64) -> Pair {
         if mounts.before.looks_ahead() && mounts.after.looks_ahead() {
-            return Pair { before, after, cv };
+            return Pair::new(before, after, cv);
         }
-        Pair {
-            before: mounts.ahead.robot_to_cam(mounts.before.cam_to_robot(before)),
-            after: mounts.ahead.robot_to_cam(mounts.after.cam_to_robot(after)),
+        Pair::new(
+            mounts.ahead.robot_to_cam(mounts.before.cam_to_robot(before)),
+            mounts.ahead.robot_to_cam(mounts.after.cam_to_robot(after)),
             cv,
-        }
+        )
     }
 
     fn estimate(&self, pairs: &[Pair], input: StepInput<'_>) -> Option<StepMotion> {
         Simple2d::estimate(self, input.camera, pairs, input.max_step_m, input.phase)
-            .map(|(motion, landmarks)| StepMotion { motion, landmarks, covariance: None })
+            .map(|(motion, landmarks)| StepMotion { motion, landmarks, covariance: None, inliers: Vec::new() })
     }
 }
 

@@ -5,7 +5,7 @@
 use crate::stereo::StereoCamera;
 use nalgebra::Matrix3;
 use rand_chacha::ChaCha8Rng;
-use ubf_core::{CameraMount, Command, Pose2, Turn};
+use ubf_core::{CameraMount, Command, Pose2, StereoPixels, Turn};
 
 /// A planar motion of the robot between two frames, in the earlier frame's
 /// robot frame.
@@ -31,6 +31,17 @@ pub(super) struct Pair {
     pub(super) before: [f64; 3],
     pub(super) after: [f64; 3],
     pub(super) cv: f64,
+    /// The pixels it was seen at in the earlier and the later frame, where
+    /// they triangulate: the disparity offset is read from them.
+    pub(super) pixels: Option<[StereoPixels; 2]>,
+}
+
+impl Pair {
+    /// A landmark seen at `before` and `after`, weighed by `cv`; its pixels
+    /// are left for the tracker to fill in.
+    pub(super) fn new(before: [f64; 3], after: [f64; 3], cv: f64) -> Pair {
+        Pair { before, after, cv, pixels: None }
+    }
 }
 
 /// What the robot was commanded to do between two frames.
@@ -108,6 +119,9 @@ pub(super) struct StepMotion {
     pub(super) landmarks: usize,
     /// Its covariance (forward, left, yaw), where the estimator gives one.
     pub(super) covariance: Option<Matrix3<f64>>,
+    /// The matched landmarks consistent with it, where the estimator says
+    /// (empty where it does not): the disparity offset is read from them.
+    pub(super) inliers: Vec<Pair>,
 }
 
 /// An egomotion estimator: from the landmarks matched between two frames,

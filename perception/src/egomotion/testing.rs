@@ -79,3 +79,35 @@ pub(super) fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
 pub(super) fn at(number: u64, time: f64, landmarks: Vec<LandmarkObservation>) -> StereoFrame {
     StereoFrame { number, time, landmarks, calibration: None, images: None }
 }
+
+/// Observations of `points` (world frame) from `pose` by a rig whose
+/// disparities are `offset_px` short of what `camera`, its calibration,
+/// assumes (the true depth is `f·B / (d + offset_px)`): each pixel is
+/// projected exactly, moved by Gaussian noise of `sigma_px`, and
+/// triangulated by the calibration. Landmarks outside the images, or
+/// whose disparity the noise and offset leave under a pixel, are not seen.
+pub(super) fn seen_with_offset(
+    points: &[[f64; 3]],
+    pose: Pose2,
+    camera: &StereoCamera,
+    offset_px: f64,
+    sigma_px: f64,
+    rng: &mut ChaCha8Rng,
+) -> Vec<LandmarkObservation> {
+    let rig = StereoCamera { disparity_offset_px: camera.disparity_offset_px + offset_px, ..*camera };
+    let exact = frame(points, pose, &rig);
+    exact
+        .into_iter()
+        .filter(|o| rig.in_images(&o.pixels))
+        .filter_map(|mut o| {
+            o.pixels.u_left += sigma_px * standard_normal(rng);
+            o.pixels.u_right += sigma_px * standard_normal(rng);
+            o.pixels.v += sigma_px * standard_normal(rng);
+            if o.pixels.disparity() < 1.0 {
+                return None;
+            }
+            o.point_cam = camera.triangulate(&o.pixels)?;
+            Some(o)
+        })
+        .collect()
+}
