@@ -611,11 +611,14 @@ fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_pos
     let report: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
     assert_eq!(report["layout"], "kitti");
     assert_eq!(report["frames"], 51);
-    // No failed step. The end point drifts 1.5 % (the target is
-    // 1 %): the sequence's calibration leaves a disparity offset of about
-    // 0.13 px (docs/perception.md, scripts/kitti-scale.py), which inflates
-    // every step by about 1 %.
+    // No failed step. The sequence's calibration leaves a disparity offset
+    // of about 0.13 px (docs/perception.md, scripts/kitti-scale.py), which
+    // inflates every step by about 1 %; by default egomotion reads it from
+    // the frames and corrects the landmarks by it once it has settled.
     assert_eq!(report["failures"], 0, "{report}");
+    assert_eq!(report["disparity_offset_corrected"], true, "{report}");
+    let read = report["disparity_offset_px"].as_f64().unwrap();
+    assert!((0.05..0.3).contains(&read), "{report}");
     let drift = report["endpoint_drift_pct"].as_f64().unwrap();
     assert!(drift <= 2.0, "end-point drift {drift} %");
     let segments = report["translation_error_pct"].as_f64().unwrap();
@@ -623,14 +626,24 @@ fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_pos
     // Frame by frame: no far anchor's wrong consensus puts frames metres
     // off (the median step was 42 % wrong before the near-far check).
     assert!(report["step_translation_error_pct_median"].as_f64().unwrap() < 5.0, "{report}");
-    let scale = report["step_scale_median"].as_f64().unwrap();
-    assert!((1.0..1.03).contains(&scale), "{report}");
-    // The over-estimate moves with the disparity offset, as the
-    // explanation says it must.
-    let corrected = ubf(&["pipeline", dir.to_str().unwrap(), "--json", "--disparity-offset", "0.13"]);
-    let corrected: serde_json::Value = serde_json::from_slice(&corrected.stdout).unwrap();
+    // As the calibration has it, every step is too long, and the
+    // over-estimate moves with the disparity offset, as the explanation
+    // says it must.
+    let pipeline = |extra: &[&str]| -> serde_json::Value {
+        let args = [&["pipeline", dir.to_str().unwrap(), "--json", "--keep-disparity-offset"], extra].concat();
+        serde_json::from_slice(&ubf(&args).stdout).unwrap()
+    };
+    let kept = pipeline(&[]);
+    assert_eq!(kept["disparity_offset_corrected"], false, "{kept}");
+    let scale = kept["step_scale_median"].as_f64().unwrap();
+    assert!((1.0..1.03).contains(&scale), "{kept}");
+    let corrected = pipeline(&["--disparity-offset", "0.13"]);
     assert!(corrected["step_scale_median"].as_f64().unwrap() < scale - 0.005, "{corrected}");
-    assert!(corrected["translation_error_pct"].as_f64().unwrap() < segments - 0.3, "{corrected}");
+    let kept_segments = kept["translation_error_pct"].as_f64().unwrap();
+    assert!(corrected["translation_error_pct"].as_f64().unwrap() < kept_segments - 0.3, "{corrected}");
+    // The offset read from the frames moves it the same way.
+    assert!(report["step_scale_median"].as_f64().unwrap() < scale - 0.002, "{report}");
+    assert!(segments < kept_segments, "{report}");
     assert_eq!(report["limits"], serde_json::json!([40.0, 90.0]));
     assert!(std::fs::metadata(&plot).unwrap().len() > 10_000);
     // The robot's limits reject every step of a car at 12 m/s.

@@ -59,7 +59,13 @@ fn misalignment_blur_and_low_contrast_stay_within_the_drift_bounds() {
     });
     let base = drift(&aligned);
     assert_eq!(aligned.failures, 0, "{aligned:?}");
-    assert!(aligned.warnings.is_empty(), "{:?}", aligned.warnings);
+    // No stretch starves; the one warning is the disparity offset KITTI's
+    // calibration leaves (the frames read about +0.14 px).
+    assert!(
+        aligned.warnings.iter().all(|w| w.frames.is_none() && w.message.contains("disparity offset")),
+        "{:?}",
+        aligned.warnings
+    );
     let mut failures = Vec::new();
     for ((perturbation, bound, most_failed), report) in cases.iter().zip(&reports) {
         let ratio = drift(report) / base;

@@ -371,12 +371,12 @@ enum Command {
         /// rectification leaves a disparity bias. Negative values allowed.
         #[arg(long, value_name = "PX", allow_negative_numbers = true, value_parser = parse_offset)]
         disparity_offset: Option<f64>,
-        /// Correct the landmarks by the disparity offset egomotion reads
-        /// from the frames, once it has settled (over ten steps); without
-        /// this flag it is only estimated and reported, as
-        /// `disparity_offset_px` in the JSON.
+        /// Leave the landmarks as the calibration's disparity offset puts
+        /// them, and only report the offset egomotion reads from the frames
+        /// (`disparity_offset_px` in the JSON); without this flag they are
+        /// corrected by it once it has settled (over ten steps).
         #[arg(long)]
-        self_calibrate: bool,
+        keep_disparity_offset: bool,
         /// Draw the estimated path (over the true one, if known) here (PNG).
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
@@ -775,7 +775,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
             max_turn_rate,
             keyframe_range,
             disparity_offset,
-            self_calibrate,
+            keep_disparity_offset,
             plot,
             landmarks,
         } => {
@@ -786,7 +786,7 @@ pub fn main_with(registry: Registry) -> ExitCode {
                 poses,
                 keyframe_range_m: keyframe_range,
                 disparity_offset_px: disparity_offset,
-                self_calibrate,
+                keep_disparity_offset,
                 landmarks,
             };
             images::pipeline(&dir, &options, json, plot.as_deref())
