@@ -31,6 +31,7 @@ mod rigid;
 mod simple2d;
 mod step;
 mod tracker;
+mod wheel_scale;
 
 pub use config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind, RigidConfig, Simple2dConfig};
 pub use matching::{match_frames, MatchConfig};
@@ -39,6 +40,7 @@ pub use rigid::Rigid;
 pub use simple2d::Simple2d;
 pub use step::{MotionPhase, PlanarMotion};
 pub use tracker::{OffsetEstimate, Tracker};
+pub use wheel_scale::WheelScale;
 
 #[cfg(test)]
 mod testing;

@@ -5,6 +5,8 @@ use super::config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind};
 use super::matching::match_frames;
 use super::offset::{self, OffsetReading};
 use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion};
+use super::wheel_scale::{WheelScale, WheelScaleFit};
+use super::OdometryFusion;
 use crate::error_model::{CvTable, MODEL_STEP_M};
 use crate::fusion::fuse_cv;
 use crate::stereo::StereoCamera;
@@ -128,6 +130,9 @@ pub struct Tracker {
     /// The disparity offset the landmarks are corrected by, beyond the
     /// calibration's, px: 0 until the estimate is applied.
     offset_applied: f64,
+    /// The wheels' scale as the trusted visual steps measure it, for the
+    /// `Sideways` fusion of odometry's distance.
+    wheel_scale: WheelScaleFit,
 }
 
 /// The rig's disparity offset as the frames put it.
@@ -180,6 +185,9 @@ struct Estimate {
     /// landmarks consistent with it and the mounts of its two frames: the
     /// disparity offset is read from them, for the chosen match only.
     visual: PlanarMotion,
+    /// The visual motion's own covariance, before odometry, where the
+    /// estimator gives one: the wheels' scale is measured against it.
+    visual_covariance: Option<Matrix3<f64>>,
     inliers: Vec<Pair>,
     mounts: Mounts,
 }
@@ -212,6 +220,7 @@ impl Tracker {
             pairs: Vec::new(),
             offset_readings: std::collections::VecDeque::new(),
             offset_applied: 0.0,
+            wheel_scale: WheelScaleFit::default(),
         }
     }
 
@@ -253,6 +262,29 @@ impl Tracker {
             applied = self.offset_applied,
             "disparity offset read"
         );
+    }
+
+    /// How far the robot goes for each metre odometry counts, as the
+    /// visual steps so far measure it (with the rigid estimator,
+    /// when odometry's distance is fused: `odometry_fusion: Sideways`);
+    /// `None` until ten steps have.
+    pub fn wheel_scale(&self) -> Option<WheelScale> {
+        self.wheel_scale.scale()
+    }
+
+    /// Takes in the chosen step's visual forward motion against
+    /// odometry's, if `Sideways` fusion will use the scale. Every step the
+    /// odometry gate passed counts, weighed by its own variance: a step on
+    /// few landmarks says so in its covariance.
+    fn measure_wheels(&mut self, anchor: u64, estimate: &Estimate, odometric: &Pose2, driven: f64) {
+        let noise = self.config.odometry_gate.and_then(|gate| gate.noise);
+        let (OdometryFusion::Sideways, Some(noise), Some(visual)) =
+            (self.config.odometry_fusion, noise, estimate.visual_covariance)
+        else {
+            return;
+        };
+        let odometric_variance = noise.covariance(driven)[(0, 0)];
+        self.wheel_scale.add(anchor, estimate.visual.forward, visual[(0, 0)], odometric.x, odometric_variance);
     }
 
     /// The tracker's camera with the disparity offset the landmarks are
@@ -424,6 +456,9 @@ impl Tracker {
                 self.state.bridging = false;
                 self.state.anchor_frame = Some(keyframe.number);
                 self.last_match = frame.time;
+                let odometric = odometry.relative_to(&keyframe.odometry);
+                let stretch = odometric.x.hypot(odometric.y);
+                self.measure_wheels(keyframe.number, &estimate, &odometric, stretch);
                 if self.config.disparity_offset != DisparityOffsetEstimate::Off {
                     let sigma = match self.config.estimator {
                         EstimatorKind::Rigid(rigid) => rigid.pixel_sigma,
@@ -662,7 +697,7 @@ impl Tracker {
             rng: &mut self.rng,
         };
         let StepMotion { mut motion, landmarks, mut covariance, inliers } = estimator.estimate(&self.pairs, input)?;
-        let visual = motion;
+        let (visual, visual_covariance) = (motion, covariance);
         // Frames that share landmarks cannot have looked further apart than
         // the view is wide, nor can the robot have turned faster than it
         // turns (§4.4.6).
@@ -673,7 +708,8 @@ impl Tracker {
         }
         if let Some(gate) = &self.config.odometry_gate {
             let odometric = odometry.relative_to(&keyframe.odometry);
-            (motion, covariance) = gate.pass(self.config.odometry_fusion, motion, covariance, &odometric)?;
+            let scale = self.wheel_scale.scale();
+            (motion, covariance) = gate.pass(self.config.odometry_fusion, motion, covariance, &odometric, scale)?;
         }
         Some(Estimate {
             motion,
@@ -681,6 +717,7 @@ impl Tracker {
             step_cv: fuse_cv(self.pairs.iter().map(|p| p.cv)),
             covariance,
             visual,
+            visual_covariance,
             inliers,
             mounts,
         })
