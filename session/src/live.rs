@@ -8,25 +8,25 @@
 //! address: it binds only where it is told, the docs give loopback, and
 //! [`LiveServer::announce`] warns when it is anything else.
 //!
-//! A slow viewer never slows a tick: the view runs on a thread of its own
-//! behind a [`BackgroundSink`], which drops records when it falls behind
-//! and which the tick never has to wake (it takes what has come every
-//! 20 ms), and the server keeps a bounded queue per client, dropping that
-//! client's oldest messages when it cannot keep up. While nobody watches,
-//! no record is handed over; messages of a topic nobody has subscribed to
-//! are not made. A viewer is shown at most 20 ticks a second
-//! ([`SHOW_EVERY`]), and every tick that adds a collision; a run's log
-//! keeps every tick.
+//! A slow viewer never slows a tick: the view runs on a thread of its own,
+//! which takes the latest tick to show from a one-record mailbox every
+//! 20 ms (the tick never wakes it, never waits for it, and overwrites a
+//! tick it has not taken yet), and the server keeps a bounded queue per
+//! client, dropping that client's oldest messages when it cannot keep up.
+//! While nobody watches, no record is handed over; messages of a topic
+//! nobody has subscribed to are not made. A viewer is shown at most 20
+//! ticks a second ([`SHOW_EVERY`]), and every tick that adds a collision;
+//! a run's log keeps every tick.
 
 use crate::json_topics::{nanos, JsonChannels, JsonTopics, RunMessage, WorldMessage};
 use foxglove::WebSocketServerHandle;
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, TryLockError};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-use ubf_core::{BackgroundSink, TickRecord, TickSink, TreeLayout};
+use ubf_core::{TickRecord, TickSink, TreeLayout};
 
 /// Why the live view could not be served.
 #[derive(Debug, thiserror::Error)]
@@ -122,7 +122,6 @@ impl LiveServer {
         let now = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64);
         let channels = LiveChannels { epoch_ns: now, ..self.channels.clone() };
         let watchable: Vec<Arc<RawChannel>> = channels.channels.values().cloned().collect();
-        let watched_from = Arc::new(AtomicU64::new(0));
         let view = LiveView {
             channels,
             topics: JsonTopics::default(),
@@ -130,19 +129,28 @@ impl LiveServer {
             world,
             described_at: None,
             last_tick: None,
-            watched_from: watched_from.clone(),
+            started: false,
         };
-        let background = BackgroundSink::spawn_batched("live view", view, QUEUE, BATCH_EVERY)
-            .map_err(|e| LiveError { address: self.address, message: format!("starting its thread: {e}") })?;
+        let mailbox = Arc::new(Mutex::new(Mailbox::default()));
+        let thread = {
+            let mailbox = mailbox.clone();
+            std::thread::Builder::new()
+                .name("live view".into())
+                .spawn(move || view.serve(&mailbox))
+                .map_err(|e| LiveError { address: self.address, message: format!("starting its thread: {e}") })?
+        };
         let now = Instant::now();
         Ok(LiveSink {
-            background,
+            mailbox,
+            thread: Some(thread),
+            new_layout: None,
+            dropped: 0,
             channels: watchable,
             watched: false,
             ask_at: now,
             show_at: now,
             collisions: 0,
-            watched_from,
+            watched_from: 0,
         })
     }
 }
@@ -171,24 +179,22 @@ impl Drop for LiveServer {
 /// close.
 const CLOSE_WAIT: Duration = Duration::from_secs(1);
 
-/// Ticks the live view may fall behind by before records are dropped.
-const QUEUE: usize = 64;
-
 /// How often a live view asks whether anyone watches: a new viewer's
 /// first messages come this much later at most.
 const ASK_EVERY: Duration = Duration::from_millis(100);
 
-/// How often the live view takes the records that have come: a viewer
-/// sees the robot 20 ms late at most, and the tick never wakes a thread.
-const BATCH_EVERY: Duration = Duration::from_millis(20);
+/// How often the live view's thread looks for a tick to show: a viewer
+/// sees the robot 20 ms late at most, and the tick never wakes a thread
+/// (waking it every tick cost a viewer's tick 46 %).
+const TAKE_EVERY: Duration = Duration::from_millis(20);
 
 /// The least wall time between two ticks the view shows: a viewer gets at
 /// most 20 ticks a second, about as often as a screen can show a change
 /// worth seeing, while the log gets every one. A robot ticking at 10 Hz in
 /// real time is shown whole; a run at `--speed 10` (100 ticks a second) is
 /// shown every fifth tick. Handing a record to the view's thread is most
-/// of what a viewer costs a tick (its copy lands in memory the other core
-/// last held), so the ticks not shown cost no more than an unwatched view.
+/// of what a viewer costs a tick, so the ticks not shown cost no more than
+/// an unwatched view.
 pub const SHOW_EVERY: Duration = Duration::from_millis(50);
 
 /// Seconds of controller time between repeats of what the session is (its
@@ -197,10 +203,31 @@ pub const SHOW_EVERY: Duration = Duration::from_millis(50);
 const DESCRIBE_EVERY_S: f64 = 1.0;
 
 /// The live view of one session, as the controller holds it: records go
-/// to the view's own thread ([`BackgroundSink`]) only while someone
-/// watches, so an unwatched view costs a tick next to nothing.
+/// to the view's own thread only while someone watches, so an unwatched
+/// view costs a tick next to nothing.
+///
+/// A shown tick is copied into a one-record mailbox that only this side
+/// writes, and that the view's thread copies out of. Timed on the
+/// `live_view` bench (docs/performance.md): the copy into a buffer of a
+/// pool that had been to the view's thread and back cost the tick 4.5 µs
+/// (memory the other core last held), and the channel operations and the
+/// check on the thread around it 2.2 µs more; the copy into the mailbox
+/// costs 1.3 µs and its lock 0.4 µs. The controller's record itself is not
+/// handed over instead: the robot senses into it and keeps in it what it
+/// does not renew (the last stereo frame), so a record swapped for a spare
+/// would have to be copied back into the spare, the same copy into the
+/// same distant memory.
 pub struct LiveSink {
-    background: BackgroundSink,
+    /// The latest tick to show, shared with the view's thread.
+    mailbox: Arc<Mutex<Mailbox>>,
+    /// The view's thread; it ends when the mailbox is closed, or early
+    /// when showing fails.
+    thread: Option<JoinHandle<std::io::Result<()>>>,
+    /// A new tree's layout, put in the mailbox with the next tick shown.
+    new_layout: Option<TreeLayout>,
+    /// Ticks not shown because the view's thread held the mailbox or had
+    /// not taken the last one yet.
+    dropped: u64,
     /// The channels, to ask whether anyone subscribes.
     channels: Vec<Arc<RawChannel>>,
     /// Whether anyone subscribed when last asked, and when to ask again:
@@ -214,29 +241,89 @@ pub struct LiveSink {
     collisions: u32,
     /// The tick from which the current viewers have watched, for the view
     /// to tell a gap nobody watched from ticks left out by [`SHOW_EVERY`].
-    watched_from: Arc<AtomicU64>,
+    watched_from: u64,
+}
+
+/// What the tick leaves for the view's thread, which takes it every
+/// [`TAKE_EVERY`]. Each side holds the lock only to copy a record in or
+/// out; the tick never waits for it: when the view holds it, that tick is
+/// not shown.
+#[derive(Default)]
+struct Mailbox {
+    /// The latest tick to show: written only by the tick's side, so that
+    /// the copy lands in memory that side keeps (the view copies out).
+    record: TickRecord,
+    /// `record` is new since the view last took it. While it is, the tick
+    /// puts only a tick that added a collision in its place (whose count
+    /// includes the collisions of the one it replaces: two collisions
+    /// within 20 ms are shown as one, at the later).
+    fresh: bool,
+    /// [`LiveSink::watched_from`] as of `record`.
+    watched_from: u64,
+    /// The layout of `record` and the records after it, when it changed.
+    layout: Option<TreeLayout>,
+    /// The session is over: the view shows what is left and ends.
+    closed: bool,
+    /// The view's thread has ended early (showing failed, or it
+    /// panicked): the tick reports it.
+    ended: bool,
+}
+
+/// Locks the mailbox, whatever happened to the other side: neither side
+/// can leave it half written (a copy does not panic), so a poisoned lock
+/// is still a good one.
+fn lock(mailbox: &Mutex<Mailbox>) -> MutexGuard<'_, Mailbox> {
+    mailbox.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Marks the mailbox when the view's thread ends, however it ends (a
+/// panic included), so that the tick finds out.
+struct Ended<'a>(&'a Mutex<Mailbox>);
+
+impl Drop for Ended<'_> {
+    fn drop(&mut self) {
+        lock(self.0).ended = true;
+    }
+}
+
+impl LiveSink {
+    /// The view's thread has ended early: why, named.
+    fn stopped(&mut self) -> std::io::Error {
+        match self.finish() {
+            Err(e) => e,
+            Ok(()) => std::io::Error::other("live view: its thread stopped"),
+        }
+    }
 }
 
 impl TickSink for LiveSink {
+    /// Gives the view the tree's layout: once, before the first tick, so
+    /// waiting for the lock here costs no tick.
     fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
-        self.background.start(layout)
+        lock(&self.mailbox).layout = Some(layout.clone());
+        Ok(())
     }
 
+    /// Keeps the new layout to put in the mailbox with the next tick shown,
+    /// so that the view never names one tree's nodes by another's layout
+    /// and the tick never waits.
     fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
-        self.background.tree_changed(layout)
+        self.new_layout = Some(layout.clone());
+        Ok(())
     }
 
-    /// Hands the record over if anyone watches and [`SHOW_EVERY`] has
-    /// passed since the last one, or if the tick added a collision. A first
-    /// viewer is told what the session is with the first record it gets:
-    /// the view says it again when a second has passed since it last did.
+    /// Puts the record in the mailbox if anyone watches and [`SHOW_EVERY`]
+    /// has passed since the last one, or if the tick added a collision. A
+    /// first viewer is told what the session is with the first record it
+    /// gets: the view says it again when a second has passed since it last
+    /// did.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         let now = Instant::now();
         if now >= self.ask_at {
             self.ask_at = now + ASK_EVERY;
             let watched = self.channels.iter().any(|c| c.has_sinks());
             if watched && !self.watched {
-                self.watched_from.store(record.tick, Ordering::Relaxed);
+                self.watched_from = record.tick;
             }
             self.watched = watched;
         }
@@ -251,11 +338,58 @@ impl TickSink for LiveSink {
         // pause, from now.
         let next = self.show_at + SHOW_EVERY;
         self.show_at = if next > now { next } else { now + SHOW_EVERY };
-        self.background.record(record)
+        let mut mailbox = match self.mailbox.try_lock() {
+            Ok(mailbox) => mailbox,
+            Err(TryLockError::Poisoned(poisoned)) => poisoned.into_inner(),
+            Err(TryLockError::WouldBlock) => {
+                // The view is copying the last tick out: this one is not
+                // shown (a collision it added comes with the next).
+                if self.dropped == 0 {
+                    tracing::debug!("live view: a tick was not shown: the view's thread was taking the last");
+                }
+                self.dropped += 1;
+                return Ok(());
+            }
+        };
+        if mailbox.ended {
+            drop(mailbox);
+            return Err(self.stopped());
+        }
+        if mailbox.fresh && !collided {
+            // The view has not taken the last tick yet (it is 50 ms
+            // behind): that one stays, so that a tick that added a
+            // collision is only ever replaced by another that did.
+            self.dropped += 1;
+            return Ok(());
+        }
+        mailbox.record.copy_from(record);
+        mailbox.fresh = true;
+        mailbox.watched_from = self.watched_from;
+        if let Some(layout) = self.new_layout.take() {
+            mailbox.layout = Some(layout);
+        }
+        Ok(())
     }
 
+    /// Closes the mailbox and waits for the view's thread to show what is
+    /// left; its own failure, if it failed.
     fn finish(&mut self) -> std::io::Result<()> {
-        self.background.finish()
+        let Some(thread) = self.thread.take() else { return Ok(()) };
+        lock(&self.mailbox).closed = true;
+        thread.thread().unpark();
+        if self.dropped > 0 {
+            tracing::debug!("live view: {} ticks not shown while the view's thread was behind", self.dropped);
+        }
+        thread.join().unwrap_or_else(|_| Err(std::io::Error::other("live view: its thread panicked")))
+    }
+}
+
+impl Drop for LiveSink {
+    /// Ends the view's thread with the sink, however the session ended.
+    fn drop(&mut self) {
+        if let Err(e) = self.finish() {
+            tracing::warn!("{e}");
+        }
     }
 }
 
@@ -269,33 +403,64 @@ struct LiveView {
     described_at: Option<f64>,
     /// The last tick shown.
     last_tick: Option<u64>,
-    /// The tick from which the current viewers have watched
-    /// ([`LiveSink`] sets it).
-    watched_from: Arc<AtomicU64>,
+    /// Whether the view has been given its first layout.
+    started: bool,
 }
 
-impl TickSink for LiveView {
-    fn start(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
+impl LiveView {
+    /// The view's thread: every [`TAKE_EVERY`] (or when woken to end), it
+    /// copies what the mailbox holds out of it and shows it, until the
+    /// mailbox is closed or showing fails.
+    fn serve(mut self, mailbox: &Mutex<Mailbox>) -> std::io::Result<()> {
+        let _ended = Ended(mailbox);
+        let mut record = TickRecord::default();
+        loop {
+            std::thread::park_timeout(TAKE_EVERY);
+            let (layout, fresh, watched_from, closed) = {
+                let mut mailbox = lock(mailbox);
+                let fresh = std::mem::take(&mut mailbox.fresh);
+                if fresh {
+                    // A copy rather than a swap: the mailbox's buffer stays
+                    // memory the tick's side writes, and the cost of moving
+                    // the record between cores falls on this thread.
+                    record.copy_from(&mailbox.record);
+                }
+                (mailbox.layout.take(), fresh, mailbox.watched_from, mailbox.closed)
+            };
+            if let Some(layout) = layout {
+                if std::mem::replace(&mut self.started, true) {
+                    self.topics.start(&layout);
+                } else {
+                    self.start(&layout);
+                }
+            }
+            if fresh {
+                self.show(&record, watched_from)
+                    .map_err(|e| std::io::Error::new(e.kind(), format!("live view: {e}")))?;
+            }
+            if closed {
+                return Ok(());
+            }
+        }
+    }
+
+    /// The tree of the ticks to come, the first time.
+    fn start(&mut self, layout: &TreeLayout) {
         self.topics.start(layout);
         // The camera's pairs cost nothing until a viewer subscribes.
         self.topics.images(true);
-        Ok(())
     }
 
-    fn tree_changed(&mut self, layout: &TreeLayout) -> std::io::Result<()> {
-        self.topics.start(layout);
-        Ok(())
-    }
-
-    /// Shows the tick. Sending cannot fail: a client that cannot keep up
-    /// loses messages, and the tick goes on.
-    fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
+    /// Shows the tick to viewers who have watched from tick `from`.
+    /// Sending cannot fail: a client that cannot keep up loses messages,
+    /// and the tick goes on.
+    fn show(&mut self, record: &TickRecord, from: u64) -> std::io::Result<()> {
         let time = record.time();
         // Ticks left out between two shown are no gap: a tick that added a
-        // collision is shown (or, dropped by a view far behind, its
-        // collision comes with the next). Ticks nobody watched are: what
-        // they did is not news to a viewer who has just come.
-        let from = self.watched_from.load(Ordering::Relaxed);
+        // collision is shown (or, overwritten in the mailbox before the
+        // view took it, its collision comes with the next). Ticks nobody
+        // watched are: what they did is not news to a viewer who has just
+        // come.
         if self.last_tick.is_none_or(|last| from > last) {
             self.topics.catch_up(record);
         }
@@ -305,5 +470,60 @@ impl TickSink for LiveView {
             JsonTopics::describe(&mut self.channels, time, &self.run, &self.world).map_err(std::io::Error::other)?;
         }
         self.topics.tick(&mut self.channels, record).map_err(std::io::Error::other)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ubf_core::GroundTruth;
+
+    fn watched_sink() -> (LiveServer, LiveSink) {
+        let server = LiveServer::serve("127.0.0.1:0".parse().unwrap(), ("ubf.Report", b"{}".to_vec())).unwrap();
+        let run = RunMessage { scenario: "test".into(), seed: 1, start: [0.0; 3], outline: [[0.0; 2]; 4], goal: None };
+        let mut sink = server.view(run, WorldMessage::default()).unwrap();
+        sink.start(&TreeLayout::default()).unwrap();
+        // As if a viewer had subscribed, for the next hour.
+        sink.watched = true;
+        sink.ask_at = Instant::now() + Duration::from_secs(3600);
+        (server, sink)
+    }
+
+    fn tick(tick: u64, collisions: u32) -> TickRecord {
+        TickRecord { tick, truth: Some(GroundTruth { collisions, ..GroundTruth::default() }), ..TickRecord::default() }
+    }
+
+    #[test]
+    fn the_view_ends_with_its_session_without_waiting_out_its_nap() {
+        let (_server, mut sink) = watched_sink();
+        for i in 0..50 {
+            sink.record(&tick(i, 0)).unwrap();
+        }
+        let started = Instant::now();
+        sink.finish().unwrap();
+        // Woken, not left to sleep out `TAKE_EVERY`; far below it here
+        // unless the machine is very busy.
+        assert!(started.elapsed() < Duration::from_secs(1), "{:?}", started.elapsed());
+        // Dropped after its end, and without one: neither waits.
+        drop(sink);
+        let (_server, sink) = watched_sink();
+        drop(sink);
+    }
+
+    #[test]
+    fn a_tick_that_added_a_collision_is_replaced_only_by_another() {
+        let (_server, mut sink) = watched_sink();
+        sink.record(&tick(0, 1)).unwrap();
+        // Due at once, whatever the schedule.
+        sink.show_at = Instant::now();
+        sink.record(&tick(1, 1)).unwrap();
+        {
+            let mailbox = lock(&sink.mailbox);
+            // Unless the view took the first in between.
+            assert!(!mailbox.fresh || mailbox.record.tick == 0, "tick {}", mailbox.record.tick);
+        }
+        sink.record(&tick(2, 2)).unwrap();
+        let mailbox = lock(&sink.mailbox);
+        assert!(!mailbox.fresh || mailbox.record.tick == 2, "tick {}", mailbox.record.tick);
     }
 }
