@@ -85,28 +85,10 @@ impl BackgroundSink {
     /// Starts `sink` on a thread named after `name` (which also names it in
     /// warnings), with a pool of `capacity` record buffers.
     pub fn spawn(name: impl Into<String>, sink: impl TickSink + 'static, capacity: usize) -> io::Result<Self> {
-        BackgroundSink::start(name.into(), sink, capacity, None)
+        BackgroundSink::start(name.into(), sink, capacity)
     }
 
-    /// [`BackgroundSink::spawn`] for a sink that may see records late: its
-    /// thread wakes every `every` and takes what has come, so that handing
-    /// a record over never has to wake it. A tick then costs only the copy
-    /// of its record; the records reach the sink up to `every` later.
-    pub fn spawn_batched(
-        name: impl Into<String>,
-        sink: impl TickSink + 'static,
-        capacity: usize,
-        every: std::time::Duration,
-    ) -> io::Result<Self> {
-        BackgroundSink::start(name.into(), sink, capacity, Some(every))
-    }
-
-    fn start(
-        name: String,
-        mut sink: impl TickSink + 'static,
-        capacity: usize,
-        every: Option<std::time::Duration>,
-    ) -> io::Result<Self> {
+    fn start(name: String, mut sink: impl TickSink + 'static, capacity: usize) -> io::Result<Self> {
         let capacity = capacity.max(1);
         // A slot for each buffer, one for each new tree's layout (which
         // goes only with a record) and one for the start message: the
@@ -119,17 +101,7 @@ impl BackgroundSink {
         let label = name.clone();
         let writer = std::thread::Builder::new().name(format!("sink {name}")).spawn(move || {
             let mut result = Ok(());
-            let next = || match every {
-                None => messages.recv().ok(),
-                Some(every) => loop {
-                    match messages.try_recv() {
-                        Ok(message) => return Some(message),
-                        Err(crossbeam_channel::TryRecvError::Empty) => std::thread::sleep(every),
-                        Err(crossbeam_channel::TryRecvError::Disconnected) => return None,
-                    }
-                },
-            };
-            while let Some(message) = next() {
+            while let Ok(message) = messages.recv() {
                 let written = match message {
                     Message::Start(layout) => sink.start(&layout),
                     Message::TreeChanged(layout) => sink.tree_changed(&layout),
