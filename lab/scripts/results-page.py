@@ -115,7 +115,7 @@ def fusion_row(route, data):
 
 
 w("## In short\n")
-w("- **Over families of layouts, as set out before the runs.** The experiment of [lab/protocol.md](../lab/protocol.md) (eight layout families, twelve fresh layouts each, 30 seeds, both estimates, every aid and miscalibrated wheels) is written up on its own page, [aiding-families.md](aiding-families.md), by the protocol's rules. Where its verdicts and the single-layout and held-out figures below differ, its verdicts are the ones that generalise; the sections below stay as the reproductions and diagnoses they are. Their navigating runs (`navigate: true`) steered by egomotion's pose wholesale; the pose steered by now combines it with odometry's by their covariances.")
+w("- **Over families of layouts, as set out before the runs.** The experiment of [lab/protocol.md](../lab/protocol.md) (eight layout families, twelve fresh layouts each, 30 seeds, both estimates, every aid and miscalibrated wheels) is written up on its own page, [aiding-families.md](aiding-families.md), by the protocol's rules. Where its verdicts and the single-layout and held-out figures below differ, its verdicts are the ones that generalise; the sections below stay as the reproductions and diagnoses they are. Their navigating runs (`navigate: true`) steered by egomotion's pose wholesale; the pose steered by now combines it with odometry's by their covariances, and `Sideways` fusion now also takes odometry's distance, corrected by the wheels' scale the visual steps measure.")
 pays_early = [c for c in env['cells'] if c['ratio_ci95'][1] < 1.0]
 losses_early = [c for c in env['cells'] if c['ratio_ci95'][0] > 1.0]
 
