@@ -220,7 +220,8 @@ pub struct PipelineReport {
     /// Steps whose readings [`PipelineReport::disparity_offset_px`] rests on.
     pub disparity_offset_steps: usize,
     /// Whether the landmarks were corrected by the estimate as it settled
-    /// (the default), or only the estimate reported (`--keep-disparity-offset`).
+    /// (the default, once enough steps have read it), or only the estimate
+    /// reported (`--keep-disparity-offset`, or too few readings).
     pub disparity_offset_corrected: bool,
     /// Frames whose egomotion step failed or rested on too few landmarks
     /// to trust.
@@ -592,7 +593,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         disparity_offset_px,
         calibrated_disparity_offset_px: camera.disparity_offset_px,
         disparity_offset_steps,
-        disparity_offset_corrected: !options.keep_disparity_offset,
+        disparity_offset_corrected: tracker.applied_disparity_offset() != 0.0,
         starving_frames,
         pose_sigma_m: (covariance[(0, 0)] + covariance[(1, 1)]).sqrt(),
         warnings,

@@ -10,8 +10,9 @@
 //!
 //! A slow viewer never slows a tick: the view runs on a thread of its own,
 //! which takes the latest tick to show from a one-record mailbox every
-//! 20 ms (the tick never wakes it, never waits for it, and overwrites a
-//! tick it has not taken yet), and the server keeps a bounded queue per
+//! 20 ms (the tick never wakes it and never waits for it; a tick it has
+//! not taken yet is replaced only by one that adds a collision, and a tick
+//! that finds the view holding the mailbox is not shown), and the server keeps a bounded queue per
 //! client, dropping that client's oldest messages when it cannot keep up.
 //! While nobody watches, no record is handed over; messages of a topic
 //! nobody has subscribed to are not made. A viewer is shown at most 20

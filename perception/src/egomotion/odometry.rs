@@ -312,9 +312,11 @@ mod tests {
         let astray = PlanarMotion { forward: 5.8, ..seen };
         let (fused, _) = noise.fuse(OdometryFusion::Sideways, &astray, &poor, &long, 5.0, measured).unwrap();
         assert!((fused.forward - 5.0).abs() < 0.02, "{fused:?}");
-        // A sharp visual distance stays itself.
-        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, measured).unwrap();
-        assert!((fused.forward - 5.0).abs() < 0.02, "{fused:?}");
+        // A sharp visual distance (σ 1 cm) stays itself against wheels
+        // measured exact that say 5.1 m.
+        let exact = Some(WheelScale { factor: 1.0, sigma: 0.005 });
+        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, exact).unwrap();
+        assert!((fused.forward - 5.0).abs() < 0.01, "{fused:?}");
         // Across ±π the two headings are 0.02 rad apart, not 2π.
         let back = PlanarMotion { forward: 0.0, left: 0.0, yaw: PI - 0.01 };
         let (fused, _) = noise

@@ -155,24 +155,18 @@ const OFFSET_READINGS_KEPT: usize = 500;
 /// step on a car, a wall of far landmarks).
 const OFFSET_SETTLED_READINGS: usize = 10;
 
-/// The median of `readings` weighed by their precision (inverse variance):
-/// the value with half the total weight on each side. A step matched over
-/// metres to landmarks at many depths reads the offset far more precisely
-/// than one over a few centimetres, and a plain median would count both
-/// alike; a weighted mean would let one wild reading pull it.
-fn weighted_median(readings: &[OffsetReading]) -> Option<f64> {
-    let mut sorted: Vec<(f64, f64)> = readings.iter().map(|r| (r.px, 1.0 / r.variance)).collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    let total: f64 = sorted.iter().map(|r| r.1).sum();
-    let mut below = 0.0;
-    for &(px, weight) in &sorted {
-        below += weight;
-        if below >= total / 2.0 {
-            return Some(px);
-        }
-    }
-    sorted.last().map(|r| r.0)
-}
+/// A reading less certain than this, px (σ), is not taken: a step that
+/// moved too little (a robot standing, or turning on the spot) cannot
+/// tell the offset from its landmarks' depths, and its reading is noise.
+/// Ten times what a step over metres reads on real frames.
+const OFFSET_READING_MAX_SIGMA_PX: f64 = 0.5;
+
+/// The least scatter a reading is weighed with, px (σ), added to its own:
+/// the fit's variance counts only pixel noise, while on real frames
+/// single readings scatter by about 0.2 px (motion the planar model leaves
+/// out, mismatches), so without it two sharp readings could hold half the
+/// weight of a young estimate.
+const OFFSET_READING_SCATTER_PX: f64 = 0.1;
 
 /// The result of matching a frame against one keyframe.
 struct Estimate {
@@ -228,9 +222,14 @@ impl Tracker {
     /// rigid estimator, unless `disparity_offset` is `Off`): the median of
     /// the latest steps' readings weighed by their precision, beyond the
     /// calibration's offset. `None` before a step has read one.
+    ///
+    /// The median is weighed because a step matched over metres to
+    /// landmarks at many depths reads the offset far more precisely than one
+    /// over a few centimetres; a weighted mean would let one wild reading
+    /// pull it.
     pub fn disparity_offset(&self) -> Option<OffsetEstimate> {
-        let readings: Vec<OffsetReading> = self.offset_readings.iter().copied().collect();
-        weighted_median(&readings).map(|px| OffsetEstimate { px, readings: readings.len() })
+        let readings = self.offset_readings.iter().map(|r| (r.px, r.variance + OFFSET_READING_SCATTER_PX.powi(2)));
+        crate::fusion::weighted_median(readings).map(|px| OffsetEstimate { px, readings: self.offset_readings.len() })
     }
 
     /// The disparity offset the landmarks are corrected by now, beyond the
@@ -267,7 +266,7 @@ impl Tracker {
     /// How far the robot goes for each metre odometry counts, as the
     /// visual steps so far measure it (with the rigid estimator,
     /// when odometry's distance is fused: `odometry_fusion: Sideways`);
-    /// `None` until ten steps have.
+    /// `None` until steps from five keyframes have.
     pub fn wheel_scale(&self) -> Option<WheelScale> {
         self.wheel_scale.scale()
     }
@@ -467,6 +466,7 @@ impl Tracker {
                     let camera = self.corrected_camera();
                     if let Some(reading) =
                         offset::read(&camera, &estimate.mounts, &estimate.inliers, &estimate.visual, sigma)
+                            .filter(|r| r.variance.sqrt() <= OFFSET_READING_MAX_SIGMA_PX)
                     {
                         self.read_offset(reading);
                     }
@@ -1011,14 +1011,14 @@ mod tests {
     }
 
     /// A car-like drive where the truth is known: 60 frames 1 m apart down
-    /// a road lined with 600 landmarks 2–130 m ahead and 3–12 m to either
+    /// a road lined with 600 landmarks 2–190 m ahead and 3–12 m to either
     /// side, seen by a KITTI-like rig (707 px focal length, 0.54 m
     /// baseline, 1226 × 370) whose disparities are `offset_px` short of
     /// what its calibration assumes, through 0.2 px of pixel noise (about
     /// the sub-pixel matcher's error on Middlebury, docs/perception.md).
     /// Odometry is egomotion's own, as on a replay. Returns the tracker
     /// and how far its end point is from the truth, m.
-    fn offset_drive(offset_px: f64, mode: DisparityOffsetEstimate, seed: u64) -> (Tracker, f64) {
+    fn offset_drive(offset_px: f64, mode: DisparityOffsetEstimate, seed: u64, standing: u64) -> (Tracker, f64) {
         use crate::egomotion::testing::seen_with_offset;
         use rand::{Rng, SeedableRng};
         let camera = StereoCamera {
@@ -1045,8 +1045,8 @@ mod tests {
         };
         let mut tracker = Tracker::new(config, camera, Pose2::default(), seed);
         let mut truth = Pose2::default();
-        for k in 0..60 {
-            truth = Pose2::new(k as f64, 0.0, 0.0);
+        for k in 0..standing + 60 {
+            truth = Pose2::new(k.saturating_sub(standing) as f64, 0.0, 0.0);
             let seen = seen_with_offset(&road, truth, &camera, offset_px, 0.2, &mut rng);
             let odometry = tracker.state().pose.unwrap_or_default();
             tracker.update(&at(k + 1, k as f64 * 0.1, seen), &odometry);
@@ -1062,7 +1062,7 @@ mod tests {
         // lands within a few hundredths. A fit to the triangulated points
         // instead read 0.4–0.9 px with no offset at all (see offset.rs).
         for (truth, seed) in [(0.3, 1), (-0.2, 2), (0.0, 3)] {
-            let (tracker, _) = offset_drive(truth, DisparityOffsetEstimate::Report, seed);
+            let (tracker, _) = offset_drive(truth, DisparityOffsetEstimate::Report, seed, 0);
             let estimate = tracker.disparity_offset().unwrap();
             assert!(estimate.readings >= 50, "{estimate:?}");
             assert!((estimate.px - truth).abs() < 0.05, "truth {truth:+} px, estimated {estimate:?}");
@@ -1071,14 +1071,26 @@ mod tests {
     }
 
     #[test]
+    fn a_robot_standing_still_before_it_drives_reads_nothing_from_it() {
+        // Fifteen frames standing: each matches its keyframe with no motion,
+        // which cannot tell the offset from the landmarks' depths. Taken,
+        // such readings would set the correction to noise after ten steps.
+        let (tracker, off) = offset_drive(0.3, DisparityOffsetEstimate::Correct, 6, 15);
+        let estimate = tracker.disparity_offset().unwrap();
+        assert!(estimate.readings < 60, "{estimate:?}");
+        assert!((tracker.applied_disparity_offset() - 0.3).abs() < 0.05, "{estimate:?}");
+        assert!(off < 0.3, "end point {off:.3} m off");
+    }
+
+    #[test]
     fn correcting_by_the_estimated_offset_shortens_the_drift() {
-        let (_, reported) = offset_drive(0.3, DisparityOffsetEstimate::Report, 4);
-        let (corrected, off) = offset_drive(0.3, DisparityOffsetEstimate::Correct, 4);
+        let (_, reported) = offset_drive(0.3, DisparityOffsetEstimate::Report, 4, 0);
+        let (corrected, off) = offset_drive(0.3, DisparityOffsetEstimate::Correct, 4, 0);
         assert!((corrected.applied_disparity_offset() - 0.3).abs() < 0.05, "{:?}", corrected.disparity_offset());
         assert!(off < 0.5 * reported, "end point {off:.3} m off corrected, {reported:.3} m uncorrected");
         // With no offset to find, correcting costs little.
-        let (_, plain) = offset_drive(0.0, DisparityOffsetEstimate::Off, 5);
-        let (_, corrected) = offset_drive(0.0, DisparityOffsetEstimate::Correct, 5);
+        let (_, plain) = offset_drive(0.0, DisparityOffsetEstimate::Off, 5, 0);
+        let (_, corrected) = offset_drive(0.0, DisparityOffsetEstimate::Correct, 5, 0);
         assert!(corrected < plain + 0.1, "end point {corrected:.3} m off corrected, {plain:.3} m not");
     }
 }
