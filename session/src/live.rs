@@ -12,7 +12,8 @@
 //! which takes the latest tick to show from a one-record mailbox every
 //! 20 ms (the tick never wakes it and never waits for it; a tick it has
 //! not taken yet is replaced only by one that adds a collision, and a tick
-//! that finds the view holding the mailbox is not shown), and the server keeps a bounded queue per
+//! that finds the view holding the mailbox is not shown, the next offered
+//! in its place), and the server keeps a bounded queue per
 //! client, dropping that client's oldest messages when it cannot keep up.
 //! While nobody watches, no record is handed over; messages of a topic
 //! nobody has subscribed to are not made. A viewer is shown at most 20
@@ -146,6 +147,7 @@ impl LiveServer {
             thread: Some(thread),
             new_layout: None,
             dropped: 0,
+            unshown_collision: false,
             channels: watchable,
             watched: false,
             ask_at: now,
@@ -229,6 +231,9 @@ pub struct LiveSink {
     /// Ticks not shown because the view's thread held the mailbox or had
     /// not taken the last one yet.
     dropped: u64,
+    /// Whether a tick that added a collision found the view holding the
+    /// mailbox: the next tick is then shown in its place, at once.
+    unshown_collision: bool,
     /// The channels, to ask whether anyone subscribes.
     channels: Vec<Arc<RawChannel>>,
     /// Whether anyone subscribed when last asked, and when to ask again:
@@ -329,25 +334,22 @@ impl TickSink for LiveSink {
             self.watched = watched;
         }
         let collisions = record.truth.map_or(0, |t| t.collisions);
-        let collided = collisions > self.collisions;
+        let collided = collisions > self.collisions || self.unshown_collision;
         self.collisions = collisions;
         if !self.watched || (now < self.show_at && !collided) {
             return Ok(());
         }
-        // On the schedule while ticks keep up with it, so that 100 ticks a
-        // second are shown every fifth rather than every sixth; after a
-        // pause, from now.
-        let next = self.show_at + SHOW_EVERY;
-        self.show_at = if next > now { next } else { now + SHOW_EVERY };
         let mut mailbox = match self.mailbox.try_lock() {
             Ok(mailbox) => mailbox,
             Err(TryLockError::Poisoned(poisoned)) => poisoned.into_inner(),
             Err(TryLockError::WouldBlock) => {
                 // The view is copying the last tick out: this one is not
-                // shown (a collision it added comes with the next).
+                // shown, and the schedule stays where it is, so the next
+                // tick is offered at once (with a collision this one added).
                 if self.dropped == 0 {
                     tracing::debug!("live view: a tick was not shown: the view's thread was taking the last");
                 }
+                self.unshown_collision |= collided;
                 self.dropped += 1;
                 return Ok(());
             }
@@ -356,6 +358,11 @@ impl TickSink for LiveSink {
             drop(mailbox);
             return Err(self.stopped());
         }
+        // On the schedule while ticks keep up with it, so that 100 ticks a
+        // second are shown every fifth rather than every sixth; after a
+        // pause, from now.
+        let next = self.show_at + SHOW_EVERY;
+        self.show_at = if next > now { next } else { now + SHOW_EVERY };
         if mailbox.fresh && !collided {
             // The view has not taken the last tick yet (it is 50 ms
             // behind): that one stays, so that a tick that added a
@@ -365,6 +372,7 @@ impl TickSink for LiveSink {
         }
         mailbox.record.copy_from(record);
         mailbox.fresh = true;
+        self.unshown_collision = false;
         mailbox.watched_from = self.watched_from;
         if let Some(layout) = self.new_layout.take() {
             mailbox.layout = Some(layout);
