@@ -325,25 +325,35 @@ mod tests {
         assert!(angle_difference(fused.yaw, PI).abs() < 0.011, "{fused:?}");
     }
 
+    /// Frame `k` of a drive towards a wall of 16 landmarks 30 m ahead, seen
+    /// from `pose`, each range off by a share `range_sigma` (σ, fresh in
+    /// every frame, as stereo's are).
+    fn towards_a_far_wall(
+        pose: Pose2,
+        k: u32,
+        range_sigma: f64,
+        camera: &StereoCamera,
+    ) -> Vec<ubf_core::LandmarkObservation> {
+        use rand::SeedableRng;
+        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
+        let mut observations = frame(&far, pose, camera);
+        for o in &mut observations {
+            let scale = 1.0 + range_sigma * standard_normal(&mut rng);
+            o.point_cam = o.point_cam.map(|v: f64| v * scale);
+        }
+        observations
+    }
+
     #[test]
     fn fusing_odometry_corrects_a_drive_towards_far_landmarks() {
         // Driving 8 m towards a far wall whose landmarks' ranges are off by
         // 3 % (σ, fresh in every frame, as stereo's are); odometry is exact.
         // The fused pose is nearer the truth sideways than the purely visual
         // one.
-        use rand::SeedableRng;
         let camera = StereoCamera::default();
-        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
         let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
-        let seen = |k: u32| {
-            let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
-            let mut observations = frame(&far, pose(k), &camera);
-            for o in &mut observations {
-                let scale = 1.0 + 0.03 * standard_normal(&mut rng);
-                o.point_cam = o.point_cam.map(|v: f64| v * scale);
-            }
-            observations
-        };
+        let seen = |k: u32| towards_a_far_wall(pose(k), k, 0.03, &camera);
         let end_error = |odometry_fusion| {
             let config = EgomotionConfig { odometry_fusion, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
@@ -370,20 +380,10 @@ mod tests {
         // ranges alone (0.07 against 0.13 m when written). Taken
         // uncorrected, as `Full` takes them, the wheels' 3 % is carried in
         // (0.22 m).
-        use rand::SeedableRng;
         let camera = StereoCamera::default();
-        let far: Vec<[f64; 3]> = (0..16).map(|i| [30.0, -3.0 + 0.4 * f64::from(i), 1.0]).collect();
         let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
         let counted = |k: u32| Pose2::new(1.03 * 0.25 * f64::from(k), 0.0, 0.0);
-        let seen = |k: u32| {
-            let mut rng = ChaCha8Rng::seed_from_u64(u64::from(k));
-            let mut observations = frame(&far, pose(k), &camera);
-            for o in &mut observations {
-                let scale = 1.0 + 0.05 * standard_normal(&mut rng);
-                o.point_cam = o.point_cam.map(|v: f64| v * scale);
-            }
-            observations
-        };
+        let seen = |k: u32| towards_a_far_wall(pose(k), k, 0.05, &camera);
         let drive = |odometry_fusion| {
             let config = EgomotionConfig { odometry_fusion, navigate: false, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
