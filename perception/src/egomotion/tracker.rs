@@ -271,6 +271,16 @@ impl Tracker {
         self.wheel_scale.scale()
     }
 
+    /// Odometry's motion `odometric` with its distance put in the wheels'
+    /// scale, once `Sideways` fusion has measured it; its turn as counted
+    /// (a scale measured on distance says little of the turns).
+    fn scaled(&self, odometric: Pose2) -> Pose2 {
+        match self.wheel_scale() {
+            Some(scale) => Pose2::new(odometric.x * scale.factor, odometric.y * scale.factor, odometric.theta),
+            None => odometric,
+        }
+    }
+
     /// Takes in the chosen step's visual forward motion against
     /// odometry's, if `Sideways` fusion will use the scale. Every step the
     /// odometry gate passed counts, weighed by its own variance: a step on
@@ -360,7 +370,7 @@ impl Tracker {
         else {
             return Some(visual);
         };
-        let by_odometry = self.start.compose(&odometry.relative_to(&origin));
+        let by_odometry = self.start.compose(&self.scaled(odometry.relative_to(&origin)));
         let driven = self.odometry_driven_m + odometry.distance_to(self.newest.1.x, self.newest.1.y);
         let odometric = noise.covariance(driven);
         let Some(inverse) = (odometric + self.pose_covariance()).try_inverse() else { return Some(visual) };
@@ -480,8 +490,9 @@ impl Tracker {
             }
             None => {
                 // Carry the pose on by what odometry says the robot did
-                // since the last frame, and say so.
-                let bridged = odometry.relative_to(&previous_odometry);
+                // since the last frame, and say so; its distance in the
+                // wheels' measured scale when fusion has measured it.
+                let bridged = self.scaled(odometry.relative_to(&previous_odometry));
                 let step = PlanarMotion { forward: bridged.x, left: bridged.y, yaw: bridged.theta };
                 self.extra = composed_covariance(
                     &pose,
