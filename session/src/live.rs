@@ -121,6 +121,15 @@ impl LiveServer {
     /// on its own thread ([`LiveSink`]): a viewer that falls behind costs
     /// dropped records, never a tick.
     pub fn view(&self, run: RunMessage, world: WorldMessage) -> Result<LiveSink, LiveError> {
+        self.view_napping(run, world, TAKE_EVERY)
+    }
+
+    /// [`LiveServer::view`] with the view's thread looking for a tick every
+    /// `nap` rather than every [`TAKE_EVERY`]. Not public: only the tests
+    /// need another nap, a long one, so that the thread takes nothing
+    /// unless woken, and what they check cannot pass by the thread's
+    /// timing.
+    fn view_napping(&self, run: RunMessage, world: WorldMessage, nap: Duration) -> Result<LiveSink, LiveError> {
         let now = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64);
         let channels = LiveChannels { epoch_ns: now, ..self.channels.clone() };
         let watchable: Vec<Arc<RawChannel>> = channels.channels.values().cloned().collect();
@@ -132,6 +141,7 @@ impl LiveServer {
             described_at: None,
             last_tick: None,
             started: false,
+            nap,
         };
         let mailbox = Arc::new(Mutex::new(Mailbox::default()));
         let thread = {
@@ -414,17 +424,20 @@ struct LiveView {
     last_tick: Option<u64>,
     /// Whether the view has been given its first layout.
     started: bool,
+    /// How long the thread sleeps between looks at the mailbox
+    /// ([`TAKE_EVERY`] but in tests).
+    nap: Duration,
 }
 
 impl LiveView {
-    /// The view's thread: every [`TAKE_EVERY`] (or when woken to end), it
+    /// The view's thread: every nap ([`TAKE_EVERY`]), or when woken to end, it
     /// copies what the mailbox holds out of it and shows it, until the
     /// mailbox is closed or showing fails.
     fn serve(mut self, mailbox: &Mutex<Mailbox>) -> std::io::Result<()> {
         let _ended = Ended(mailbox);
         let mut record = TickRecord::default();
         loop {
-            std::thread::park_timeout(TAKE_EVERY);
+            std::thread::park_timeout(self.nap);
             let (layout, fresh, watched_from, closed) = {
                 let mut mailbox = lock(mailbox);
                 let fresh = std::mem::take(&mut mailbox.fresh);
