@@ -498,43 +498,88 @@ impl LiveView {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::mpsc::{self, RecvTimeoutError};
     use ubf_core::GroundTruth;
 
-    fn watched_sink() -> (LiveServer, LiveSink) {
-        let server = LiveServer::serve("127.0.0.1:0".parse().unwrap(), ("ubf.Report", b"{}".to_vec())).unwrap();
+    /// The tests' views nap far longer than any test, so that their
+    /// threads take nothing from the mailbox unless the sink wakes them to
+    /// end: what a test finds in the mailbox is what the sink left there,
+    /// whatever the machine's timing.
+    const NAP: Duration = Duration::from_secs(3600);
+
+    /// How long ending a view may take once its thread is woken: generous
+    /// on a loaded machine, and still far below [`NAP`], so that a thread
+    /// left to sleep out its nap fails the test rather than passes it late.
+    const WAKE_ALLOWANCE: Duration = Duration::from_secs(30);
+
+    fn server() -> LiveServer {
+        LiveServer::serve("127.0.0.1:0".parse().unwrap(), ("ubf.Report", b"{}".to_vec())).unwrap()
+    }
+
+    fn watched_sink(server: &LiveServer) -> LiveSink {
         let run = RunMessage { scenario: "test".into(), seed: 1, start: [0.0; 3], outline: [[0.0; 2]; 4], goal: None };
-        let mut sink = server.view(run, WorldMessage::default()).unwrap();
+        let mut sink = server.view_napping(run, WorldMessage::default(), NAP).unwrap();
         sink.start(&TreeLayout::default()).unwrap();
         // As if a viewer had subscribed, for the next hour.
         sink.watched = true;
         sink.ask_at = Instant::now() + Duration::from_secs(3600);
-        (server, sink)
+        sink
     }
 
     fn tick(tick: u64, collisions: u32) -> TickRecord {
         TickRecord { tick, truth: Some(GroundTruth { collisions, ..GroundTruth::default() }), ..TickRecord::default() }
     }
 
+    /// The tick waiting in the mailbox for the view to take, if any.
+    fn waiting(sink: &LiveSink) -> Option<u64> {
+        let mailbox = lock(&sink.mailbox);
+        mailbox.fresh.then_some(mailbox.record.tick)
+    }
+
+    /// Runs `end`, which ends a view, on a thread of its own, and fails if
+    /// it has not returned within [`WAKE_ALLOWANCE`]: a view whose thread
+    /// is not woken holds it for [`NAP`], and the test then fails at the
+    /// allowance instead of hanging for the nap.
+    fn ends_promptly(what: &str, end: impl FnOnce() + Send + 'static) {
+        let (done, ended) = mpsc::channel();
+        let ending = std::thread::spawn(move || {
+            end();
+            let _ = done.send(());
+        });
+        match ended.recv_timeout(WAKE_ALLOWANCE) {
+            Ok(()) => {}
+            Err(RecvTimeoutError::Timeout) => {
+                panic!("{what}: still waiting after {WAKE_ALLOWANCE:?}, the view's thread was not woken")
+            }
+            Err(RecvTimeoutError::Disconnected) => std::panic::resume_unwind(ending.join().unwrap_err()),
+        }
+    }
+
     #[test]
     fn the_view_ends_with_its_session_without_waiting_out_its_nap() {
-        let (_server, mut sink) = watched_sink();
+        let server = server();
+        let mut sink = watched_sink(&server);
         for i in 0..50 {
             sink.record(&tick(i, 0)).unwrap();
         }
-        let started = Instant::now();
-        sink.finish().unwrap();
-        // Woken, not left to sleep out `TAKE_EVERY`; far below it here
-        // unless the machine is very busy.
-        assert!(started.elapsed() < Duration::from_secs(1), "{:?}", started.elapsed());
-        // Dropped after its end, and without one: neither waits.
-        drop(sink);
-        let (_server, sink) = watched_sink();
-        drop(sink);
+        // Still waiting: the view's thread is asleep for the hour.
+        assert_eq!(waiting(&sink), Some(0));
+        ends_promptly("finishing", move || {
+            sink.finish().unwrap();
+            // Woken, it showed what was left before it ended.
+            assert_eq!(waiting(&sink), None);
+            // Dropped after its end: no thread left to wait for.
+            drop(sink);
+        });
+        // Dropped without an end: the drop ends it, and wakes it too.
+        let sink = watched_sink(&server);
+        ends_promptly("dropping", move || drop(sink));
     }
 
     #[test]
     fn a_tick_that_added_a_collision_is_replaced_only_by_another() {
-        let (_server, mut sink) = watched_sink();
+        let server = server();
+        let mut sink = watched_sink(&server);
         sink.record(&tick(0, 1)).unwrap();
         // Due at once, whatever the schedule.
         sink.show_at = Instant::now();
@@ -545,7 +590,10 @@ mod tests {
             assert!(!mailbox.fresh || mailbox.record.tick == 0, "tick {}", mailbox.record.tick);
         }
         sink.record(&tick(2, 2)).unwrap();
-        let mailbox = lock(&sink.mailbox);
-        assert!(!mailbox.fresh || mailbox.record.tick == 2, "tick {}", mailbox.record.tick);
+        {
+            let mailbox = lock(&sink.mailbox);
+            assert!(!mailbox.fresh || mailbox.record.tick == 2, "tick {}", mailbox.record.tick);
+        }
+        ends_promptly("dropping", move || drop(sink));
     }
 }
