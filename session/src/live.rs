@@ -584,16 +584,9 @@ mod tests {
         // Due at once, whatever the schedule.
         sink.show_at = Instant::now();
         sink.record(&tick(1, 1)).unwrap();
-        {
-            let mailbox = lock(&sink.mailbox);
-            // Unless the view took the first in between.
-            assert!(!mailbox.fresh || mailbox.record.tick == 0, "tick {}", mailbox.record.tick);
-        }
+        assert_eq!(waiting(&sink), Some(0), "a tick that added no collision replaced one that did");
         sink.record(&tick(2, 2)).unwrap();
-        {
-            let mailbox = lock(&sink.mailbox);
-            assert!(!mailbox.fresh || mailbox.record.tick == 2, "tick {}", mailbox.record.tick);
-        }
+        assert_eq!(waiting(&sink), Some(2), "a tick that added a collision did not replace the last");
         ends_promptly("dropping", move || drop(sink));
     }
 }
