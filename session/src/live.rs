@@ -589,4 +589,31 @@ mod tests {
         assert_eq!(waiting(&sink), Some(2), "a tick that added a collision did not replace the last");
         ends_promptly("dropping", move || drop(sink));
     }
+
+    #[test]
+    fn a_collision_whose_tick_found_the_view_busy_goes_with_the_next_tick() {
+        let server = server();
+        let mut sink = watched_sink(&server);
+        sink.record(&tick(0, 0)).unwrap();
+        assert_eq!(waiting(&sink), Some(0));
+        // No tick due for an hour: only a collision can show one.
+        sink.show_at = Instant::now() + Duration::from_secs(3600);
+        let mailbox = sink.mailbox.clone();
+        {
+            // The view holding the mailbox, as if copying a tick out, for
+            // the tick that adds the collision and the one after.
+            let _busy = lock(&mailbox);
+            sink.record(&tick(1, 1)).unwrap();
+            sink.record(&tick(2, 1)).unwrap();
+        }
+        assert_eq!(waiting(&sink), Some(0), "a tick was shown while the view held the mailbox");
+        // The first tick to find the mailbox free carries the collision,
+        // though it adds none and the schedule shows nothing.
+        sink.record(&tick(3, 1)).unwrap();
+        assert_eq!(waiting(&sink), Some(3), "the collision was not shown with the next tick");
+        // Once shown, it is not shown again.
+        sink.record(&tick(4, 1)).unwrap();
+        assert_eq!(waiting(&sink), Some(3), "the collision was shown twice");
+        ends_promptly("dropping", move || drop(sink));
+    }
 }
