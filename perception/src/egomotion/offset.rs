@@ -85,6 +85,10 @@ struct Linearised {
     cost: f64,
 }
 
+/// A fit has converged when its step's squared length, in standard
+/// deviations of the motion and offset, is under this.
+const CONVERGED: f64 = 1e-6;
+
 /// Finite-difference steps for the motion and the offset: a micrometre, a
 /// microradian, a millionth of a pixel (and for a landmark, 10⁻⁷ of its
 /// line's slope and a millionth of its inverse depth): far below what
@@ -211,7 +215,14 @@ pub(super) fn read(
             // A step through infinity is halved towards it instead.
             l.rho = if l.rho + own_step[1] > 0.0 { l.rho + own_step[1] } else { l.rho / 2.0 };
         }
-        if step.norm() < 1e-7 || iteration == 7 {
+        // Converged once the step moves the motion and offset by under a
+        // thousandth of their standard deviation (its length measured by
+        // the fit's own information): what is left cannot change the
+        // reading. A fixed length in metres, radians and pixels at once (it
+        // was 10⁻⁷) sat at the floor rounding leaves: on KITTI 06 with the
+        // landmarks kept, five fits' δ went on jittering by ±1.2·10⁻⁷ px,
+        // against a σ of 0.1 px, for up to six iterations more.
+        if step.dot(&(information * step)) < CONVERGED || iteration == 7 {
             break;
         }
     }
