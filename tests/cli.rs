@@ -635,6 +635,9 @@ fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_pos
     };
     let kept = pipeline(&[]);
     assert_eq!(kept["disparity_offset_corrected"], false, "{kept}");
+    // Every step's offset fit converges and is read, kept or corrected.
+    assert_eq!(kept["disparity_offset_steps"], 50, "{kept}");
+    assert_eq!(report["disparity_offset_steps"], 50, "{report}");
     let scale = kept["step_scale_median"].as_f64().unwrap();
     assert!((1.0..1.03).contains(&scale), "{kept}");
     let corrected = pipeline(&["--disparity-offset", "0.13"]);
