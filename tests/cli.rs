@@ -605,8 +605,10 @@ fn kitti_sample() -> Option<PathBuf> {
 #[test]
 fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_poses() {
     let Some(dir) = kitti_sample() else { return };
-    let plot = tempfile::tempdir().unwrap().keep().join("kitti.png");
-    let result = ubf(&["pipeline", dir.to_str().unwrap(), "--json", "--plot", plot.to_str().unwrap()]);
+    let out = tempfile::tempdir().unwrap().keep();
+    let (plot, listed) = (out.join("kitti.png"), out.join("landmarks.csv"));
+    let args = ["--json", "--plot", plot.to_str().unwrap(), "--landmarks", listed.to_str().unwrap()];
+    let result = ubf(&[&["pipeline", dir.to_str().unwrap()], &args[..]].concat());
     assert_eq!(result.status.code(), Some(0), "{}", text(&result.stderr));
     let report: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
     assert_eq!(report["layout"], "kitti");
@@ -633,8 +635,35 @@ fn a_kitti_sequence_replays_with_its_calibration_and_is_measured_against_its_pos
         let args = [&["pipeline", dir.to_str().unwrap(), "--json", "--keep-disparity-offset"], extra].concat();
         serde_json::from_slice(&ubf(&args).stdout).unwrap()
     };
-    let kept = pipeline(&[]);
+    let kept_listed = out.join("kept.csv");
+    let kept = pipeline(&["--landmarks", kept_listed.to_str().unwrap()]);
     assert_eq!(kept["disparity_offset_corrected"], false, "{kept}");
+    // Every step's offset fit converges and is read, kept or corrected.
+    assert_eq!(kept["disparity_offset_steps"], 50, "{kept}");
+    assert_eq!(report["disparity_offset_steps"], 50, "{report}");
+    // The landmarks file holds the points the path was estimated from:
+    // each row's depth is f·B over its disparity plus the offset in its
+    // last column, which is the calibration's (0) while the offset is
+    // kept, and the correction once it has settled when it is not.
+    let calib = std::fs::read_to_string(dir.join("calib.txt")).unwrap();
+    let p1 = calib.lines().find_map(|l| l.strip_prefix("P1:")).unwrap();
+    let focal_baseline = -p1.split_whitespace().nth(3).unwrap().parse::<f64>().unwrap();
+    let offsets = |path: &Path| -> Vec<f64> {
+        let rows = std::fs::read_to_string(path).unwrap();
+        assert_eq!(rows.lines().next(), Some(ubf::frames::LANDMARKS_HEADER));
+        let rows: Vec<Vec<f64>> =
+            rows.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+        assert!(rows.len() > 20_000, "{} rows", rows.len());
+        for row in &rows {
+            let (disparity, depth, offset) = (row[4], row[6], row[8]);
+            assert!((depth * (disparity + offset) / focal_baseline - 1.0).abs() < 1e-3, "{row:?}");
+        }
+        rows.iter().map(|row| row[8]).collect()
+    };
+    assert!(offsets(&kept_listed).iter().all(|&o| o == 0.0));
+    let corrected_offsets = offsets(&listed);
+    assert_eq!(corrected_offsets[0], 0.0, "not corrected before it settles");
+    assert!((0.05..0.3).contains(corrected_offsets.last().unwrap()), "{:?}", corrected_offsets.last());
     let scale = kept["step_scale_median"].as_f64().unwrap();
     assert!((1.0..1.03).contains(&scale), "{kept}");
     let corrected = pipeline(&["--disparity-offset", "0.13"]);

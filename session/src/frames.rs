@@ -354,13 +354,21 @@ pub struct ReplayOptions {
     /// perturbed copies that took the drift down (docs/perception.md).
     pub keep_disparity_offset: bool,
     /// Write every landmark of every pair here (CSV): pair, pixels (the
-    /// first pixel's centre at (0, 0), as calibration tools count),
-    /// disparity, and the point in the camera frame.
+    /// first pixel's centre at (0, 0), as calibration tools count), the
+    /// disparity as matched, the point in the camera frame, and the
+    /// disparity offset the point was triangulated with (the depth is
+    /// `focal_px · baseline_m / (disparity_px + disparity_offset_px)`).
+    /// The points are the ones egomotion used for the path: with the
+    /// calibration's offset (or `disparity_offset_px`'s) until the offset
+    /// read from the frames has settled, and from then on corrected by it,
+    /// unless `keep_disparity_offset`. A landmark the correction puts at or
+    /// beyond infinity is left out, as egomotion leaves it out.
     pub landmarks: Option<PathBuf>,
 }
 
-/// The header of the landmarks CSV that `ubf pipeline --landmarks` writes.
-pub const LANDMARKS_HEADER: &str = "pair,u_left_px,u_right_px,v_px,disparity_px,x_m,y_m,z_m";
+/// The header of the landmarks CSV that `ubf pipeline --landmarks` writes:
+/// see [`ReplayOptions::landmarks`].
+pub const LANDMARKS_HEADER: &str = "pair,u_left_px,u_right_px,v_px,disparity_px,x_m,y_m,z_m,disparity_offset_px";
 
 /// A KITTI sequence's egomotion limits, for a car on public roads: 40 m/s
 /// (144 km/h) and 90 °/s.
@@ -482,15 +490,27 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
         let processed = Instant::now();
         landmarks += observed.len();
         if let Some((log, path)) = &mut landmark_log {
+            // The points as egomotion takes them for this pair, so that the
+            // file and the path agree: triangulated with the offset the
+            // tracker corrects the landmarks by when it matches the pair (the
+            // calibration's until the frames' reading has settled, and
+            // throughout with --keep-disparity-offset).
+            let applied = tracker.applied_disparity_offset();
+            let used = StereoCamera { disparity_offset_px: camera.disparity_offset_px + applied, ..camera };
             for l in &observed {
-                let (p, [x, y, z]) = (&l.pixels, l.point_cam);
+                // A landmark the correction puts at or beyond infinity (its
+                // disparity no longer positive) is left out, as egomotion
+                // leaves it out.
+                let point = if applied == 0.0 { Some(l.point_cam) } else { used.triangulate(&l.pixels) };
+                let (p, Some([x, y, z])) = (&l.pixels, point) else { continue };
                 writeln!(
                     log,
-                    "{number},{:.4},{:.4},{:.4},{:.4},{x:.4},{y:.4},{z:.4}",
+                    "{number},{:.4},{:.4},{:.4},{:.4},{x:.4},{y:.4},{z:.4},{:.4}",
                     p.u_left - 0.5,
                     p.u_right - 0.5,
                     p.v - 0.5,
-                    p.disparity()
+                    p.disparity(),
+                    used.disparity_offset_px
                 )
                 .map_err(FramesError::file(path))?;
             }

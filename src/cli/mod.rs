@@ -381,8 +381,11 @@ enum Command {
         #[arg(long, value_name = "FILE.png")]
         plot: Option<PathBuf>,
         /// Write every landmark of every pair here (CSV: pair, pixels with
-        /// the first pixel's centre at (0, 0), disparity, camera-frame
-        /// point).
+        /// the first pixel's centre at (0, 0), disparity as matched,
+        /// camera-frame point, and the disparity offset the point was
+        /// triangulated with). The points are the ones the path was
+        /// estimated from: corrected by the offset read from the frames
+        /// once it has settled, unless --keep-disparity-offset.
         #[arg(long, value_name = "FILE.csv")]
         landmarks: Option<PathBuf>,
     },
