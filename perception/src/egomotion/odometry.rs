@@ -156,7 +156,15 @@ impl OdometryNoise {
     /// The covariance (forward, left, yaw) of odometry's motion over a
     /// stretch of `driven` metres.
     pub(super) fn covariance(&self, driven: f64) -> Matrix3<f64> {
-        let position = self.position_m + self.position_share * driven;
+        self.covariance_in_scale(driven, None)
+    }
+
+    /// [`OdometryNoise::covariance`] of a motion whose distance was put in
+    /// the wheels' measured `scale`: the scale's own error widens the
+    /// position's.
+    pub(super) fn covariance_in_scale(&self, driven: f64, scale: Option<WheelScale>) -> Matrix3<f64> {
+        let share = self.position_share + scale.map_or(0.0, |s| s.sigma);
+        let position = self.position_m + share * driven;
         let heading2 =
             (self.heading_deg.powi(2) + self.heading_deg_per_sqrt_m.powi(2) * driven) * 1f64.to_radians().powi(2);
         Matrix3::from_diagonal(&Vector3::new(position * position, position * position, heading2))
@@ -212,7 +220,7 @@ impl OdometryNoise {
             odometry_info[(0, 0)] = match wheel_scale {
                 Some(scale) => {
                     (odometric.x, odometric.y) = (odometric.x * scale.factor, odometric.y * scale.factor);
-                    (self.position_m + (self.position_share + scale.sigma) * driven).powi(-2)
+                    self.covariance_in_scale(driven, Some(scale))[(0, 0)].recip()
                 }
                 None => 0.0,
             };
@@ -404,6 +412,7 @@ mod tests {
             "{fused_error} m, visual {visual_error} m, full {full_error} m"
         );
     }
+
     #[test]
     fn a_stretch_bridged_blind_is_driven_in_the_measured_scale() {
         // The 12 m drive above on wheels 3 % long, then 4 m with nothing in
