@@ -358,11 +358,14 @@ pub struct ReplayOptions {
     /// disparity as matched, the point in the camera frame, and the
     /// disparity offset the point was triangulated with (the depth is
     /// `focal_px · baseline_m / (disparity_px + disparity_offset_px)`).
-    /// The points are the ones egomotion used for the path: with the
+    /// Every landmark found in the pair is written, matched or not, as
+    /// egomotion triangulates it when the pair comes in: with the
     /// calibration's offset (or `disparity_offset_px`'s) until the offset
     /// read from the frames has settled, and from then on corrected by it,
-    /// unless `keep_disparity_offset`. A landmark the correction puts at or
-    /// beyond infinity is left out, as egomotion leaves it out.
+    /// unless `keep_disparity_offset`. (A pair kept as a keyframe is
+    /// triangulated again with later corrections; the file keeps the first.)
+    /// A landmark the correction puts at or beyond infinity is left out, as
+    /// egomotion leaves it out.
     pub landmarks: Option<PathBuf>,
 }
 

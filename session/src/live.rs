@@ -504,7 +504,8 @@ mod tests {
     /// The tests' views nap far longer than any test, so that their
     /// threads take nothing from the mailbox unless the sink wakes them to
     /// end: what a test finds in the mailbox is what the sink left there,
-    /// whatever the machine's timing.
+    /// however slow the machine (a park can in principle wake early, but
+    /// nothing here leaves the thread a wake-up token to do so).
     const NAP: Duration = Duration::from_secs(3600);
 
     /// How long ending a view may take once its thread is woken: generous

@@ -383,9 +383,10 @@ enum Command {
         /// Write every landmark of every pair here (CSV: pair, pixels with
         /// the first pixel's centre at (0, 0), disparity as matched,
         /// camera-frame point, and the disparity offset the point was
-        /// triangulated with). The points are the ones the path was
-        /// estimated from: corrected by the offset read from the frames
-        /// once it has settled, unless --keep-disparity-offset.
+        /// triangulated with). Each point is triangulated as egomotion
+        /// triangulates it when its pair comes in: corrected by the offset
+        /// read from the frames once it has settled, unless
+        /// --keep-disparity-offset.
         #[arg(long, value_name = "FILE.csv")]
         landmarks: Option<PathBuf>,
     },
