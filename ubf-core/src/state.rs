@@ -79,7 +79,8 @@ pub struct EgomotionState {
     pub outages: u32,
     /// Seconds spent in outages, from the last matched frame to the next.
     pub outage_s: f64,
-    /// Metres driven (by odometry) across outages.
+    /// Metres driven across outages, as odometry counts them (not in the
+    /// wheel scale fusion may have measured).
     pub outage_m: f64,
     /// The latest frame matched no keyframe: the pose is carried on by
     /// odometry until one does.

@@ -419,26 +419,39 @@ mod tests {
         // view, carried on odometry alone. Taken as counted, the blind
         // stretch adds its 3 %, 12 cm, along the corridor; in the scale the
         // steps measured, 3 cm (when written: the scale read 0.7 % off).
+        // The pose's uncertainty along the corridor grows by more than the
+        // counted stretch's, by the scale's own error.
         let camera = StereoCamera::default();
         let pose = |k: u32| Pose2::new(0.25 * f64::from(k), 0.0, 0.0);
         let counted = |k: u32| Pose2::new(1.03 * 0.25 * f64::from(k), 0.0, 0.0);
-        let blind_stretch_error = |odometry_fusion| {
+        let blind_stretch = |odometry_fusion| {
             let config = EgomotionConfig { odometry_fusion, navigate: false, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
-            let mut before = 0.0;
+            let (mut error, mut variance) = (0.0, 0.0);
             for k in 0..=64u32 {
                 let seen = if k <= 48 { towards_a_far_wall(pose(k), k, 0.05, &camera) } else { Vec::new() };
                 tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), seen), &counted(k));
                 if k == 48 {
-                    before = tracker.state().pose.unwrap().x - pose(k).x;
+                    (error, variance) =
+                        (tracker.state().pose.unwrap().x - pose(k).x, tracker.pose_covariance()[(0, 0)]);
                 }
             }
             assert_eq!(tracker.state().failures, 16);
-            tracker.state().pose.unwrap().x - pose(64).x - before
+            let grown = tracker.pose_covariance()[(0, 0)] - variance;
+            (tracker.state().pose.unwrap().x - pose(64).x - error, grown, tracker.wheel_scale())
         };
-        let counted_error = blind_stretch_error(OdometryFusion::Off);
+        let (counted_error, counted_growth, _) = blind_stretch(OdometryFusion::Off);
         assert!((counted_error - 0.12).abs() < 0.005, "{counted_error} m");
-        let scaled_error = blind_stretch_error(OdometryFusion::Sideways);
+        let (scaled_error, scaled_growth, scale) = blind_stretch(OdometryFusion::Sideways);
         assert!(scaled_error.abs() < 0.3 * counted_error, "{scaled_error} m, counted {counted_error} m");
+        // Sixteen steps of about 0.26 m, each σ wider by the scale's σ per metre.
+        let noise = OdometryNoise::default();
+        let step = 1.03 * 0.25;
+        let widened = |share: f64| (noise.position_m + share * step).powi(2);
+        let expected = 16.0 * (widened(noise.position_share + scale.unwrap().sigma) - widened(noise.position_share));
+        assert!(
+            (scaled_growth - counted_growth - expected).abs() < 0.1 * expected,
+            "grew {scaled_growth} m², counted {counted_growth} m², expected {expected} m² more"
+        );
     }
 }
