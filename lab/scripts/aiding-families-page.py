@@ -80,7 +80,7 @@ def main():
     say('')
     say('```sh run-slow')
     say('lab/scripts/aiding-families.sh "40001 40002 40003 40004 40005 40006 40007 40008 40009 40010 40011 40012" \\')
-    say('    50000..50030 > out/aiding-families.json   # about an hour on two cores')
+    say('    50000..50030 > out/aiding-families.json   # about 15 minutes on two cores')
     say('python3 lab/scripts/aiding-families-page.py')
     say('```')
     say('')
