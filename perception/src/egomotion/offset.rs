@@ -250,22 +250,9 @@ pub(super) fn read(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::egomotion::testing::standard_normal;
+    use crate::egomotion::testing::{kitti_rig, standard_normal};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-    use ubf_core::CameraMount;
-
-    /// A KITTI-like rig: 707 px focal length, 0.54 m baseline, 1.65 m up.
-    fn rig() -> StereoCamera {
-        StereoCamera {
-            width_px: 1226,
-            height_px: 370,
-            focal_px: 707.0,
-            baseline_m: 0.54,
-            mount: CameraMount::ahead(0.0, 0.0, 1.65),
-            ..StereoCamera::default()
-        }
-    }
 
     fn mounts(camera: &StereoCamera) -> Mounts {
         Mounts { before: camera.mount, after: camera.mount, ahead: camera.mount }
@@ -302,7 +289,7 @@ mod tests {
         // The robot drives 12 m and turns right a quarter turn; the step's
         // estimate is a little off the truth, and the rig's disparities are
         // 0.2 px short.
-        let camera = rig();
+        let camera = kitti_rig();
         let truth = [12.02, 3.01, (-89.5f64).to_radians()];
         let start = PlanarMotion { forward: 12.0, left: 3.0 + 5e-7, yaw: -std::f64::consts::FRAC_PI_2 };
         let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -342,7 +329,7 @@ mod tests {
         // never do: δ wanders by pixels from one iteration to the next, for
         // forty of them. Taken at the last one, their readings were 14 to 42
         // px off.
-        let camera = rig();
+        let camera = kitti_rig();
         for seed in [0, 6, 8] {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let pairs: Vec<Pair> = (0..40)

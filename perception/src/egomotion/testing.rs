@@ -31,6 +31,19 @@ pub(super) fn frame(points: &[[f64; 3]], pose: Pose2, camera: &StereoCamera) -> 
         .collect()
 }
 
+/// A KITTI-like rig: 707 px focal length, 0.54 m baseline, 1226 × 370
+/// px, 1.65 m up.
+pub(super) fn kitti_rig() -> StereoCamera {
+    StereoCamera {
+        width_px: 1226,
+        height_px: 370,
+        focal_px: 707.0,
+        baseline_m: 0.54,
+        mount: ubf_core::CameraMount::ahead(0.0, 0.0, 1.65),
+        ..StereoCamera::default()
+    }
+}
+
 /// Twelve landmarks 6–22.5 m ahead, alternately 2.5 m left and right.
 pub(super) fn landmarks() -> Vec<[f64; 3]> {
     (0..12).map(|i| [6.0 + i as f64 * 1.5, if i % 2 == 0 { 2.5 } else { -2.5 }, 0.5 + 0.1 * i as f64]).collect()

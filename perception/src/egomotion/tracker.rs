@@ -1040,14 +1040,7 @@ mod tests {
     fn offset_drive(offset_px: f64, mode: DisparityOffsetEstimate, seed: u64, standing: u64) -> (Tracker, f64) {
         use crate::egomotion::testing::seen_with_offset;
         use rand::{Rng, SeedableRng};
-        let camera = StereoCamera {
-            width_px: 1226,
-            height_px: 370,
-            focal_px: 707.0,
-            baseline_m: 0.54,
-            mount: CameraMount::ahead(0.0, 0.0, 1.65),
-            ..StereoCamera::default()
-        };
+        let camera = crate::egomotion::testing::kitti_rig();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let road: Vec<[f64; 3]> = (0..600)
             .map(|_| {
