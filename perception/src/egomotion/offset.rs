@@ -168,17 +168,16 @@ pub(super) fn read(
     motion: &PlanarMotion,
     pixel_sigma: f64,
 ) -> Option<OffsetReading> {
-    let seen: Vec<(Vector4<f64>, Landmark)> = pairs
+    let mut fitted: Vec<(Vector4<f64>, Landmark)> = pairs
         .iter()
         .filter_map(|p| {
             let pixels = p.pixels?;
             Some((columns(&pixels), Landmark::seen(camera, &pixels[0])?))
         })
         .collect();
-    if seen.len() < 5 {
+    if fitted.len() < 5 {
         return None;
     }
-    let mut fitted = seen;
     let mut g = Vector4::new(motion.forward, motion.left, motion.yaw, 0.0);
     let (mut information, mut cost) = (Matrix4::zeros(), 0.0);
     let mut converged = false;
