@@ -419,12 +419,16 @@ impl Tracker {
         if frame.number == 0 || frame.number == self.newest.0 {
             return;
         }
-        let previous_odometry = std::mem::replace(&mut self.newest, (frame.number, *odometry)).1;
+        let (previous_frame, previous_odometry) = std::mem::replace(&mut self.newest, (frame.number, *odometry));
         let previous_time = std::mem::replace(&mut self.newest_time, frame.time);
         // The commands between the last frame and this one.
         self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
         let Some(pose) = self.state.pose else { return };
-        if self.keyframes.is_empty() {
+        // Only the first frame starts the pose here. A later frame finding
+        // every keyframe retired (a blind stretch longer than their reach)
+        // is bridged like any frame nothing matches: starting afresh there
+        // would drop the motion since the last frame.
+        if previous_frame == 0 {
             self.last_match = frame.time;
             // Egomotion's pose starts here, so odometry's is carried into
             // the tracker's frame from here too.
@@ -826,6 +830,28 @@ mod tests {
         tracker
             .update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None, images: None }, &odometry);
         assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
+    }
+
+    #[test]
+    fn a_blind_stretch_beyond_every_keyframe_loses_no_motion() {
+        // 30 frames with nothing in view, 0.3 m and 1° apart: 9 m, 3 m
+        // beyond the keyframes' reach, so every keyframe is retired on the
+        // way. Each frame is bridged by odometry; none starts the pose
+        // afresh (which would drop that frame's 0.3 m and 1°).
+        let camera = StereoCamera::default();
+        let config = EgomotionConfig { keyframe_range_m: 6.0, ..EgomotionConfig::default() };
+        let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+        tracker.update(&at(1, 0.0, frame(&landmarks(), Pose2::default(), &camera)), &Pose2::default());
+        let mut odometry = Pose2::default();
+        for k in 0..30u32 {
+            odometry = odometry.compose(&Pose2::new(0.3, 0.0, 1f64.to_radians()));
+            tracker.update(&at(u64::from(k) + 2, 0.5 * f64::from(k + 1), Vec::new()), &odometry);
+        }
+        let s = tracker.state();
+        assert_eq!((s.steps, s.failures), (30, 30), "{s:?}");
+        let pose = s.pose.unwrap();
+        assert!(pose.distance_to(odometry.x, odometry.y) < 1e-9, "{pose:?} against {odometry:?}");
+        assert!((pose.theta - odometry.theta).abs() < 1e-12, "{pose:?} against {odometry:?}");
     }
 
     #[test]
