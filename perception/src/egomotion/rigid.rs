@@ -162,9 +162,11 @@ impl Rigid {
         pairs: &[Pair],
         max_step: f64,
         turned: f64,
+        min_landmarks: usize,
         rng: &mut ChaCha8Rng,
     ) -> Option<(PlanarMotion, Vec<Pair>, Matrix3<f64>)> {
-        if pairs.len() < 3 {
+        let min_landmarks = min_landmarks.max(2);
+        if pairs.len() < min_landmarks {
             return None;
         }
         let info: Vec<Matrix2<f64>> = pairs
@@ -190,7 +192,7 @@ impl Rigid {
                 best = Some(inliers);
             }
         }
-        let inliers = best.filter(|b| b.len() >= 3)?;
+        let inliers = best.filter(|b| b.len() >= min_landmarks)?;
         let chosen: Vec<Pair> = inliers.iter().map(|&i| pairs[i]).collect();
         let chosen_info: Vec<Matrix2<f64>> = inliers.iter().map(|&i| info[i]).collect();
         // Weighted Kabsch (weights 1/CV, thesis eq. 5) starts the refinement.
@@ -221,14 +223,13 @@ impl StepEstimator for RigidConfig {
     }
 
     fn estimate(&self, pairs: &[Pair], input: StepInput<'_>) -> Option<StepMotion> {
-        Rigid::estimate(self, input.camera, pairs, input.max_step_m, input.turned_rad, input.rng).map(
-            |(motion, inliers, covariance)| StepMotion {
+        Rigid::estimate(self, input.camera, pairs, input.max_step_m, input.turned_rad, input.min_landmarks, input.rng)
+            .map(|(motion, inliers, covariance)| StepMotion {
                 motion,
                 landmarks: inliers.len(),
                 covariance: Some(covariance),
                 inliers,
-            },
-        )
+            })
     }
 }
 
@@ -384,7 +385,7 @@ mod tests {
             let (a, b) = (seen(&before), seen(&after));
             let pairs: Vec<Pair> = a.into_iter().zip(b).map(|(before, after)| Pair::new(before, after, 1.0)).collect();
             let turned = turned_deg.to_radians();
-            let Some((motion, _, _)) = Rigid::estimate(&config, &camera, &pairs, 10.0, turned, &mut rng) else {
+            let Some((motion, _, _)) = Rigid::estimate(&config, &camera, &pairs, 10.0, turned, 3, &mut rng) else {
                 continue;
             };
             let mut yaw = motion.yaw;

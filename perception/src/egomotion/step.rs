@@ -107,6 +107,8 @@ pub(super) struct StepInput<'a> {
     /// The turn between the frames as odometry measured it (or, without
     /// odometry, as egomotion last put it), rad.
     pub(super) turned_rad: f64,
+    /// The fewest consistent landmarks a motion may rest on.
+    pub(super) min_landmarks: usize,
     /// The tracker's generator, for random draws (RANSAC's samples).
     pub(super) rng: &'a mut ChaCha8Rng,
 }

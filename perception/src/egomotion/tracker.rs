@@ -526,7 +526,7 @@ impl Tracker {
                 // A frame nothing matches, from a new viewpoint, anchors the
                 // frames after it (through the odometry bridge) once the old
                 // keyframes are out of sight.
-                if frame.landmarks.len() >= 3 && self.distinct(odometry, &self.mount_of(frame)) {
+                if frame.landmarks.len() >= self.min_landmarks() && self.distinct(odometry, &self.mount_of(frame)) {
                     let bridges = self.keyframes.iter().map(|k| k.bridges).min().unwrap_or_default();
                     self.add_keyframe(frame, pose, *odometry, bridges + 1);
                 }
@@ -546,6 +546,25 @@ impl Tracker {
         let dt = dt.max(0.0);
         let (step, turn) = (self.config.max_speed * dt, self.config.max_turn_rate_deg.to_radians() * dt);
         Matrix3::from_diagonal(&nalgebra::Vector3::new(step * step, step * step, turn * turn)) / 3.0
+    }
+
+    /// The fewest consistent landmarks a step may rest on. On its own a
+    /// visual step needs three: two fit any rigid motion but one dimension,
+    /// so a wrong match among them is hardly seen. With odometry fused in,
+    /// two will do: the gate checks their motion against odometry's, and
+    /// the fusion takes the distance from the wheels, so the pair is asked
+    /// only for the sideways motion and the turn, which two fix well.
+    /// Where only a couple of landmarks are in view at a time (a short
+    /// detection range, walls seen only obliquely) that turns a run bridged
+    /// blind into one corrected every frame.
+    fn min_landmarks(&self) -> usize {
+        let fused = self.config.odometry_fusion != OdometryFusion::Off
+            && self.config.odometry_gate.as_ref().is_some_and(|g| g.noise.is_some());
+        if fused {
+            2
+        } else {
+            3
+        }
     }
 
     /// Whether the estimator must work frame to frame (the simplified one
@@ -717,6 +736,7 @@ impl Tracker {
             max_step_m: self.config.max_speed * dt * 1.5 + 0.02,
             phase: self.phase,
             turned_rad: odometry.relative_to(&keyframe.odometry).theta,
+            min_landmarks: self.min_landmarks(),
             rng: &mut self.rng,
         };
         let StepMotion { mut motion, landmarks, mut covariance, inliers } = estimator.estimate(&self.pairs, input)?;
@@ -830,6 +850,35 @@ mod tests {
         tracker
             .update(&StereoFrame { number: 4, time: 1.5, landmarks: seen, calibration: None, images: None }, &odometry);
         assert!((tracker.state().pose.unwrap().x - 0.75).abs() < 1e-6, "{:?}", tracker.state().pose);
+    }
+
+    #[test]
+    fn two_landmarks_correct_a_turn_odometry_invents_when_odometry_is_fused() {
+        // Two landmarks ahead and the robot driving straight 0.3 m a frame,
+        // while odometry counts 0.3° of turn a frame that never happened.
+        // Fused with odometry, two landmarks make a step, and the pose's
+        // heading stays true; purely visual, two are too few, every frame
+        // is bridged, and the pose turns with odometry. (The fused heading
+        // is not exact: the rigid fit lays the later lines of sight by
+        // odometry's turn, and follows its error a little.)
+        let camera = StereoCamera::default();
+        let two = [[8.0, 1.5, 0.8], [9.0, -1.5, 1.0]];
+        for (fusion, failures, heading_deg, within_deg) in
+            [(OdometryFusion::Sideways, 0, 0.0, 0.3), (OdometryFusion::Off, 8, 2.4, 1e-9)]
+        {
+            let config = EgomotionConfig { odometry_fusion: fusion, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+            let mut odometry = Pose2::default();
+            for k in 0..9u32 {
+                let truth = Pose2::new(0.3 * f64::from(k), 0.0, 0.0);
+                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), frame(&two, truth, &camera)), &odometry);
+                odometry = odometry.compose(&Pose2::new(0.3, 0.0, 0.3f64.to_radians()));
+            }
+            let s = tracker.state();
+            assert_eq!((s.steps, s.failures), (8, failures), "{fusion:?}: {s:?}");
+            let heading = s.pose.unwrap().theta.to_degrees();
+            assert!((heading - heading_deg).abs() < within_deg, "{fusion:?}: {heading}° against {heading_deg}°");
+        }
     }
 
     #[test]
