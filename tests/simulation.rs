@@ -528,6 +528,10 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     let report = run(&by_egomotion, 104, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
+    // The robot stopped where the pose it steered by reached the goal, and
+    // the report gives that pose (odometry's own is off by the veer).
+    let (goal, believed) = (by_egomotion.goal.unwrap(), report.final_estimated_pose);
+    assert!(goal.reached_by(&believed), "{goal:?}: {believed:?}");
 }
 
 #[test]

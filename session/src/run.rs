@@ -238,7 +238,11 @@ pub fn run_until(
         })
         .unzip();
     let sim = robot.inner();
-    let (truth, estimate) = (sim.true_pose(), sim.odometry_pose());
+    // Where the robot believed it was: the pose it steered by (egomotion's
+    // combined with odometry's, where it navigates), else odometry's.
+    let odometry = sim.odometry_pose();
+    let believed = robot.tracker().and_then(|t| t.navigation_pose(&odometry)).unwrap_or(odometry);
+    let (truth, estimate) = (sim.true_pose(), believed);
     let endpoint_error =
         egomotion.and_then(|e| e.pose).zip(end_point.truth_at_frame).map(|(p, truth)| truth.distance_to(p.x, p.y));
     let distance = sim.distance_travelled();
