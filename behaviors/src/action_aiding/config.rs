@@ -142,7 +142,8 @@ pub struct ActionAidingConfig {
     #[serde(default)]
     pub costs: DecisionCosts,
     /// Landmarks a heading must keep in view: the estimator's minimum and a
-    /// margin (the rigid estimator needs three consistent ones).
+    /// margin (the rigid estimator needs three consistent ones, or two with
+    /// odometry fused in).
     #[serde(default = "ActionAidingConfig::default_min_landmarks")]
     pub min_landmarks: usize,
     /// Largest angle between the two cameras' lines of sight at a landmark
