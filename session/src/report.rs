@@ -50,9 +50,9 @@ pub struct RunReport {
     /// Where the robot really ended.
     #[schemars(with = "PoseSchema")]
     pub final_true_pose: Pose2,
-    /// Where the robot believed it ended: the pose it steered by
-    /// (with `navigate`, egomotion's combined with odometry's; else
-    /// odometry's).
+    /// Where the robot believed it ended: the pose it steered by (with
+    /// `navigate`, egomotion's, combined with odometry's where the rigid
+    /// estimator and the gate's noise model weigh the two; else odometry's).
     #[schemars(with = "PoseSchema")]
     pub final_estimated_pose: Pose2,
     /// Distance between the two, m.

@@ -15,7 +15,8 @@
 //!   Gauss–Newton then weighs each landmark by its real, elongated stereo
 //!   uncertainty (bearing precise, range not), without which a far wall's
 //!   depth noise tilts the solution into metres of false sideways motion.
-//!   It needs three consistent landmarks; two, with odometry fused in.
+//!   It needs three consistent landmarks; two with odometry fused in
+//!   (`Tracker` decides, from the settings).
 //!
 //! The files, by job: `config` (the settings a scenario file gives),
 //! `matching` (which landmarks of two frames are the same), `step` (what

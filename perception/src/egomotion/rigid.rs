@@ -180,6 +180,8 @@ impl Rigid {
         };
         // χ² with 2 degrees of freedom at 99 %.
         const GATE: f64 = 9.21;
+        // χ² with 1 degree of freedom at 99 %.
+        const PAIR_GATE: f64 = 6.63;
         let ones = [1.0; 2];
         let mut best: Option<Vec<usize>> = None;
         for _ in 0..config.iterations {
@@ -199,6 +201,12 @@ impl Rigid {
         let weights: Vec<f64> = chosen.iter().map(|p| 1.0 / p.cv).collect();
         let (yaw, t) = kabsch(&chosen, &weights)?;
         let (yaw, t) = Self::refine(&chosen, &chosen_info, yaw, t);
+        // Two landmarks leave one dimension to check them by (their distance
+        // apart), and each passing the gate alone lets the pair's joint cost
+        // reach twice the gate: it must pass χ² with one degree of freedom.
+        if chosen.len() == 2 && Self::normal_equations(&chosen, &chosen_info, yaw, t).2 > PAIR_GATE {
+            return None;
+        }
         let motion = PlanarMotion { forward: t[0], left: t[1], yaw };
         let covariance = Self::covariance(&chosen, &chosen_info, yaw, t)?;
         if !(motion.forward.hypot(motion.left) <= max_step && yaw.is_finite()) {
@@ -251,6 +259,53 @@ mod tests {
         assert!((end.theta - truth.theta).abs() < 1e-6);
         assert_eq!(state.failures, 0);
         assert!(state.journey_cv > 0.0);
+    }
+
+    #[test]
+    fn two_landmarks_must_agree_on_their_distance_apart() {
+        // Two landmarks seen before and after 0.3 m of driving, the second
+        // seen `shift` m further along the line from the first the second
+        // time (a wrong match). Each landmark alone may pass the gate with
+        // the pair's misfit split between them; the pair's joint cost is
+        // what tells, on its one degree of freedom.
+        use rand::SeedableRng;
+        let camera = StereoCamera::default();
+        let config = RigidConfig::default();
+        let points = [[8.0, 1.5, 0.8], [9.0, -1.5, 1.0]];
+        let seen = |pose: Pose2, p: [f64; 3]| {
+            let r = Pose2::new(p[0], p[1], 0.0).relative_to(&pose);
+            [r.x, r.y, p[2]]
+        };
+        let pairs = |shift: f64| -> Vec<Pair> {
+            let (a, b) = (Pose2::default(), Pose2::new(0.3, 0.0, 0.0));
+            let apart = Vector2::new(points[1][0] - points[0][0], points[1][1] - points[0][1]).normalize();
+            let moved = [points[1][0] + shift * apart[0], points[1][1] + shift * apart[1], points[1][2]];
+            vec![
+                Pair::new(seen(a, points[0]), seen(b, points[0]), 1.0),
+                Pair::new(seen(a, points[1]), seen(b, moved), 1.0),
+            ]
+        };
+        // The joint cost of the pair's best fit.
+        let cost = |pairs: &[Pair]| {
+            let info: Vec<Matrix2<f64>> = pairs
+                .iter()
+                .map(|p| residual_information(&camera, Pixels(config.pixel_sigma), p.before, p.after, 0.0))
+                .collect();
+            let (yaw, t) = Rigid::refine(pairs, &info, 0.0, Vector2::new(0.3, 0.0));
+            Rigid::normal_equations(pairs, &info, yaw, t).2
+        };
+        let shift_costing = |target: f64| {
+            let shift = (1..10_000).map(|k| f64::from(k) * 1e-4).find(|&s| cost(&pairs(s)) >= target).unwrap();
+            pairs(shift)
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut estimate = |pairs: &[Pair]| Rigid::estimate(&config, &camera, pairs, 10.0, 0.0, 2, &mut rng);
+        let exact = estimate(&pairs(0.0)).expect("two exact landmarks give the motion").0;
+        assert!((exact.forward - 0.3).abs() < 1e-6 && exact.left.abs() < 1e-6, "{exact:?}");
+        assert!(estimate(&shift_costing(3.0)).is_some(), "within the χ² bound");
+        // Beyond it, though each landmark alone would pass (the second
+        // takes most of the misfit, and under 9.21 of it).
+        assert!(estimate(&shift_costing(8.0)).is_none(), "beyond the χ² bound on one degree of freedom");
     }
 
     #[test]

@@ -433,7 +433,11 @@ impl Tracker {
             // Egomotion's pose starts here, so odometry's is carried into
             // the tracker's frame from here too.
             self.odometry_origin.get_or_insert(*odometry);
-            self.add_keyframe(frame, pose, *odometry, 0);
+            // A first view with too few landmarks could never be matched,
+            // and would keep frames near it from becoming keyframes.
+            if frame.landmarks.len() >= self.min_landmarks() {
+                self.add_keyframe(frame, pose, *odometry, 0);
+            }
             return;
         }
         self.keyframes.retain(|k| k.odometry.distance_to(odometry.x, odometry.y) <= self.config.keyframe_range_m);
@@ -549,16 +553,19 @@ impl Tracker {
     }
 
     /// The fewest consistent landmarks a step may rest on. On its own a
-    /// visual step needs three: two fit any rigid motion but one dimension,
-    /// so a wrong match among them is hardly seen. With odometry fused in,
-    /// two will do: the gate checks their motion against odometry's, and
-    /// the fusion takes the distance from the wheels, so the pair is asked
-    /// only for the sideways motion and the turn, which two fix well.
-    /// Where only a couple of landmarks are in view at a time (a short
-    /// detection range, walls seen only obliquely) that turns a run bridged
-    /// blind into one corrected every frame.
+    /// visual step needs three: two fit any rigid motion but one dimension
+    /// (their distance apart), so a wrong match among them is hardly seen.
+    /// With odometry fused in (the rigid estimator and the gate's noise
+    /// model), two will do: the gate checks their motion against
+    /// odometry's, and the fusion takes the sideways motion from the
+    /// wheels (and the distance, once their scale is measured), which two
+    /// landmarks alone fix poorly, leaving them the turn, which they fix
+    /// well. Where only a couple of landmarks are in view at a time (a
+    /// short detection range, walls seen only obliquely) that corrects
+    /// the heading on frames that were bridged blind.
     fn min_landmarks(&self) -> usize {
         let fused = self.config.odometry_fusion != OdometryFusion::Off
+            && matches!(self.config.estimator, EstimatorKind::Rigid(_))
             && self.config.odometry_gate.as_ref().is_some_and(|g| g.noise.is_some());
         if fused {
             2
@@ -859,8 +866,9 @@ mod tests {
         // Fused with odometry, two landmarks make a step, and the pose's
         // heading stays true; purely visual, two are too few, every frame
         // is bridged, and the pose turns with odometry. (The fused heading
-        // is not exact: the rigid fit lays the later lines of sight by
-        // odometry's turn, and follows its error a little.)
+        // is not exact: odometry's sideways motion, bent by the turn it
+        // invents, is fused in, and a two-landmark fit couples its sideways
+        // motion with its turn.)
         let camera = StereoCamera::default();
         let two = [[8.0, 1.5, 0.8], [9.0, -1.5, 1.0]];
         for (fusion, failures, heading_deg, within_deg) in
@@ -897,7 +905,8 @@ mod tests {
             tracker.update(&at(u64::from(k) + 2, 0.5 * f64::from(k + 1), Vec::new()), &odometry);
         }
         let s = tracker.state();
-        assert_eq!((s.steps, s.failures), (30, 30), "{s:?}");
+        assert_eq!((s.steps, s.failures, s.outages), (30, 30, 1), "{s:?}");
+        assert!((s.outage_m - 9.0).abs() < 1e-9, "{s:?}");
         let pose = s.pose.unwrap();
         assert!(pose.distance_to(odometry.x, odometry.y) < 1e-9, "{pose:?} against {odometry:?}");
         assert!((pose.theta - odometry.theta).abs() < 1e-12, "{pose:?} against {odometry:?}");
