@@ -8,7 +8,7 @@ hand.
 
 RUNS-DIR (lab/runs by default) holds the summaries of the protocol's
 earlier runs, on earlier code, as aiding-families-{first,second,third,
-fourth}.json.
+fourth,fifth}.json.
 """
 import json
 import os
@@ -60,10 +60,14 @@ def main():
     runs_dir = sys.argv[3] if len(sys.argv) > 3 else 'lab/runs'
 
     def earlier(name):
+        # Every earlier run is cited by the page: a missing summary is an
+        # error, not an empty column.
         path = os.path.join(runs_dir, f'aiding-families-{name}.json')
-        return json.load(open(path)) if os.path.exists(path) else None
+        if not os.path.exists(path):
+            sys.exit(f'{path}: the summary of the protocol\'s {name} run is missing')
+        return json.load(open(path))
 
-    first, second, third, fourth = (earlier(n) for n in ['first', 'second', 'third', 'fourth'])
+    first, second, third, fourth, fifth = (earlier(n) for n in ['first', 'second', 'third', 'fourth', 'fifth'])
     families = [f for f in FAMILIES if f in data]
     cell = lambda f, e, w, a: data[f][e][w][a]  # noqa: E731
     some = cell(families[0], 'default', 'exact', 'none')
@@ -130,10 +134,30 @@ def main():
         'steered by followed. On the training layouts that part alone accounted for it (missed goals, driving '
         'straight with exact wheels: fov-32 0 → 23 of 80, featureless-20 1 → 22; back to 0 and 1 without it). '
         'It was taken out, the bridged frames kept the measured scale with its error added to their covariance, '
-        'and the command was run a fifth time on the same layouts and seeds: this page is that fifth run, so for '
+        'and the command was run a fifth time on the same layouts and seeds (its summary: '
+        '`lab/runs/aiding-families-fifth.json`; its page: `git show 2c8709b:docs/aiding-families.md`).')
+    say('')
+    say('The fifth run left the range-20 family where it was, default and visual alike. Two causes were found '
+        'there on the training layouts 2121–2828 (seeds 100–109, where egomotion failed 115 of a run\'s 136 '
+        'frames), each tested by removing it. First, a defect: with two or three landmarks in view, a blind '
+        'stretch longer than a keyframe\'s reach (10 m) retired every keyframe, and the next frame was taken as '
+        'a fresh start, dropping the motion since the frame before (0.3 m of driving, or 10° of a scan\'s turn, '
+        'each time). Fixed, straight driving\'s error there went from 0.631 to 0.364 m with the default estimate '
+        '(the scan\'s from 0.983 to 0.304 m), and no other family\'s figures moved; the defect was egomotion\'s, '
+        'so the fix serves the visual estimate too (0.598 to 0.354 m), and the two estimates\' ratio there stays '
+        'near 1. Second, a step needed three consistent landmarks; with odometry fused in, two now do (the gate '
+        'checks their motion against the wheels\', the fusion takes the sideways motion from the wheels, leaving '
+        'the pair the turn, and the pair must agree on its distance apart): range-20 went from 0.364 to 0.352 m '
+        '(with wheels 1 % off from 0.499 to 0.403, veering from 0.660 to 0.468), the other families\' cells '
+        'within a few per cent. Missed goals rose in one cell on those seeds (fov-32 with the triggered scan, '
+        '13 to 22 of 80) and not on seeds 110–129 (10 to 9). The report\'s estimated end pose was also changed '
+        'to the pose the robot steered by (it was odometry\'s own), which the protocol\'s measures do not use; '
+        'the table of that pose below is an addition to the protocol. The command was run a sixth time on the '
+        'same layouts and seeds (a run started before an independent review of the two-landmark step was '
+        'stopped unfinished; the review added the pair\'s agreement): this page is that sixth run, so for '
         'these changes too the layouts are not blind.')
     if second:
-        earlier_runs = [('second', second), ('third', third), ('fourth', fourth)]
+        earlier_runs = [('second', second), ('third', third), ('fourth', fourth), ('fifth', fifth)]
         say('')
         say('Driving straight with the default estimate, by run: the ratio to the visual estimate on the same '
             'wheels, then the runs (of 360) whose true position missed the goal\'s tolerance.')
@@ -176,7 +200,39 @@ def main():
     say(f"Over the families (the mean of the families' means): {mean(pooled['visual']):.3f} m visual, "
         f"{mean(pooled['default']):.3f} m default, "
         f"{mean(pooled['default']) / mean(pooled['visual']):.2f}×.")
+    # The visual estimate is egomotion too: a fix to egomotion moves it, and
+    # the figure the issue set (0.6× the estimate of before) is then to be
+    # read against the visual estimate as the earlier run measured it.
+    moved = [f for f in families if f in fifth
+             and abs(cell(f, 'visual', 'exact', 'none')['error_m'] / fifth[f]['visual']['exact']['none']['error_m'] - 1)
+             > 0.01]
+    if moved:
+        say('')
+        say('The visual estimate itself moved since the fifth run (egomotion\'s fix above serves it too) in '
+            + '; '.join(f"{f} (from {fifth[f]['visual']['exact']['none']['error_m']:.3f} to "
+                        f"{cell(f, 'visual', 'exact', 'none')['error_m']:.3f} m)" for f in moved)
+            + '. Against the visual estimate as the fifth run measured it, the estimate of before, the default '
+            'now ends at ' + '; '.join(
+                f"{cell(f, 'default', 'exact', 'none')['error_m'] / fifth[f]['visual']['exact']['none']['error_m']:.2f}× "
+                f"in {f}" for f in moved) + '.')
     say('')
+
+    if all('steered_vs_visual' in cell(f, 'default', 'exact', 'none') for f in families):
+        say('**The pose the robot steered by** (not in the protocol: added after it, with intervals drawn apart '
+            'from the protocol\'s): the report\'s estimate error, the distance from where the robot ended to '
+            'where the pose it steered by put it, driving straight on exact wheels. With the visual estimate '
+            'that pose is odometry\'s; with the default, egomotion\'s combined with odometry\'s. It is the pose '
+            'the robot stops by, so it decides whether the goal is reached.')
+        say('')
+        say('| family | visual m | default m | default ÷ visual | layouts where the default is worse |')
+        say('| --- | --- | --- | --- | --- |')
+        for f in families:
+            v, d = cell(f, 'visual', 'exact', 'none'), cell(f, 'default', 'exact', 'none')
+            r = d['steered_vs_visual']
+            worse = beyond(r, 1.0)
+            say(f"| {f} | {v['steered_error_m']:.3f} | {d['steered_error_m']:.3f} | {interval(r)} | "
+                f"{len(worse)} of {len(r['per_layout'])}{': ' + ', '.join(worse) if worse else ''} |")
+        say('')
 
     say('**With wheels that err beyond odometry\'s noise model** (1 % scale: the wheels 1 % larger than the '
         'encoders think; veer: 0.05° per metre odometry does not see), straight driving: the default against '
