@@ -529,12 +529,12 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     let report = run(&by_egomotion, 104, Some(dir.path())).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
-    // The report gives the pose the robot steered by at the end (the
-    // trajectory's last `odom_*` row), which put it at the goal; odometry's
-    // own is off by the veer, 1.9 m.
+    // The report gives the pose the robot steered by at the end: the
+    // trajectory's last `odom_*` row, sensed before the last tick's motion
+    // (0.1 m of it here). Odometry's own pose is off by the veer, 1.9 m.
     let (goal, believed) = (by_egomotion.goal.unwrap(), report.final_estimated_pose);
     let steered = ["odom_x", "odom_y"].map(|c| *trajectory_column(dir.path(), c).last().unwrap());
-    assert!(believed.distance_to(steered[0], steered[1]) < 0.01, "{believed:?} against {steered:?}");
+    assert!(believed.distance_to(steered[0], steered[1]) < 0.15, "{believed:?} against {steered:?}");
     assert!(goal.reached_by(&believed), "{goal:?}: {believed:?}");
 }
 
