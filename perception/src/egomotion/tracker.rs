@@ -508,6 +508,14 @@ impl Tracker {
                 // since the last frame, and say so; its distance in the
                 // wheels' measured scale when fusion has measured it.
                 let bridged = self.scaled(odometry.relative_to(&previous_odometry));
+                // Why a frame was bridged: how much it saw, and against what.
+                tracing::debug!(
+                    frame = frame.number,
+                    in_view = frame.landmarks.len(),
+                    keyframes = self.keyframes.len(),
+                    bridged = ?(bridged.x, bridged.y, bridged.theta.to_degrees()),
+                    "egomotion bridged"
+                );
                 let step = PlanarMotion { forward: bridged.x, left: bridged.y, yaw: bridged.theta };
                 self.extra = composed_covariance(
                     &pose,
