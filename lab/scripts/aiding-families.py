@@ -91,7 +91,8 @@ def main():
             'runs': len(reports),
             'error_m': round(mean(measure(r, 'error') for r in reports), 4),
             # Not in the protocol: the pose the robot steered by against the
-            # truth where it ended (the report's estimate error).
+            # truth where it ended (the report's estimate error; in reports
+            # written before it gave the pose steered by, odometry's own).
             'steered_error_m': round(mean(measure(r, 'steered') for r in reports), 4),
             'time_s': round(mean(measure(r, 'time') for r in reports), 1),
             'failed_frames': round(mean(measure(r, 'failures') for r in reports), 2),
