@@ -21,7 +21,8 @@
 //! The files, by job: `config` (the settings a scenario file gives),
 //! `matching` (which landmarks of two frames are the same), `step` (what
 //! the estimators share), `simple2d` and `rigid` (the estimators),
-//! `odometry` (the odometry gate and fusion) and `tracker` (the keyframe
+//! `odometry` (the odometry gate and fusion), `wheel_calibration` (the
+//! wheels' scale and veer the steps measure) and `tracker` (the keyframe
 //! bank that integrates the steps over a run).
 
 mod config;
@@ -32,7 +33,7 @@ mod rigid;
 mod simple2d;
 mod step;
 mod tracker;
-mod wheel_scale;
+mod wheel_calibration;
 
 pub use config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind, RigidConfig, Simple2dConfig};
 pub use matching::{match_frames, MatchConfig};
@@ -41,7 +42,7 @@ pub use rigid::Rigid;
 pub use simple2d::Simple2d;
 pub use step::{MotionPhase, PlanarMotion};
 pub use tracker::{OffsetEstimate, Tracker};
-pub use wheel_scale::WheelScale;
+pub use wheel_calibration::{Veer, WheelScale};
 
 #[cfg(test)]
 mod testing;
