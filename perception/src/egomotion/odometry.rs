@@ -140,8 +140,8 @@ pub struct OdometryNoise {
     pub chi2: f64,
     /// How far the robot may turn per metre, unseen by odometry, as a
     /// steady pull (a σ, ° per metre): tyres of unequal pressure or wear,
-    /// a wheel base a little off. With `Sideways` fusion the visual steps
-    /// measure the veer, starting from this, and the pose the robot steers
+    /// a floor's camber. With `Sideways` fusion the visual steps measure
+    /// the veer, starting from 0 with this σ, and the pose the robot steers
     /// by takes odometry's own pose turned by it (see
     /// `Tracker::navigation_pose`); 0 takes odometry's turns for unbiased.
     #[serde(deserialize_with = "non_negative")]
@@ -499,24 +499,39 @@ mod tests {
             truth.push(last.compose(&Pose2::new(0.25, 0.0, veer * 0.25)));
         }
         let counted = |k: usize| Pose2::new(0.25 * k as f64, 0.0, 0.0);
-        let drive = |veer_deg_per_m| {
+        let end = truth[144];
+        let drive = |veer_deg_per_m, trusted_landmarks| {
             let noise = OdometryNoise { veer_deg_per_m, ..OdometryNoise::default() };
             let gate = OdometryGate { noise: Some(noise), ..OdometryGate::default() };
-            let config = EgomotionConfig { odometry_gate: Some(gate), ..EgomotionConfig::default() };
+            let config = EgomotionConfig { odometry_gate: Some(gate), trusted_landmarks, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
             for (k, pose) in truth.iter().enumerate() {
                 let seen = if k <= 96 { towards_a_far_wall(*pose, k as u32, 0.01, &camera) } else { Vec::new() };
                 tracker.update(&at(k as u64 + 1, 0.5 * k as f64, seen), &counted(k));
             }
-            let (end, steered) = (truth[144], tracker.navigation_pose(&counted(144)).unwrap());
-            (tracker.veer(), steered.distance_to(end.x, end.y))
+            (tracker.veer(), tracker.navigation_pose(&counted(144)).unwrap().distance_to(end.x, end.y))
         };
-        let (measured, steered) = drive(OdometryNoise::default().veer_deg_per_m);
+        let trusted = EgomotionConfig::default().trusted_landmarks;
+        let (measured, steered) = drive(OdometryNoise::default().veer_deg_per_m, trusted);
         let measured = measured.unwrap();
-        assert!((measured.rad_per_m - veer).abs() < 2.0 * measured.sigma, "{measured:?}");
-        let (none, steered_straight) = drive(0.0);
-        assert_eq!(none.map(|v| v.rad_per_m), Some(0.0));
+        assert!(measured.rad_per_m < 0.0 && (measured.rad_per_m - veer).abs() < 2.0 * measured.sigma, "{measured:?}");
+        let (_, steered_straight) = drive(0.0, trusted);
         assert!(steered_straight > 0.5, "{steered_straight} m");
         assert!(steered < 0.3 * steered_straight, "steered by {steered} m, {steered_straight} m without the veer");
+        // With egomotion's pose taken for worthless (every step far short
+        // of the landmarks it needs to be trusted), the pose steered by is
+        // odometry's own: turned by the veer measured, its error shrinks by
+        // the share of the veer measured, not by leaning elsewhere.
+        let worthless = 1_000_000_000;
+        let counted_error = counted(144).distance_to(end.x, end.y);
+        let (_, steered_straight) = drive(0.0, worthless);
+        assert!((steered_straight - counted_error).abs() < 0.01, "{steered_straight} m, odometry {counted_error} m");
+        let (_, steered) = drive(OdometryNoise::default().veer_deg_per_m, worthless);
+        let expected = 1.0 - measured.rad_per_m / veer;
+        assert!(
+            (steered / counted_error - expected).abs() < 0.1,
+            "steered by {steered} m, odometry {counted_error} m: {} of it, expected {expected}",
+            steered / counted_error
+        );
     }
 }

@@ -5,7 +5,7 @@ use super::config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind};
 use super::matching::match_frames;
 use super::offset::{self, OffsetReading};
 use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion};
-use super::wheel_calibration::{ProportionalFit, Veer, VeerPath, WheelScale};
+use super::wheel_calibration::{ProportionalFit, Travel, Veer, VeerPath, WheelScale, TURN_SHARE};
 use super::OdometryFusion;
 use crate::error_model::{CvTable, MODEL_STEP_M};
 use crate::fusion::fuse_cv;
@@ -40,6 +40,8 @@ struct Keyframe {
     /// Where the camera looked on the robot (a pan-tilt unit's measured
     /// angles), to lift its landmarks into the robot frame.
     mount: CameraMount,
+    /// How far odometry had driven and turned along its path then.
+    travel: Travel,
 }
 
 /// Where the camera looked in the world by the robot's `odometry`: its
@@ -184,7 +186,8 @@ struct Estimate {
     /// disparity offset is read from them, for the chosen match only.
     visual: PlanarMotion,
     /// The visual motion's own covariance, before odometry, where the
-    /// estimator gives one: the wheels' scale is measured against it.
+    /// estimator gives one: the wheels' scale and veer are measured
+    /// against it.
     visual_covariance: Option<Matrix3<f64>>,
     inliers: Vec<Pair>,
     mounts: Mounts,
@@ -278,10 +281,10 @@ impl Tracker {
     }
 
     /// How far the robot turns for each metre it drives beyond the turns
-    /// odometry counts: the odometry noise model's veer, as the visual
-    /// steps measure it once steps from five keyframes have (with the
-    /// rigid estimator, when `Sideways` fusion measures the wheels' scale
-    /// too); `None` where they are not measured.
+    /// odometry counts (with the rigid estimator, when `Sideways` fusion
+    /// measures the wheels' scale too; `None` otherwise): 0 with the noise
+    /// model's `veer_deg_per_m` for σ until steps from five keyframes have
+    /// measured it, then their measure weighed against that.
     pub fn veer(&self) -> Option<Veer> {
         let noise = self.config.odometry_gate.and_then(|gate| gate.noise)?;
         let measured = matches!(self.config.estimator, EstimatorKind::Rigid(_))
@@ -305,17 +308,19 @@ impl Tracker {
     }
 
     /// Takes in the chosen step's visual forward motion against
-    /// odometry's, if `Sideways` fusion will use the scale. Every step the
-    /// odometry gate passed counts, weighed by its own variance: a step on
-    /// few landmarks says so in its covariance.
-    fn measure_wheels(&mut self, anchor: u64, estimate: &Estimate, odometric: &Pose2, driven: f64) {
+    /// odometry's, for the wheels' scale, and its visual turn less
+    /// odometry's against odometry's distance, for their veer, if
+    /// `Sideways` fusion will use them. Every step the odometry gate passed
+    /// counts, weighed by its own variance: a step on few landmarks says so
+    /// in its covariance.
+    fn measure_wheels(&mut self, anchor: u64, estimate: &Estimate, odometric: &Pose2, travel: &Travel) {
         let noise = self.config.odometry_gate.and_then(|gate| gate.noise);
         let (OdometryFusion::Sideways, Some(noise), Some(visual)) =
             (self.config.odometry_fusion, noise, estimate.visual_covariance)
         else {
             return;
         };
-        let odometric_covariance = noise.covariance(driven);
+        let odometric_covariance = noise.covariance(odometric.x.hypot(odometric.y));
         self.wheel_scale.add(
             anchor,
             odometric.x,
@@ -324,12 +329,18 @@ impl Tracker {
         );
         // The turn odometry did not count, against the distance: the
         // visual turn is taken before odometry was combined with it, and
-        // `Sideways` never takes odometry's turn anyway.
+        // `Sideways` never takes odometry's turn anyway. It is not quite
+        // free of odometry: the rigid estimator lays the later lines of
+        // sight by odometry's turn, and on far landmarks its yaw follows
+        // an error there by about a third (`rigid.rs`), so the veer is
+        // read short by up to that much: a correction that errs small. The
+        // distance is the one the correction turns odometry's path by, and
+        // a stretch that turned is read as less certain by its turn.
         self.veer.add(
             anchor,
-            odometric.x,
+            travel.forward_m,
             angle_difference(estimate.visual.yaw, odometric.theta),
-            visual[(2, 2)] + odometric_covariance[(2, 2)],
+            visual[(2, 2)] + odometric_covariance[(2, 2)] + (TURN_SHARE * travel.turned_rad).powi(2),
         );
     }
 
@@ -418,7 +429,11 @@ impl Tracker {
         // take the veer, whose error is added to odometry's: a veer
         // odometry does not see walks its pose off sideways with the square
         // of the distance, which its noise model, a random slip, does not
-        // cover.
+        // cover. The veer is measured by vision too, so the same caution
+        // holds; the prior it is weighed against keeps a veer read from a
+        // few landmarks small, and so turned, odometry's pose took the runs
+        // a veer pinned against a wall on training layouts off the time
+        // limit (the cost is in `VEER_DEG_PER_M`'s note, `odometry.rs`).
         let driven = self.odometry_driven_m + odometry.distance_to(self.newest.1.x, self.newest.1.y);
         let mut odometric = noise.covariance(driven);
         let by_odometry = match self.veer() {
@@ -534,8 +549,8 @@ impl Tracker {
                 self.state.anchor_frame = Some(keyframe.number);
                 self.last_match = frame.time;
                 let odometric = odometry.relative_to(&keyframe.odometry);
-                let stretch = odometric.x.hypot(odometric.y);
-                self.measure_wheels(keyframe.number, &estimate, &odometric, stretch);
+                let travel = self.odometry_path.travel().since(&keyframe.travel);
+                self.measure_wheels(keyframe.number, &estimate, &odometric, &travel);
                 if self.config.disparity_offset != DisparityOffsetEstimate::Off {
                     let sigma = match self.config.estimator {
                         EstimatorKind::Rigid(rigid) => rigid.pixel_sigma,
@@ -679,6 +694,7 @@ impl Tracker {
             covariance: self.covariance,
             extra: self.extra,
             mount: self.mount_of(frame),
+            travel: self.odometry_path.travel(),
         });
     }
 
