@@ -528,6 +528,7 @@ mod tests {
         assert!((steered_straight - counted_error).abs() < 0.01, "{steered_straight} m, odometry {counted_error} m");
         let (_, steered) = drive(OdometryNoise::default().veer_deg_per_m, worthless);
         let expected = 1.0 - measured.rad_per_m / veer;
+        assert!(expected < 0.8, "too little of the veer measured to tell: {measured:?}");
         assert!(
             (steered / counted_error - expected).abs() < 0.1,
             "steered by {steered} m, odometry {counted_error} m: {} of it, expected {expected}",

@@ -335,7 +335,9 @@ impl Tracker {
         // an error there by about a third (`rigid.rs`), so the veer is
         // read short by up to that much: a correction that errs small. The
         // distance is the one the correction turns odometry's path by, and
-        // a stretch that turned is read as less certain by its turn.
+        // a stretch that turned is read as less certain by its turn. (The
+        // slip's share is still reckoned on the chord, which understates
+        // it where the stretch went back and forth.)
         self.veer.add(
             anchor,
             travel.forward_m,
@@ -431,9 +433,9 @@ impl Tracker {
         // of the distance, which its noise model, a random slip, does not
         // cover. The veer is measured by vision too, so the same caution
         // holds; the prior it is weighed against keeps a veer read from a
-        // few landmarks small, and so turned, odometry's pose took the runs
-        // a veer pinned against a wall on training layouts off the time
-        // limit (the cost is in `VEER_DEG_PER_M`'s note, `odometry.rs`).
+        // few landmarks small. Turned by it, odometry's pose took the runs
+        // a veer had pinned against a wall on training layouts off the
+        // time limit (the cost is in `VEER_DEG_PER_M`'s note, `odometry.rs`).
         let driven = self.odometry_driven_m + odometry.distance_to(self.newest.1.x, self.newest.1.y);
         let mut odometric = noise.covariance(driven);
         let by_odometry = match self.veer() {

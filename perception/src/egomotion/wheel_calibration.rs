@@ -35,7 +35,8 @@ pub struct Veer {
 /// The weighted least-squares fit of `y ≈ k · x` through the origin over
 /// the steps egomotion took, each from a keyframe: the wheels' scale
 /// (`x` odometry's forward motion, `y` the visual one) and their veer (`x`
-/// odometry's forward motion, `y` the visual turn less odometry's).
+/// odometry's forward travel along its path, `y` the visual turn less
+/// odometry's).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct ProportionalFit {
     /// Σ w·x·y, Σ w·x², Σ w·y² and the readings they sum.
@@ -121,7 +122,9 @@ impl Veer {
     /// prior moves the veer little, so a few steps on scattered landmarks
     /// do not turn odometry's whole path.
     pub(super) fn given_prior(measured: Option<Veer>, prior_sigma: f64) -> Veer {
-        let Some(measured) = measured else { return Veer { rad_per_m: 0.0, sigma: prior_sigma } };
+        let Some(measured) = measured.filter(|m| !m.sigma.is_nan()) else {
+            return Veer { rad_per_m: 0.0, sigma: prior_sigma };
+        };
         if prior_sigma <= 0.0 {
             return Veer { rad_per_m: 0.0, sigma: 0.0 };
         }
@@ -156,13 +159,15 @@ impl Travel {
 /// errs with the turns, not the distance, and a visual turn through a
 /// sweep errs with its size, neither of which a veer describes. Without
 /// it a robot scanning (20 m detection range, exact wheels) read a veer
-/// of −0.15 ± 0.04°/m and steered by it into a wall. Chosen on training
-/// layouts against 0.05 (and none): scanning with a 20 m detection range,
-/// the pose steered by went from 0.370 to 0.295 m off (0.05: 0.285) and
-/// the runs missing the goal from 45 to 39 of 80 (0.05: 32), on seeds
-/// 110–129 from 0.409 to 0.259 m and 96 to 65 of 160; its cost there, one
-/// straight run with the veer went on to the time limit (0.05: two)
-/// where it had ended 1.7 m off after bumping the wall.
+/// of −0.15 ± 0.04°/m as it turned back and forth by the goal, and the
+/// pose it steered by ended 1.9 m off. Chosen on training layouts
+/// (seeds 100–109) against none and 0.05: scanning with a 20 m detection
+/// range, the pose steered by went from 0.370 to 0.295 m off and the runs
+/// missing the goal from 45 to 39 of 80 (seeds 110–129: 0.409 to 0.259 m,
+/// 96 to 65 of 160). 0.05 did a little better there (0.285 m, 32 runs),
+/// but put two straight runs with the veer on the time limit against
+/// 0.02's one (seeds 100–109; with none, that run had ended 1.7 m off
+/// after bumping the wall).
 pub(super) const TURN_SHARE: f64 = 0.02;
 
 /// Odometry's path since its origin, summed as a veer's correction needs
@@ -188,14 +193,15 @@ impl VeerPath {
     /// Takes in odometry's motion from `before` to `after`, both relative
     /// to the origin.
     pub(super) fn add(&mut self, before: &Pose2, after: &Pose2) {
-        let ds = after.relative_to(before).x;
+        let step = after.relative_to(before);
+        let ds = step.x;
         let dq = Vector2::new(after.x - before.x, after.y - before.y);
         // The turn at the stretch's middle stands for the turn along it.
         let s = self.forward_m + ds / 2.0;
         self.first += s * Vector2::new(-dq.y, dq.x);
         self.second += s * s * dq;
         self.forward_m += ds;
-        self.turned_rad += after.relative_to(before).theta.abs();
+        self.turned_rad += step.theta.abs();
     }
 
     /// How far odometry has driven forward and turned (either way) along
@@ -310,7 +316,8 @@ mod tests {
         let covariance = path.covariance(&Veer { sigma, ..veer }, 0.0);
         assert!((covariance[(1, 1)].sqrt() - sigma * 40.0 * 40.0 / 2.0).abs() < 0.01, "{covariance}");
         assert!((covariance[(2, 2)].sqrt() - sigma * 40.0).abs() < 1e-9);
-        // In a frame turned a quarter left, sideways is along −x.
+        // With the origin turned a quarter left in the frame asked for,
+        // its sideways is along −x there.
         let turned = path.covariance(&Veer { sigma, ..veer }, std::f64::consts::FRAC_PI_2);
         assert!((turned[(0, 0)] - covariance[(1, 1)]).abs() < 1e-12 && turned[(0, 2)] < 0.0, "{turned}");
     }
