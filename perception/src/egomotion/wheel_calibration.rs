@@ -6,7 +6,7 @@
 //! with the veer, odometry's own pose, which the pose steered by leans on,
 //! no longer walks off sideways with a soft tyre's pull.
 
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix3, Rotation2, Vector2, Vector3};
 use ubf_core::Pose2;
 
 /// Odometry's distances times `factor` are the distances driven, to within
@@ -180,10 +180,8 @@ pub(super) const TURN_SHARE: f64 = 0.02;
 /// the same path, and the correction puts back what it measured there.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct VeerPath {
-    /// Metres driven forward (backward counts negative), `s`.
-    forward_m: f64,
-    /// Radians odometry turned, either way.
-    turned_rad: f64,
+    /// How far odometry drove forward (`s`) and turned along the path.
+    travel: Travel,
     /// Σ s·J·dq and Σ s²·dq, in the origin's frame.
     first: Vector2<f64>,
     second: Vector2<f64>,
@@ -197,18 +195,18 @@ impl VeerPath {
         let ds = step.x;
         let dq = Vector2::new(after.x - before.x, after.y - before.y);
         // The turn at the stretch's middle stands for the turn along it.
-        let s = self.forward_m + ds / 2.0;
+        let s = self.travel.forward_m + ds / 2.0;
         self.first += s * Vector2::new(-dq.y, dq.x);
         self.second += s * s * dq;
-        self.forward_m += ds;
-        self.turned_rad += step.theta.abs();
+        self.travel.forward_m += ds;
+        self.travel.turned_rad += step.theta.abs();
     }
 
     /// How far odometry has driven forward and turned (either way) along
     /// the path so far: a keyframe keeps it, so that a step from it is read
     /// against the path between.
     pub(super) fn travel(&self) -> Travel {
-        Travel { forward_m: self.forward_m, turned_rad: self.turned_rad }
+        self.travel
     }
 
     /// Where the robot is by odometry's pose `counted` (relative to the
@@ -216,7 +214,7 @@ impl VeerPath {
     pub(super) fn corrected(&self, counted: &Pose2, veer: &Veer) -> Pose2 {
         let v = veer.rad_per_m;
         let position = Vector2::new(counted.x, counted.y) + v * self.first - v * v / 2.0 * self.second;
-        Pose2::new(position.x, position.y, counted.theta + v * self.forward_m)
+        Pose2::new(position.x, position.y, counted.theta + v * self.travel.forward_m)
     }
 
     /// What the veer's own error adds to the covariance (x, y, heading) of
@@ -224,12 +222,8 @@ impl VeerPath {
     /// veer off by `δ` moves the pose by `δ·(J-sum, s)`, all in one
     /// direction.
     pub(super) fn covariance(&self, veer: &Veer, theta: f64) -> Matrix3<f64> {
-        let (sin, cos) = theta.sin_cos();
-        let shift = Vector3::new(
-            cos * self.first.x - sin * self.first.y,
-            sin * self.first.x + cos * self.first.y,
-            self.forward_m,
-        );
+        let sideways = Rotation2::new(theta) * self.first;
+        let shift = Vector3::new(sideways.x, sideways.y, self.travel.forward_m);
         veer.sigma.powi(2) * shift * shift.transpose()
     }
 }
