@@ -464,27 +464,27 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
 
 #[test]
 fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
-    // ActionAiding steering a camera on a pan-tilt unit down route 1->2:
-    // the robot keeps to the straight line at the goal (no detour, no time
-    // spent turning), while the camera looks where the tracking list's
-    // landmarks are. The default costs put nothing on a step's view (on
-    // these routes none paid), so the camera would never look aside: the
-    // step term here is the one fitted to end points as they are.
-    let steer = format!(
-        "technique: Tracking, steer: Camera, costs: (step_sigma_per_cv: {})",
-        ubf_behaviors::decision::DecisionCosts::levels().step_sigma_per_cv
-    );
-    let scenario = edited(
-        "lab/scenarios/thesis/route-1-2.ron",
-        &[("technique: None", &steer), ("camera: (", "camera: (pan_tilt: (), ")],
-    );
-    let dir = tempfile::tempdir().unwrap();
-    let report = run(&scenario, 3, Some(dir.path())).unwrap();
-    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
-    assert!(report.path_overhead_pct.unwrap() < 1.0, "{report:?}");
-    assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
-    let widest = trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs()).fold(0.0, f64::max);
-    assert!(widest > 10f64.to_radians(), "the camera looked at most {:.1}° off", widest.to_degrees());
+    // ActionAiding steering a camera on a pan-tilt unit down route 1->2,
+    // with the shipped costs: the robot keeps to the straight line at the
+    // goal (no detour, no time spent turning). With odometry fused into
+    // egomotion the camera looks for the view of least step CV among the
+    // tracking list's landmarks; purely visual, where those looks measured
+    // worse than looking ahead, the costs' zero step term keeps it ahead.
+    let steered = [("technique: None", "technique: Tracking, steer: Camera"), ("camera: (", "camera: (pan_tilt: (), ")];
+    let widest_pan = |fusion: &str| {
+        let fusion = ("odometry_fusion: Off, navigate: false", fusion);
+        let scenario = edited("lab/scenarios/thesis/route-1-2.ron", &[steered[0], steered[1], fusion]);
+        let dir = tempfile::tempdir().unwrap();
+        let report = run(&scenario, 3, Some(dir.path())).unwrap();
+        assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+        assert!(report.path_overhead_pct.unwrap() < 1.0, "{report:?}");
+        assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
+        trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs().to_degrees()).fold(0.0, f64::max)
+    };
+    let fused = widest_pan("odometry_fusion: Sideways, navigate: true");
+    assert!(fused > 10.0, "with odometry fused the camera looked at most {fused:.1}° off");
+    let visual = widest_pan("odometry_fusion: Off, navigate: false");
+    assert!(visual < 1.0, "purely visual, the camera looked {visual:.1}° off");
 }
 
 #[test]

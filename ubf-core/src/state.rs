@@ -93,6 +93,10 @@ pub struct EgomotionState {
     /// in rad², row by row): what the estimator's own information says,
     /// plus each failed or starving step's share. `None` with no pose.
     pub pose_covariance: Option<[[f64; 3]; 3]>,
+    /// The steps take odometry's motion in (egomotion's `odometry_fusion`
+    /// is not `Off`): the wheels give the sideways motion, and vision is
+    /// left chiefly the turn, which changes which views serve it best.
+    pub odometry_fused: bool,
 }
 
 /// Everything a behaviour may know this tick.

@@ -66,7 +66,10 @@ pub enum Steer {
     /// decision over the tracking list, while the robot drives straight at
     /// the goal (the technique does not turn it). The unit's angle is read
     /// far more precisely than a turn of the robot is estimated (thesis
-    /// §5.3.4).
+    /// §5.3.4). Where egomotion fuses odometry (its default) the camera
+    /// looks for the view of least step CV; purely visual, the objective
+    /// decides, which with the shipped costs looks ahead unless too few
+    /// landmarks are there.
     Camera,
     /// Both: the technique turns the robot, and the camera looks where the
     /// decision says from the heading the robot takes.
@@ -419,7 +422,9 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "Robot",
                 "",
                 "what is steered: `Robot` (by the technique), `Camera` (a camera on a pan-tilt unit, chosen every \
-                 frame by the evaluative decision, while the robot drives straight at the goal) or `Both`",
+                 frame by the evaluative decision, while the robot drives straight at the goal: with odometry fused \
+                 into egomotion, the default, towards the view of least step CV; purely visual, by `objective`, \
+                 which with the shipped costs looks ahead) or `Both`",
             ),
             Field::new(
                 "max_pan_deg",

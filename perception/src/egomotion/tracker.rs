@@ -216,7 +216,11 @@ impl Tracker {
             outage_since: None,
             phase: MotionPhase::Still,
             commanded: MotionPhase::Still,
-            state: EgomotionState { pose: Some(start), ..EgomotionState::default() },
+            state: EgomotionState {
+                pose: Some(start),
+                odometry_fused: config.odometry_fusion != OdometryFusion::Off,
+                ..EgomotionState::default()
+            },
             matches: Vec::new(),
             pairs: Vec::new(),
             offset_readings: std::collections::VecDeque::new(),
