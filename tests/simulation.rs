@@ -481,10 +481,14 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
         assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
         trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs().to_degrees()).fold(0.0, f64::max)
     };
-    let fused = widest_pan("odometry_fusion: Sideways, navigate: true");
+    // Each arm steers by the other's pose, so that it is the fusion that
+    // decides, not the pose steered by.
+    let fused = widest_pan("odometry_fusion: Sideways, navigate: false");
     assert!(fused > 10.0, "with odometry fused the camera looked at most {fused:.1}° off");
-    let visual = widest_pan("odometry_fusion: Off, navigate: false");
-    assert!(visual < 1.0, "purely visual, the camera looked {visual:.1}° off");
+    // Looking ahead, the pan is the course's difference from the heading
+    // the robot steers by: a degree or so.
+    let visual = widest_pan("odometry_fusion: Off, navigate: true");
+    assert!(visual < 5.0, "purely visual, the camera looked {visual:.1}° off");
 }
 
 #[test]

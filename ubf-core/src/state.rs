@@ -94,8 +94,10 @@ pub struct EgomotionState {
     /// plus each failed or starving step's share. `None` with no pose.
     pub pose_covariance: Option<[[f64; 3]; 3]>,
     /// The steps take odometry's motion in (egomotion's `odometry_fusion`
-    /// is not `Off`): the wheels give the sideways motion, and vision is
-    /// left chiefly the turn, which changes which views serve it best.
+    /// is not `Off`, with the rigid estimator and the odometry gate's noise
+    /// model): the wheels give the sideways motion (with `Full`, the turn
+    /// too), which changes which views serve vision best. `false` also
+    /// where no estimator runs.
     pub odometry_fused: bool,
 }
 

@@ -72,7 +72,8 @@ pub enum Steer {
     /// landmarks are there.
     Camera,
     /// Both: the technique turns the robot, and the camera looks where the
-    /// decision says from the heading the robot takes.
+    /// decision says from the heading the robot takes, by the same rule as
+    /// `Camera` (with `Both` that rule is not measured).
     Both,
 }
 
@@ -359,7 +360,8 @@ impl ubf_core::Describe for ActionAidingConfig {
                  translation variance plus the heading variance of the turn now and back to the goal bearing, times \
                  the remaining distance squared; the goal bearing is always a candidate, so the robot drives straight \
                  unless turning pays, and with too few landmarks predicted there it costs the odometry bridge's \
-                 heading drift instead), or `Cv`, the thesis's step CV with turns free",
+                 heading drift instead), or `Cv`, the thesis's step CV with turns free; a steered camera's look \
+                 takes `Cv` wherever egomotion fuses odometry (see `steer`)",
             ),
             Field::new(
                 "costs",
@@ -423,8 +425,9 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "",
                 "what is steered: `Robot` (by the technique), `Camera` (a camera on a pan-tilt unit, chosen every \
                  frame by the evaluative decision, while the robot drives straight at the goal: with odometry fused \
-                 into egomotion, the default, towards the view of least step CV; purely visual, by `objective`, \
-                 which with the shipped costs looks ahead) or `Both`",
+                 into egomotion, the default, towards the view of least step CV, whatever `objective` and `costs` \
+                 say; purely visual, by `objective`, which with the shipped costs looks ahead unless too few \
+                 landmarks are there) or `Both` (the technique turns the robot, the camera looks by the same rule)",
             ),
             Field::new(
                 "max_pan_deg",

@@ -201,6 +201,17 @@ fn at_least_one<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<usi
     Ok(n)
 }
 
+impl EgomotionConfig {
+    /// Whether the steps really take odometry's motion in: `odometry_fusion`
+    /// not `Off`, with the rigid estimator and a gate that has a `noise`
+    /// model (without them nothing is combined, whatever the setting).
+    pub fn fuses_odometry(&self) -> bool {
+        self.odometry_fusion != OdometryFusion::Off
+            && matches!(self.estimator, EstimatorKind::Rigid(_))
+            && self.odometry_gate.as_ref().is_some_and(|g| g.noise.is_some())
+    }
+}
+
 impl Default for EgomotionConfig {
     fn default() -> Self {
         EgomotionConfig {

@@ -218,7 +218,7 @@ impl Tracker {
             commanded: MotionPhase::Still,
             state: EgomotionState {
                 pose: Some(start),
-                odometry_fused: config.odometry_fusion != OdometryFusion::Off,
+                odometry_fused: config.fuses_odometry(),
                 ..EgomotionState::default()
             },
             matches: Vec::new(),
@@ -646,10 +646,7 @@ impl Tracker {
     /// short detection range, walls seen only obliquely) that corrects
     /// the heading on frames that were bridged blind.
     fn min_landmarks(&self) -> usize {
-        let fused = self.config.odometry_fusion != OdometryFusion::Off
-            && matches!(self.config.estimator, EstimatorKind::Rigid(_))
-            && self.config.odometry_gate.as_ref().is_some_and(|g| g.noise.is_some());
-        if fused {
+        if self.config.fuses_odometry() {
             2
         } else {
             3
