@@ -8,7 +8,7 @@ hand.
 
 RUNS-DIR (lab/runs by default) holds the summaries of the protocol's
 earlier runs, on earlier code, as aiding-families-{first,second,third,
-fourth,fifth,sixth,seventh,eighth}.json.
+fourth,fifth,sixth,seventh,eighth,ninth}.json.
 """
 import json
 import os
@@ -67,8 +67,8 @@ def main():
             sys.exit(f'{path}: the summary of the protocol\'s {name} run is missing')
         return json.load(open(path))
 
-    first, second, third, fourth, fifth, sixth, seventh, eighth = (
-        earlier(n) for n in ['first', 'second', 'third', 'fourth', 'fifth', 'sixth', 'seventh', 'eighth'])
+    first, second, third, fourth, fifth, sixth, seventh, eighth, ninth = (
+        earlier(n) for n in ['first', 'second', 'third', 'fourth', 'fifth', 'sixth', 'seventh', 'eighth', 'ninth'])
     families = [f for f in FAMILIES if f in data]
     cell = lambda f, e, w, a: data[f][e][w][a]  # noqa: E731
     some = cell(families[0], 'default', 'exact', 'none')
@@ -191,18 +191,33 @@ def main():
     say('')
     say('The eighth run left the steered camera no different from straight driving in every family (0.90–1.04×): '
         'a look turns nothing, so only the step term of the costs could tell looks apart, and the shipped '
-        'costs, fitted to what the robot\'s own paths changed, put it at zero, so every look tied and the camera '
-        'looked ahead. On the training layouts 2121–2828 (seeds 100–129, default estimate) the view of least '
-        'step CV ended 0.73–0.90× straight driving\'s error in seven families of eight (feature-poor 0.97), '
-        'where looking ahead ended 0.91–1.03×; with the visual estimate the same looks ended 0.91–1.30×. Which '
-        'half of the estimate decides was tested by crossing them on four families: purely visual egomotion '
-        'steering by its own pose, 0.88–1.22×; odometry fused, steering by odometry, 0.67–0.76×. So where '
-        'egomotion fuses odometry the camera now looks for the view of least step CV, whatever the costs, '
-        'and elsewhere the objective decides as before (the visual estimate\'s cells do not move). '
-        'The command was run a ninth time on the same layouts and seeds: this page is that ninth run.')
+        'costs, fitted to what the robot\'s own paths changed, put it at zero, so every look that kept enough '
+        'landmarks in view tied and the camera looked ahead wherever it could. On the training layouts '
+        '2121–2828 (seeds 100–129, default estimate, this command\'s camera aid with `objective: Cv` added) the '
+        'view of least step CV ended 0.73–0.90× straight driving\'s error in seven families of eight '
+        '(feature-poor 0.97), where looking ahead ended 0.91–1.03×; with the visual estimate the same looks '
+        'ended 0.91–1.30×, worse than looking ahead in four families. Which half of the estimate decides was '
+        'tested by crossing them on four families (ordinary-near, featureless-20, noise-1px, fov-32): purely '
+        'visual egomotion steering by its own pose, 0.88–1.22×; odometry fused, steering by odometry, '
+        '0.67–0.76×. So where egomotion fuses odometry the camera now looks for the view of least step CV, '
+        'whatever the costs, and elsewhere the objective decides as before (the visual estimate\'s cells do '
+        'not move). The robot\'s own tracking given the same step term (σ_cv 0.614, the costs fitted to end '
+        'points as they are) did not pay with the default estimate on those layouts (0.91–1.12× straight '
+        'driving, and fov-32 missed the goal in 51 runs of 240 instead of 6), so the robot\'s costs stay. The '
+        'change was prompted by the eighth run\'s held-out result, so it is not blind either. The command was '
+        'run a ninth time on the same layouts and seeds (its summary: `lab/runs/aiding-families-ninth.json`; '
+        'its page: `git show 578f0f3:docs/aiding-families.md`).')
+    say('')
+    say('An independent review of the ninth run found a defect in it: where no look within half the field of '
+        'view of the last kept enough landmarks in view, the camera jumped straight back to the course (the '
+        'end-point objective had priced every such look as the odometry bridge, all alike, and took the one '
+        'nearest the course; the CV has no such price), so the next frame shared little with the last. It now '
+        'turns back by at most half its view, as before. On the training layouts that moved the camera\'s '
+        'ratios by at most 0.01. The command was run a tenth time on the same layouts and seeds: this page is '
+        'that tenth run.')
     if second:
         earlier_runs = [('second', second), ('third', third), ('fourth', fourth), ('fifth', fifth),
-                        ('sixth', sixth), ('seventh', seventh), ('eighth', eighth)]
+                        ('sixth', sixth), ('seventh', seventh), ('eighth', eighth), ('ninth', ninth)]
         say('')
         say('Driving straight with the default estimate, by run: the ratio to the visual estimate on the same '
             'wheels, then the runs (of 360) whose true position missed the goal\'s tolerance.')
@@ -218,18 +233,26 @@ def main():
                 say(f"| {f} | {w} | " + ' | '.join(interval(c['error_vs_visual']) if c else '' for c in cells)
                     + f" | {interval(now['error_vs_visual'])} | {', '.join(missed)} |")
     say('')
-    say('The steered camera against straight driving, default estimate, in the eighth run (looking ahead) and '
-        'this one (the view of least step CV): the error ratio, the layouts where it ends beyond 1.1× straight '
-        'driving, and the runs (of 360) whose true position missed the goal\'s tolerance.')
+    say('The steered camera against straight driving, default estimate, in the eighth run (looking ahead), '
+        'the ninth and this one (the view of least step CV): the error ratio, the layouts where it ends beyond '
+        '1.1× straight driving and the worst of them, the error of the pose the robot steered by (straight '
+        'driving\'s in brackets), and the runs (of 360) whose true position missed the goal\'s tolerance '
+        '(straight driving\'s in brackets). The protocol\'s measure is egomotion\'s pose; the pose steered by '
+        'blends it with odometry\'s and can move the other way.')
     say('')
-    say('| family | eighth run | layouts beyond 1.1× | this run | layouts beyond 1.1× | missed: eighth, this |')
-    say('| --- | --- | --- | --- | --- | --- |')
+    say('| family | eighth run | ninth run | this run | layouts beyond 1.1×: eighth, ninth, this (worst now) | '
+        'steered m: eighth, this (straight) | missed: eighth, ninth, this (straight) |')
+    say('| --- | --- | --- | --- | --- | --- | --- |')
     for f in families:
-        before, now = eighth[f]['default']['exact']['camera'], cell(f, 'default', 'exact', 'camera')
-        rb, rn = before['error_vs_straight'], now['error_vs_straight']
-        say(f"| {f} | {interval(rb)} | {len(beyond(rb, WITHIN))} of {len(rb['per_layout'])} | {interval(rn)} | "
-            f"{len(beyond(rn, WITHIN))} of {len(rn['per_layout'])} | "
-            f"{before['missed_goal_runs']}, {now['missed_goal_runs']} |")
+        runs_ = [r[f]['default']['exact']['camera'] for r in (eighth, ninth)] + [cell(f, 'default', 'exact', 'camera')]
+        straight = cell(f, 'default', 'exact', 'none')
+        ratios = [c['error_vs_straight'] for c in runs_]
+        worst = max(ratios[-1]['per_layout'].values())
+        say(f"| {f} | " + ' | '.join(interval(r) for r in ratios) + ' | '
+            + ', '.join(str(len(beyond(r, WITHIN))) for r in ratios) + f" of {len(ratios[-1]['per_layout'])} "
+            f"({worst:.2f}) | {runs_[0]['steered_error_m']:.3f}, {runs_[-1]['steered_error_m']:.3f} "
+            f"({straight['steered_error_m']:.3f}) | " + ', '.join(str(c['missed_goal_runs']) for c in runs_)
+            + f" ({straight['missed_goal_runs']}) |")
     say('')
     say('## The default estimate against purely visual egomotion')
     say('')
@@ -365,7 +388,8 @@ def main():
             c = cell(f, 'default', 'exact', a)
             r, t = c['error_vs_straight'], c['time_vs_straight']
             met = r['ratio'] <= PAYS and t['ratio'] <= 1.5
-            say(f"- **The {name} in the feature-poor family** (default estimate): {interval(r)} straight "
+            added = '' if a == 'triggered-scan' else ' (an addition to the protocol, which names the triggered scan here)'
+            say(f"- **The {name} in the feature-poor family** (default estimate){added}: {interval(r)} straight "
                 f"driving's error at {t['ratio']:.2f}× its time: the issue's figure (0.85× at 1.5× the time) is "
                 f"{'met' if met else 'not met'}.")
     better = [f for f in families if cell(f, 'default', 'exact', 'none')['error_vs_visual']['ci95'][1] < 1]
