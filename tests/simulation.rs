@@ -481,10 +481,13 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
         assert!(report.egomotion_failures.unwrap() <= 5, "{report:?}");
         trajectory_column(dir.path(), "camera_pan").iter().map(|p| p.abs().to_degrees()).fold(0.0, f64::max)
     };
-    // Each arm steers by the other's pose, so that it is the fusion that
-    // decides, not the pose steered by.
-    let fused = widest_pan("odometry_fusion: Sideways, navigate: false");
-    assert!(fused > 10.0, "with odometry fused the camera looked at most {fused:.1}° off");
+    // Fusion crossed with the pose steered by (egomotion's with
+    // `navigate: true`, odometry's without), so that it is the fusion that
+    // decides.
+    for navigate in ["true", "false"] {
+        let fused = widest_pan(&format!("odometry_fusion: Sideways, navigate: {navigate}"));
+        assert!(fused > 10.0, "navigate {navigate}: with odometry fused the camera looked at most {fused:.1}° off");
+    }
     // Looking ahead, the pan is the course's difference from the heading
     // the robot steers by: a degree or so.
     let visual = widest_pan("odometry_fusion: Off, navigate: true");

@@ -427,7 +427,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                  frame by the evaluative decision, while the robot drives straight at the goal: with odometry fused \
                  into egomotion, the default, towards the view of least step CV, whatever `objective` and `costs` \
                  say; purely visual, by `objective`, which with the shipped costs looks ahead unless too few \
-                 landmarks are there) or `Both` (the technique turns the robot, the camera looks by the same rule)",
+                 landmarks are there) or `Both` (the technique turns the robot, the camera looks by the same rule, not measured with `Both`)",
             ),
             Field::new(
                 "max_pan_deg",

@@ -206,7 +206,8 @@ impl ActionAiding {
     /// robot keeps on along `course`, among directions within `max_pan_deg`
     /// of the course and half the field of view of where it looks now, so
     /// that consecutive frames share half their view. Without a feasible
-    /// look, the one nearest the course among them.
+    /// look, the one nearest the course among them, or, with none in
+    /// reach, half the field of view towards the course.
     ///
     /// A look turns nothing, so the objective can only weigh its view.
     /// Where egomotion takes odometry's motion in (`odometry_fused`), the
@@ -218,8 +219,9 @@ impl ActionAiding {
     /// 100–129, each layout family of `lab/scripts/aiding-families.sh`,
     /// default estimate); the view of least CV ended 0.73–0.90× in seven
     /// families of eight (feature-poor 0.97). Purely visual, the same looks
-    /// ended 0.91–1.30×, worse than looking ahead in four families, so
-    /// there the configured objective decides, as for the robot.
+    /// ended 0.91–1.30×, worse than looking ahead in four families and
+    /// better in two, so there the configured objective decides, as for the
+    /// robot.
     fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64, odometry_fused: bool) -> f64 {
         let Some((camera, table)) = &self.camera else { return course };
         let rules = self.rules(camera);
@@ -236,10 +238,13 @@ impl ActionAiding {
         // With nothing feasible the camera still moves by at most `reach`:
         // a jump back to the course would leave the next frame nothing in
         // common with the last. (The end-point objective prices such looks
-        // as the odometry bridge, all alike, so it picks this one too.)
-        let nearest_course = looks.clone().next().unwrap_or(course);
+        // as the odometry bridge, all alike, and so takes the same one,
+        // unless a landmark nearer than the slant limit rules out every
+        // look.) Where the course has swung beyond every look in reach (a
+        // turn with `Both`), the camera turns towards it by `reach`.
+        let fallback = looks.clone().next().unwrap_or_else(|| now + angle_difference(course, now).clamp(-reach, reach));
         best_look(table, &rules, &self.positions, (pose.x, pose.y), course, looks, &objective)
-            .map_or(nearest_course, |d| d.heading)
+            .map_or(fallback, |d| d.heading)
     }
 
     /// Whether a scan from `facing` through `edges` (world headings, the
@@ -574,14 +579,24 @@ mod tests {
     #[test]
     fn with_nothing_in_view_the_camera_turns_back_no_more_than_half_its_view() {
         // Looking 80° aside with no landmark anywhere: the camera turns
-        // back towards the course by at most half its field of view, so
-        // consecutive frames still overlap, under either objective.
-        let aa = steering_camera(&[], 80.0);
+        // back towards the course by half its field of view (to the first
+        // candidate angle within it), so consecutive frames still overlap,
+        // under either objective. Looking 170° off, beyond every candidate
+        // (`max_pan_deg` 90), it turns back by half its view all the same.
+        let mut aa = steering_camera(&[], 80.0);
         let reach = StereoCamera::default().horizontal_fov().to_degrees() / 2.0;
+        let step = aa.config.angle_step_deg;
+        let pose = Pose2::new(0.0, 0.0, 0.0);
         for fused in [false, true] {
-            let look = aa.choose_look(&Pose2::new(0.0, 0.0, 0.0), 0.0, 30.0, fused).to_degrees();
-            assert!(look >= 80.0 - reach - 1e-9 && look < 80.0, "fused {fused}: looked {look:.1}° off");
+            let look = aa.choose_look(&pose, 0.0, 30.0, fused).to_degrees();
+            assert!(
+                (80.0 - reach - 1e-9..=80.0 - reach + step).contains(&look),
+                "fused {fused}: looked {look:.1}° off"
+            );
         }
+        aa.look = Some(170f64.to_radians());
+        let look = aa.choose_look(&pose, 0.0, 30.0, true).to_degrees();
+        assert!((look - (170.0 - reach)).abs() < 1e-9, "from 170° it looked {look:.1}° off");
     }
 
     #[test]

@@ -233,3 +233,22 @@ impl Default for EgomotionConfig {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn odometry_is_fused_only_where_the_steps_can_combine_it() {
+        let default = EgomotionConfig::default();
+        assert!(default.fuses_odometry());
+        let off = EgomotionConfig { odometry_fusion: OdometryFusion::Off, ..default };
+        let simple = EgomotionConfig { estimator: EstimatorKind::Simple2d(Simple2dConfig::default()), ..default };
+        let no_gate = EgomotionConfig { odometry_gate: None, ..default };
+        let gate_without_noise = OdometryGate { noise: None, ..OdometryGate::default() };
+        let no_noise = EgomotionConfig { odometry_gate: Some(gate_without_noise), ..default };
+        for (name, config) in [("Off", off), ("Simple2d", simple), ("no gate", no_gate), ("no noise", no_noise)] {
+            assert!(!config.fuses_odometry(), "{name}");
+        }
+    }
+}
