@@ -466,10 +466,11 @@ fn a_camera_sweeping_on_a_pan_tilt_unit_is_not_taken_for_turns_of_the_robot() {
 fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     // ActionAiding steering a camera on a pan-tilt unit down route 1->2,
     // with the shipped costs: the robot keeps to the straight line at the
-    // goal (no detour, no time spent turning). With odometry fused into
-    // egomotion the camera looks for the view of least step CV among the
-    // tracking list's landmarks; purely visual, where those looks measured
-    // worse than looking ahead, the costs' zero step term keeps it ahead.
+    // goal (no detour, no time spent turning). With odometry's sideways
+    // motion fused into egomotion the camera looks for the view of least
+    // step CV among the tracking list's landmarks; purely visual or with
+    // `Full` fusion, where those looks did not measure better than looking
+    // ahead, the costs' zero step term keeps it ahead.
     let steered = [("technique: None", "technique: Tracking, steer: Camera"), ("camera: (", "camera: (pan_tilt: (), ")];
     let widest_pan = |fusion: &str| {
         let fusion = ("odometry_fusion: Off, navigate: false", fusion);
@@ -486,12 +487,15 @@ fn camera_steering_turns_the_camera_and_drives_the_robot_straight() {
     // decides.
     for navigate in ["true", "false"] {
         let fused = widest_pan(&format!("odometry_fusion: Sideways, navigate: {navigate}"));
-        assert!(fused > 10.0, "navigate {navigate}: with odometry fused the camera looked at most {fused:.1}° off");
+        assert!(fused > 10.0, "navigate {navigate}: with sideways fusion the camera looked at most {fused:.1}° off");
     }
     // Looking ahead, the pan is the course's difference from the heading
-    // the robot steers by: a degree or so.
-    let visual = widest_pan("odometry_fusion: Off, navigate: true");
-    assert!(visual < 5.0, "purely visual, the camera looked {visual:.1}° off");
+    // the robot steers by: a degree or so. So it is purely visual, and with
+    // `Full` fusion, where the view of least CV did not measure better.
+    for fusion in ["Off", "Full"] {
+        let ahead = widest_pan(&format!("odometry_fusion: {fusion}, navigate: true"));
+        assert!(ahead < 5.0, "with fusion {fusion}, the camera looked {ahead:.1}° off");
+    }
 }
 
 #[test]

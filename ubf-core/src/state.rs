@@ -93,12 +93,12 @@ pub struct EgomotionState {
     /// in rad², row by row): what the estimator's own information says,
     /// plus each failed or starving step's share. `None` with no pose.
     pub pose_covariance: Option<[[f64; 3]; 3]>,
-    /// The steps take odometry's motion in (egomotion's `odometry_fusion`
-    /// is not `Off`, with the rigid estimator and the odometry gate's noise
-    /// model): the wheels give the sideways motion (with `Full`, the turn
-    /// too), which changes which views serve vision best. `false` also
-    /// where no estimator runs.
-    pub odometry_fused: bool,
+    /// The steps take odometry's sideways motion and distance in and leave
+    /// vision the turn (egomotion's `odometry_fusion: Sideways`, the
+    /// default, with the rigid estimator and the odometry gate's noise
+    /// model), which changes which views serve vision best. `false` with
+    /// `Off` or `Full` fusion, and where no estimator runs.
+    pub sideways_fusion: bool,
 }
 
 /// Everything a behaviour may know this tick.

@@ -66,10 +66,11 @@ pub enum Steer {
     /// decision over the tracking list, while the robot drives straight at
     /// the goal (the technique does not turn it). The unit's angle is read
     /// far more precisely than a turn of the robot is estimated (thesis
-    /// §5.3.4). Where egomotion fuses odometry (its default) the camera
-    /// looks for the view of least step CV; purely visual, the objective
-    /// decides, which with the shipped costs looks ahead unless too few
-    /// landmarks are there.
+    /// §5.3.4). Where egomotion fuses odometry's sideways motion (its
+    /// default, `Sideways`) the camera looks for the view of least step CV;
+    /// otherwise (purely visual, or `Full` fusion) the objective decides,
+    /// which with the shipped costs looks ahead unless too few landmarks
+    /// are there.
     Camera,
     /// Both: the technique turns the robot, and the camera looks where the
     /// decision says from the heading the robot takes, by the same rule as
@@ -361,7 +362,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                  the remaining distance squared; the goal bearing is always a candidate, so the robot drives straight \
                  unless turning pays, and with too few landmarks predicted there it costs the odometry bridge's \
                  heading drift instead), or `Cv`, the thesis's step CV with turns free; a steered camera's look \
-                 takes `Cv` wherever egomotion fuses odometry (see `steer`)",
+                 takes `Cv` wherever egomotion fuses odometry's sideways motion (see `steer`)",
             ),
             Field::new(
                 "costs",
@@ -424,9 +425,9 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "Robot",
                 "",
                 "what is steered: `Robot` (by the technique), `Camera` (a camera on a pan-tilt unit, chosen every \
-                 frame by the evaluative decision, while the robot drives straight at the goal: with odometry fused \
-                 into egomotion, the default, towards the view of least step CV, whatever `objective` and `costs` \
-                 say; purely visual, by `objective`, which with the shipped costs looks ahead unless too few \
+                 frame by the evaluative decision, while the robot drives straight at the goal: with egomotion's \
+                 `odometry_fusion: Sideways`, the default, towards the view of least step CV, whatever `objective` \
+                 and `costs` say; otherwise by `objective`, which with the shipped costs looks ahead unless too few \
                  landmarks are there) or `Both` (the technique turns the robot, the camera looks by the same rule, not measured with `Both`)",
             ),
             Field::new(

@@ -210,8 +210,9 @@ impl ActionAiding {
     /// reach, half the field of view towards the course.
     ///
     /// A look turns nothing, so the objective can only weigh its view.
-    /// Where egomotion takes odometry's motion in (`odometry_fused`), the
-    /// look is the view of least step CV, whatever the objective and costs.
+    /// Where egomotion takes odometry's sideways motion and distance in
+    /// (`sideways_fusion`), the look is the view of least step CV, whatever
+    /// the objective and costs.
     /// The shipped costs' step term, fitted to zero on the robot's own
     /// paths, ties every look that keeps enough landmarks in view, so the
     /// camera looked ahead wherever it could, and ended 0.91–1.03× straight
@@ -220,12 +221,13 @@ impl ActionAiding {
     /// default estimate); the view of least CV ended 0.73–0.90× in seven
     /// families of eight (feature-poor 0.97). Purely visual, the same looks
     /// ended 0.91–1.30×, worse than looking ahead in four families and
-    /// better in two, so there the configured objective decides, as for the
-    /// robot.
-    fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64, odometry_fused: bool) -> f64 {
+    /// better in two; with `Full` fusion (the turn from odometry too)
+    /// 0.91–1.30×, where looking ahead ended 0.93–1.17×. There the
+    /// configured objective decides, as for the robot.
+    fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64, sideways_fusion: bool) -> f64 {
         let Some((camera, table)) = &self.camera else { return course };
         let rules = self.rules(camera);
-        let objective = if odometry_fused { Objective::Cv } else { self.objective(course, course, remaining_m) };
+        let objective = if sideways_fusion { Objective::Cv } else { self.objective(course, course, remaining_m) };
         let now = self.look.unwrap_or(course);
         let (max_pan, reach) = (self.config.max_pan_deg.to_radians(), rules.half_fov);
         let step = self.config.angle_step_deg.to_radians();
@@ -345,7 +347,7 @@ impl ActionAiding {
                     let course = self.phase.course(to_goal, pose.theta);
                     self.list.prune(&pose);
                     self.refresh_positions();
-                    self.look = Some(self.choose_look(&pose, course, distance, state.egomotion.odometry_fused));
+                    self.look = Some(self.choose_look(&pose, course, distance, state.egomotion.sideways_fusion));
                 }
             }
         }
@@ -558,11 +560,11 @@ mod tests {
     }
 
     #[test]
-    fn with_odometry_fused_the_camera_looks_for_the_view_of_least_cv() {
+    fn with_sideways_fusion_the_camera_looks_for_the_view_of_least_cv() {
         // A few far landmarks ahead, enough for a step, and a cluster of
         // near ones 40° to the left. The shipped costs weigh no view, so
-        // alone they keep the camera ahead; with odometry fused the look
-        // goes to the better view.
+        // alone they keep the camera ahead; with odometry's sideways motion
+        // fused the look goes to the better view.
         let height = StereoCamera::default().mount.height;
         let mut landmarks: Vec<[f64; 3]> = (0..5).map(|i| [40.0, f64::from(i) - 2.0, height]).collect();
         landmarks.extend((0..8).map(|i| [6.0 + 0.5 * f64::from(i), 6.0 + 0.4 * f64::from(i), height]));
@@ -570,7 +572,7 @@ mod tests {
         let pose = Pose2::new(0.0, 0.0, 0.0);
         assert_eq!(aa.choose_look(&pose, 0.0, 30.0, false), 0.0);
         let fused = aa.choose_look(&pose, 0.0, 30.0, true).to_degrees();
-        assert!(fused > 10.0, "with odometry fused the camera looked {fused:.1}° off");
+        assert!(fused > 10.0, "with sideways fusion the camera looked {fused:.1}° off");
         // Purely visual, costs that weigh the view decide as they say.
         aa.config.costs = crate::decision::DecisionCosts::levels();
         assert_eq!(aa.choose_look(&pose, 0.0, 30.0, false).to_degrees(), fused);

@@ -218,7 +218,7 @@ impl Tracker {
             commanded: MotionPhase::Still,
             state: EgomotionState {
                 pose: Some(start),
-                odometry_fused: config.fuses_odometry(),
+                sideways_fusion: config.fuses_odometry() && config.odometry_fusion == OdometryFusion::Sideways,
                 ..EgomotionState::default()
             },
             matches: Vec::new(),
