@@ -217,7 +217,8 @@ def main():
         'command was run a tenth time on the same layouts and seeds: this page is that tenth run. After it the '
         'rule was narrowed to `Sideways` fusion, the default: with `Full` fusion (odometry\'s turn taken too; '
         'none of this page\'s cells) the view of least step CV ended 0.91–1.30× straight driving on the training '
-        'layouts, against 0.93–1.17× looking ahead, so there the objective decides. No cell here moves with it.')
+        'layouts, against 0.93–1.17× looking ahead (worse in three families, better in three), so there the '
+        'objective decides. No cell here moves with it.')
     if second:
         earlier_runs = [('second', second), ('third', third), ('fourth', fourth), ('fifth', fifth),
                         ('sixth', sixth), ('seventh', seventh), ('eighth', eighth), ('ninth', ninth)]

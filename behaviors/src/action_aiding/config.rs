@@ -362,7 +362,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                  the remaining distance squared; the goal bearing is always a candidate, so the robot drives straight \
                  unless turning pays, and with too few landmarks predicted there it costs the odometry bridge's \
                  heading drift instead), or `Cv`, the thesis's step CV with turns free; a steered camera's look \
-                 takes `Cv` wherever egomotion fuses odometry's sideways motion (see `steer`)",
+                 takes `Cv` with egomotion's `odometry_fusion: Sideways` (see `steer`)",
             ),
             Field::new(
                 "costs",
@@ -426,8 +426,9 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "",
                 "what is steered: `Robot` (by the technique), `Camera` (a camera on a pan-tilt unit, chosen every \
                  frame by the evaluative decision, while the robot drives straight at the goal: with egomotion's \
-                 `odometry_fusion: Sideways`, the default, towards the view of least step CV, whatever `objective` \
-                 and `costs` say; otherwise by `objective`, which with the shipped costs looks ahead unless too few \
+                 `odometry_fusion: Sideways`, the default (with the rigid estimator and the gate's `noise`, as \
+                 fusion needs), towards the view of least step CV, whatever `objective` and `costs` say; \
+                 otherwise by `objective`, which with the shipped costs looks ahead unless too few \
                  landmarks are there) or `Both` (the technique turns the robot, the camera looks by the same rule, not measured with `Both`)",
             ),
             Field::new(

@@ -210,9 +210,9 @@ impl ActionAiding {
     /// reach, half the field of view towards the course.
     ///
     /// A look turns nothing, so the objective can only weigh its view.
-    /// Where egomotion takes odometry's sideways motion and distance in
-    /// (`sideways_fusion`), the look is the view of least step CV, whatever
-    /// the objective and costs.
+    /// Where egomotion takes odometry's sideways motion (and distance) in and
+    /// leaves vision the turn (`sideways_fusion`), the look is the view of
+    /// least step CV, whatever the objective and costs.
     /// The shipped costs' step term, fitted to zero on the robot's own
     /// paths, ties every look that keeps enough landmarks in view, so the
     /// camera looked ahead wherever it could, and ended 0.91–1.03× straight
@@ -222,7 +222,8 @@ impl ActionAiding {
     /// families of eight (feature-poor 0.97). Purely visual, the same looks
     /// ended 0.91–1.30×, worse than looking ahead in four families and
     /// better in two; with `Full` fusion (the turn from odometry too)
-    /// 0.91–1.30×, where looking ahead ended 0.93–1.17×. There the
+    /// 0.91–1.30×, where looking ahead ended 0.93–1.17× (worse in three
+    /// families, better in three). There the
     /// configured objective decides, as for the robot.
     fn choose_look(&self, pose: &Pose2, course: f64, remaining_m: f64, sideways_fusion: bool) -> f64 {
         let Some((camera, table)) = &self.camera else { return course };

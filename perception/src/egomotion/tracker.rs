@@ -861,6 +861,24 @@ mod tests {
     use crate::egomotion::OdometryFusion;
 
     #[test]
+    fn the_state_says_sideways_fusion_only_where_it_is_combined() {
+        let flag = |config: EgomotionConfig| {
+            Tracker::new(config, StereoCamera::default(), Pose2::default(), 0).state().sideways_fusion
+        };
+        let default = EgomotionConfig::default();
+        assert!(flag(default));
+        let simple = EstimatorKind::Simple2d(super::super::config::Simple2dConfig::default());
+        for (name, config) in [
+            ("Full", EgomotionConfig { odometry_fusion: OdometryFusion::Full, ..default }),
+            ("Off", EgomotionConfig { odometry_fusion: OdometryFusion::Off, ..default }),
+            ("Simple2d", EgomotionConfig { estimator: simple, ..default }),
+            ("no gate", EgomotionConfig { odometry_gate: None, ..default }),
+        ] {
+            assert!(!flag(config), "{name}");
+        }
+    }
+
+    #[test]
     fn a_camera_panning_on_a_robot_driving_straight_is_not_read_as_a_turn() {
         // The robot drives 6 m straight down the corridor while a pan-tilt
         // unit sweeps the pair between 60° left and right; each frame's
