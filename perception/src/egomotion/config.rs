@@ -210,6 +210,13 @@ impl EgomotionConfig {
             && matches!(self.estimator, EstimatorKind::Rigid(_))
             && self.odometry_gate.as_ref().is_some_and(|g| g.noise.is_some())
     }
+
+    /// Whether the steps take odometry's sideways motion (and distance)
+    /// in and leave vision the turn: `Sideways` fusion, really combined.
+    /// Only then are the wheels' scale and veer measured.
+    pub fn fuses_sideways(&self) -> bool {
+        self.odometry_fusion == OdometryFusion::Sideways && self.fuses_odometry()
+    }
 }
 
 impl Default for EgomotionConfig {

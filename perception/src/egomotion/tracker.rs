@@ -218,7 +218,7 @@ impl Tracker {
             commanded: MotionPhase::Still,
             state: EgomotionState {
                 pose: Some(start),
-                sideways_fusion: config.fuses_odometry() && config.odometry_fusion == OdometryFusion::Sideways,
+                sideways_fusion: config.fuses_sideways(),
                 ..EgomotionState::default()
             },
             matches: Vec::new(),
@@ -291,9 +291,7 @@ impl Tracker {
     /// measured it, then their measure weighed against that.
     pub fn veer(&self) -> Option<Veer> {
         let noise = self.config.odometry_gate.and_then(|gate| gate.noise)?;
-        let measured = matches!(self.config.estimator, EstimatorKind::Rigid(_))
-            && self.config.odometry_fusion == OdometryFusion::Sideways;
-        measured.then(|| Veer::given_prior(self.veer.veer(), noise.veer_deg_per_m.to_radians()))
+        self.config.fuses_sideways().then(|| Veer::given_prior(self.veer.veer(), noise.veer_deg_per_m.to_radians()))
     }
 
     /// Odometry's motion `odometric` over a bridged frame with its distance
