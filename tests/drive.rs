@@ -503,6 +503,18 @@ fn a_robot_that_gets_nowhere_is_stopped_and_the_drive_gives_up() {
 }
 
 #[test]
+fn a_drive_with_the_wall_compass_reaches_its_goal_down_a_room() {
+    // The compass between the ARCOS client and the tree: the emulator's
+    // sonar ring sees the room's side walls 2 m away as the robot drives
+    // 3 m along it.
+    let extra = "goal: (x: 3.0, y: 0.0, tolerance: 0.2), until_goal: true, max_time_s: 60.0, wall_compass: (),";
+    let (drive, line, _dir) = drive_on(&["--listen", "127.0.0.1:0", "--room", "12x4"], extra, GO_ONLY);
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(0), "{stderr}");
+    assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out: {line}");
+}
+
+#[test]
 fn a_panicking_behaviour_stops_the_robot_and_is_named() {
     let root = "Composite(arbiter: CommandFusion, children: [
         (behavior: InjectFault(after_s: 1.5, message: \"lost my mind\")), (behavior: GoTo(cruise_speed: 0.3))])";
@@ -749,7 +761,7 @@ fn impossible_robot_files_are_refused_with_their_place() {
     let go =
         |speed: &str| format!("Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: {speed}))])");
     let frames = r#"camera: (source: Directory("."), "#;
-    let cases: [(&str, String, &str); 14] = [
+    let cases: [(&str, String, &str); 15] = [
         ("period_s: 1e20,", go("0.3"), "from 0.01 to 1 s"),
         ("period_s: 65535.0,", go("0.3"), "from 0.01 to 1 s"),
         ("safety: (stale_after_s: 1e300),", go("0.3"), "from 0.001 to 10 s"),
@@ -772,6 +784,8 @@ fn impossible_robot_files_are_refused_with_their_place() {
         ("baud: 12345,", go("0.3"), "not a serial baud rate"),
         ("max_time_s: 1e30,", go("0.3"), "at most 1e7 s"),
         ("max_velocity: 600.0,", go("0.3"), "at most 10 m/s"),
+        // A correction of 45° or more would take every wall for drift.
+        ("wall_compass: (max_correction_deg: 60.0),", go("0.3"), "from 0.01 to 44°"),
     ];
     let check = |body: &str| {
         std::fs::write(&file, body).unwrap();

@@ -550,6 +550,29 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
 }
 
 #[test]
+fn a_veering_robot_whose_heading_the_walls_hold_reaches_the_goal_steering_by_odometry() {
+    // The veer case above, steering by odometry, but with the wall compass
+    // on: the side sonars trace the corridor's walls, the heading is held
+    // to them, and odometry no longer walks the robot 1.4 m off the goal
+    // line into the wall: it ends at the goal as it believes, a few
+    // decimetres off (the axes are only as sure as the heading was at the
+    // first walls).
+    let compass =
+        ("odometry_fusion: Off, navigate: false),", "odometry_fusion: Off, navigate: false), wall_compass: (),");
+    let edits = [VEER, LAYOUT_2121, ("max_time_s: 2500.0", "max_time_s: 200.0"), compass];
+    let dir = tempfile::tempdir().unwrap();
+    let report = run(&edited("lab/scenarios/thesis/route-2-1.ron", &edits), 104, Some(dir.path())).unwrap();
+    assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
+    assert_eq!(report.collisions, 0, "{report:?}");
+    assert!(report.final_true_pose.y.abs() < 0.5, "{report:?}");
+    // Odometry's heading, which the veer turned 2° over the route, ends
+    // within half a degree of the truth.
+    let (truth, held) = (trajectory_column(dir.path(), "true_theta"), trajectory_column(dir.path(), "odom_theta"));
+    let off = (held.last().unwrap() - truth.last().unwrap()).to_degrees();
+    assert!(off.abs() < 0.5, "{off}°");
+}
+
+#[test]
 fn a_robot_that_gets_nowhere_gives_up_instead_of_bumping_a_wall_to_the_time_limit() {
     // The veer case above, steering by odometry: pinned beside the wall,
     // the robot turns into it again and again. A progress check ends the

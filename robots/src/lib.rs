@@ -3,6 +3,8 @@
 //! - [`sim`]: a headless simulated robot, deterministic for a given seed.
 //! - [`model`]: robot types (geometry, limits, sonar) read from RON files.
 //! - [`egomotion`]: a wrapper running visual egomotion on any robot.
+//! - [`wall_compass`]: a wrapper holding odometry's heading by the walls
+//!   the side sonars run along.
 //! - [`camera`]: a wrapper giving any robot a stereo camera: pairs from a
 //!   source through the feature pipeline on a thread of their own.
 //! - [`arcos`]: the Pioneer/Powerbot controller protocol.
@@ -18,3 +20,4 @@ pub mod model;
 pub mod ptu;
 pub mod ros2;
 pub mod sim;
+pub mod wall_compass;

@@ -23,6 +23,7 @@ use ubf_core::{
 use ubf_perception::egomotion::Tracker;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::sim::SimRobot;
+use ubf_robots::wall_compass::WallCompassRobot;
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -132,7 +133,7 @@ pub fn run_until(
         goal: scenario.goal.map(|g| [g.x, g.y, g.tolerance]),
     };
     let world = WorldMessage::of(sim.world());
-    let robot = EgomotionRobot::new(sim, tracker);
+    let robot = EgomotionRobot::new(WallCompassRobot::new(sim, scenario.robot.wall_compass), tracker);
     let root = scenario.root.build(&BuildContext::new(seed));
     let clock: Box<dyn Clock> = match &live {
         Some(live) => Box::new(PacedClock::new(scenario.period_s, live.speed)),
@@ -237,10 +238,12 @@ pub fn run_until(
             (t.state(), (c[(0, 0)] + c[(1, 1)]).sqrt())
         })
         .unzip();
-    let sim = robot.inner();
+    let compass = robot.inner();
+    let sim = compass.inner();
     // Where the robot believed it was: the pose it steered by (egomotion's
-    // combined with odometry's, where it navigates), else odometry's.
-    let odometry = sim.odometry_pose();
+    // combined with odometry's, where it navigates), else odometry's (held
+    // by the walls where the robot has a wall compass).
+    let odometry = compass.odometry(sim.odometry_pose());
     let believed = robot.tracker().and_then(|t| t.navigation_pose(&odometry)).unwrap_or(odometry);
     let (truth, estimate) = (sim.true_pose(), believed);
     let endpoint_error =

@@ -233,6 +233,11 @@ pub fn optional_duration_s<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64
     optional_number_in(d, f64::MIN_POSITIVE..=1e7, "> 0 and at most 1e7 s")
 }
 
+/// An optional angle, °: from −360 to 360.
+pub fn optional_angle_deg<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    optional_number_in(d, -360.0..=360.0, "from -360 to 360°")
+}
+
 /// An optional finite number ≥ 0.
 pub fn optional_non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
     match Option::<f64>::deserialize(d)? {

@@ -30,6 +30,7 @@ pub use world::{
 };
 
 use crate::model::{Footprint, RobotModel};
+use crate::wall_compass::WallCompassConfig;
 use body::{Body, BodyConfig};
 use camera::SimCamera;
 use geometry::Circle;
@@ -83,6 +84,11 @@ pub struct SimRobotConfig {
     /// camera.
     #[serde(default)]
     pub egomotion: Option<EgomotionConfig>,
+    /// Odometry's heading held by the walls the side sonars run along
+    /// ([`crate::wall_compass`]), for buildings whose long walls are
+    /// square; none by default.
+    #[serde(default)]
+    pub wall_compass: Option<WallCompassConfig>,
 }
 
 impl Check for SimRobotConfig {
@@ -112,6 +118,7 @@ impl Default for SimRobotConfig {
             sonar: SonarConfig::default(),
             camera: None,
             egomotion: None,
+            wall_compass: None,
         }
     }
 }

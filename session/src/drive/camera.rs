@@ -10,6 +10,7 @@ use ubf_perception::StereoCamera;
 use ubf_robots::camera::CameraRobot;
 use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::ptu::Ptu;
+use ubf_robots::wall_compass::WallCompassRobot;
 
 /// Opens the source a configuration names; `true` if it is a recording to
 /// be replayed at its own pace.
@@ -66,6 +67,10 @@ fn open_v4l(_: &str, _: &str, _: &StereoCamera) -> Result<Box<dyn CameraSource +
     Err(CameraError::NoV4l)
 }
 
+/// A robot as a drive runs it: its heading held by the walls, its camera
+/// and egomotion around it.
+pub(super) type EquippedRobot<R> = EgomotionRobot<CameraRobot<WallCompassRobot<R>>>;
+
 /// A camera opened before its session.
 pub(super) struct OpenCamera {
     source: Box<dyn CameraSource + Send>,
@@ -94,14 +99,16 @@ impl DriveConfig {
         }
     }
 
-    /// `robot` with the opened camera and the egomotion tracker (starting
+    /// `robot` with its heading held by the walls (where the drive has a
+    /// wall compass), the opened camera and the egomotion tracker (starting
     /// at `origin`) around it.
     pub(super) fn equip<R: Robot>(
         &self,
         robot: R,
         camera: Option<OpenCamera>,
         origin: Pose2,
-    ) -> Result<EgomotionRobot<CameraRobot<R>>, CameraError> {
+    ) -> Result<EquippedRobot<R>, CameraError> {
+        let robot = WallCompassRobot::new(robot, self.wall_compass);
         let (Some(open), Some(camera)) = (camera, &self.camera) else {
             return Ok(EgomotionRobot::new(CameraRobot::without_camera(robot), None));
         };

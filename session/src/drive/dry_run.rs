@@ -1,13 +1,12 @@
 //! `ubf drive --dry-run`: the robot looked at with its motors off.
 
+use super::camera::EquippedRobot;
 use super::robot_file::{DriveConfig, ROS2_CONNECTION};
 use super::{connect, DriveError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use ubf_core::{Pose2, Robot, RobotError, State, Wraps};
 use ubf_robots::arcos::client::ArcosRobot;
-use ubf_robots::camera::CameraRobot;
-use ubf_robots::egomotion::EgomotionRobot;
 use ubf_robots::model::RobotModel;
 
 /// How far, ° (left), and for how long, s, the dry run turns a pan-tilt
@@ -41,13 +40,13 @@ pub fn dry_run(config: &DriveConfig, model: &RobotModel, stop: &AtomicBool) -> R
 /// The dry run's report: I/O errors are the output's, the inner ones the
 /// robot's.
 fn show_robot(
-    robot: &mut EgomotionRobot<CameraRobot<ArcosRobot>>,
+    robot: &mut EquippedRobot<ArcosRobot>,
     config: &DriveConfig,
     model: &RobotModel,
     stop: &AtomicBool,
     out: &mut impl std::io::Write,
 ) -> std::io::Result<Result<(), RobotError>> {
-    let arcos = robot.inner().inner();
+    let arcos = robot.inner().inner().inner();
     let id = arcos.identity().clone();
     writeln!(out, "robot           {} ({} {})", id.name, id.class, id.subclass)?;
     writeln!(
@@ -93,8 +92,9 @@ fn show_robot(
         std::thread::sleep(Duration::from_millis(250));
         let pan = if started.elapsed().as_secs_f64() < PAN_CHECK_S { PAN_CHECK_DEG.to_radians() } else { 0.0 };
         let aimed = if pan_tilt.is_some() { robot.aim_camera(pan) } else { Ok(()) };
-        if let Err(e) =
-            aimed.and_then(|()| robot.inner_mut().inner_mut().keep_alive()).and_then(|_| robot.sense(&mut state))
+        if let Err(e) = aimed
+            .and_then(|()| robot.inner_mut().inner_mut().inner_mut().keep_alive())
+            .and_then(|_| robot.sense(&mut state))
         {
             return Ok(Err(e));
         }

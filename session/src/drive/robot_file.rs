@@ -16,6 +16,7 @@ use ubf_robots::arcos::client::{Accelerations, ConnectOptions};
 use ubf_robots::model::RobotModel;
 use ubf_robots::ptu::PtuConfig;
 use ubf_robots::ros2::Ros2Config;
+use ubf_robots::wall_compass::WallCompassConfig;
 
 /// Which robot model a configuration names.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -172,6 +173,12 @@ pub struct DriveConfig {
     /// Visual egomotion on the camera's frames.
     #[serde(default)]
     pub egomotion: Option<EgomotionConfig>,
+    /// Odometry's heading held by the walls the side sonars (or the
+    /// scanner's beams square to the robot) run along
+    /// (`ubf_robots::wall_compass`), for buildings whose long walls are
+    /// square; none by default.
+    #[serde(default)]
+    pub wall_compass: Option<WallCompassConfig>,
     /// Accelerations to set on the controller (unset: its own).
     #[serde(default)]
     pub accelerations: Option<Accelerations>,
