@@ -40,12 +40,15 @@ def measure(report, what):
     return report['egomotion_failures']
 
 
-def ratio(cell, base, what, rng):
+def ratio(cell, base, what, rng, layout_rng=None):
     """Ratio of means over every run and each layout's ratio, with two 95 %
     intervals: the protocol's, from resampling layouts (each with its
     seeds), and one from resampling layouts and run seeds independently,
     since every layout is run with the same seeds and a seed's share of
-    the error is then common to all of them."""
+    the error is then common to all of them. Given `layout_rng`, each
+    layout's ratio gets an interval of its own too, from resampling its
+    seeds (paired): whether a layout beyond a bound is beyond what its
+    seeds' noise explains."""
     layouts = sorted(set(cell) & set(base))
     by_seed = lambda runs: {r['seed']: measure(r, what) for r in runs}  # noqa: E731
     top = {l: by_seed(cell[l]) for l in layouts}
@@ -61,14 +64,17 @@ def ratio(cell, base, what, rng):
         draws = sorted(draw() for _ in range(RESAMPLES))
         return [round(draws[int(0.025 * RESAMPLES)], 3), round(draws[int(0.975 * RESAMPLES) - 1], 3)]
 
-    resample = lambda xs: [rng.choice(xs) for _ in xs]  # noqa: E731
-    return {
+    resample = lambda xs, r=rng: [r.choice(xs) for _ in xs]  # noqa: E731
+    out = {
         'ratio': round(pooled(layouts, seeds), 3),
         'ci95': interval(lambda: pooled(resample(layouts), seeds)),
         'ci95_layouts_and_seeds': interval(lambda: pooled(resample(layouts), resample(seeds))),
         # Unrounded, so that a bound is tested on the ratio itself.
         'per_layout': {l: pooled([l], seeds) for l in layouts},
     }
+    if layout_rng is not None:
+        out['per_layout_ci95'] = {l: interval(lambda: pooled([l], resample(seeds, layout_rng))) for l in layouts}
+    return out
 
 
 def main():
@@ -81,6 +87,10 @@ def main():
     # The measure added after the protocol draws from a generator of its
     # own, so the protocol's intervals stay as they were drawn.
     added_rng = random.Random(20261205)
+    layout_rng = random.Random(20261206)
+    # The estimate added after the protocol (the wall compass) draws from
+    # generators of its own too.
+    compass_rng, compass_layout_rng = random.Random(20261207), random.Random(20261208)
     out = {}
     for key in sorted(runs):
         family, estimate, aid, wheels = key
@@ -103,17 +113,23 @@ def main():
             'missed_goal_runs': sum(not r['reached_goal'] for r in reports),
             'collisions': sum(r['collisions'] for r in reports),
         }
+        protocol = estimate in ('default', 'visual')
         straight = runs.get((family, estimate, 'none', wheels))
         if aid != 'none' and straight:
-            entry['error_vs_straight'] = ratio(cell, straight, 'error', rng)
-            entry['time_vs_straight'] = ratio(cell, straight, 'time', rng)
+            entry['error_vs_straight'] = ratio(cell, straight, 'error', *((rng, layout_rng) if protocol
+                                                                          else (compass_rng, compass_layout_rng)))
+            entry['time_vs_straight'] = ratio(cell, straight, 'time', rng if protocol else compass_rng)
+        default = runs.get((family, 'default', aid, wheels))
+        if estimate == 'compass' and default:
+            entry['error_vs_default'] = ratio(cell, default, 'error', compass_rng)
+            entry['steered_vs_default'] = ratio(cell, default, 'steered', compass_rng)
         visual = runs.get((family, 'visual', aid, wheels))
-        if estimate == 'default' and visual:
-            entry['error_vs_visual'] = ratio(cell, visual, 'error', rng)
-            entry['steered_vs_visual'] = ratio(cell, visual, 'steered', added_rng)
+        if estimate != 'visual' and visual:
+            entry['error_vs_visual'] = ratio(cell, visual, 'error', rng if protocol else compass_rng)
+            entry['steered_vs_visual'] = ratio(cell, visual, 'steered', added_rng if protocol else compass_rng)
         exact = runs.get((family, 'visual', 'none', 'exact'))
         if wheels != 'exact' and exact:
-            entry['error_vs_visual_exact_wheels'] = ratio(cell, exact, 'error', rng)
+            entry['error_vs_visual_exact_wheels'] = ratio(cell, exact, 'error', rng if protocol else compass_rng)
         out.setdefault(family, {}).setdefault(estimate, {}).setdefault(wheels, {})[aid] = entry
     json.dump(out, sys.stdout, indent=1, sort_keys=True)
     print()

@@ -3,7 +3,9 @@
 # as lab/protocol.md lays out: every family's route file (below) with each
 # estimate (`default`: odometry's sideways motion fused, steering by the
 # fused pose; `visual`: purely visual egomotion, steering by odometry, as
-# the thesis did) and each aid, swept over the layouts and seeds given, then
+# the thesis did; beyond the protocol, `compass`: the default with
+# odometry's heading held by the walls, `wall_compass: ()`) and each aid,
+# swept over the layouts and seeds given, then
 # summarised by lab/scripts/aiding-families.py. Prints its JSON.
 #
 #   lab/scripts/aiding-families.sh "40001 40002" 50000..50030 > out/aiding-families.json
@@ -16,7 +18,7 @@ cd "$(dirname "$0")/../.."
 . lab/scripts/wheels.sh
 families=${FAMILIES:-ordinary-far ordinary-near feature-poor featureless-20 featureless-30 range-20 noise-1px fov-32}
 aids=${AIDS:-none scan triggered-scan camera}
-estimates=${ESTIMATES:-default visual}
+estimates=${ESTIMATES:-default visual compass}
 # Wheels that err beyond odometry's noise model, driven straight only.
 wheels=${WHEELS:-scale veer}
 budget=${SCAN_BUDGET:-0.5}
@@ -43,6 +45,7 @@ estimate() {
     case $1 in
         default) sed -e "s/, odometry_fusion: Off, navigate: false//" ;;
         visual) cat ;;
+        compass) sed -e "s/, odometry_fusion: Off, navigate: false),/),\n        wall_compass: (),/" ;;
     esac
 }
 aid() {
@@ -75,8 +78,9 @@ for file in "$work"/*.ron; do
     [ "$f" = ordinary-far ] || [ "$f" = ordinary-near ] || [ "$f" = feature-poor ] \
         || ! diff -q <(echo "$base") <(family ordinary-far) > /dev/null \
         || { echo "$file: the family's edit did not match" >&2; exit 1; }
-    grep -q "odometry_fusion: Off, navigate: false" "$file" && [ "$e" = default ] \
+    grep -q "odometry_fusion: Off, navigate: false" "$file" && [ "$e" != visual ] \
         && { echo "$file: the estimate's edit did not match" >&2; exit 1; }
+    [ "$e" = compass ] && ! grep -q "wall_compass: ()" "$file" && { echo "$file: the compass did not go in" >&2; exit 1; }
     [ "$a" = none ] || ! grep -q "technique: None" "$file" || { echo "$file: the aid's edit did not match" >&2; exit 1; }
     [ "$w" = exact ] || grep -q "_scale: 1.01\|veer_deg_per_m" "$file" || { echo "$file: the wheels' edit did not match" >&2; exit 1; }
 done
