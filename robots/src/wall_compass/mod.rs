@@ -113,6 +113,11 @@ fn correction_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Erro
 /// the robot's left or right.
 const SIDE_TOLERANCE_DEG: f64 = 10.0;
 
+/// How far the heading may have drifted (3σ, °) between two walls that
+/// fix the axes together: a few spans' slip, where further the pair could
+/// agree by the drift alone.
+const CANDIDATE_DRIFT_DEG: f64 = 2.0;
+
 /// The least number of echoes a line is fitted to.
 const MIN_ECHOES: usize = 10;
 
@@ -347,18 +352,24 @@ impl WallCompass {
             self.candidate = Some((direction, measured, e));
             return;
         };
-        // The heading may have drifted between the two.
+        // The first line measured the axes plus the heading's error then;
+        // as a measure of the axes plus its error now, it is as much less
+        // sure as the heading has drifted since. A first line from before a
+        // drift that wide pins nothing: the next line starts afresh.
+        let first_now = first_measured + (e - e_then);
         let gap = to_axes(direction - first);
-        let gap_variance = first_measured + measured + (e - e_then);
-        let agree = gap * gap <= 9.0 * gap_variance && gap.abs() <= self.config.max_correction_deg.to_radians();
+        let agree = 9.0 * (e - e_then) <= CANDIDATE_DRIFT_DEG.to_radians().powi(2)
+            && gap * gap <= 9.0 * (first_now + measured)
+            && gap.abs() <= self.config.max_correction_deg.to_radians();
         if !agree {
             self.candidate = Some((direction, measured, e));
             return;
         }
-        // The axes where the two lie, weighed by their variances, as sure
-        // as they and the heading are; their error goes with the heading's.
-        let weight = measured / (first_measured + measured);
-        let pooled = first_measured * measured / (first_measured + measured);
+        // The axes where the two lie, each weighed by the other's variance,
+        // as sure as they and the heading are; their error goes with the
+        // heading's.
+        let weight = first_now / (first_now + measured);
+        let pooled = first_now * measured / (first_now + measured);
         self.axes = Some(to_axes(first + weight * gap));
         self.covariance = [[e, -e], [-e, e + pooled]];
     }
