@@ -48,6 +48,13 @@ def beyond_noise(r, bound):
     return None if per is None else sorted(l for l, (low, _) in per.items() if low > bound)
 
 
+def verdict_below(r):
+    """Whether the second interval (layouts and seeds resampled apart)
+    lies below 1; None where the summary lacks it."""
+    bounds = r.get('ci95_layouts_and_seeds')
+    return None if bounds is None else bounds[1] < 1
+
+
 def first_limits(first):
     """The time-limit counts of the first run's range-20 family, when its
     summary is at hand."""
@@ -231,9 +238,9 @@ def main():
         'layouts, against 0.93–1.17× looking ahead (worse in three families, better in three), so there the '
         'objective decides. No cell here moves with it.')
     say('')
-    say('The tenth run left two straight runs with the veer on the time limit in the range-20 family, pinned '
-        'against the wall beside the goal, and the range-20 family\'s error where it was. Both were traced to '
-        'odometry\'s heading: driving the training layouts 2121–2828 (seeds 100–129) with odometry that slips '
+    say('The tenth run left two straight runs of the default estimate with the veer on the time limit in the '
+        'range-20 family, pinned against the wall beside the goal, and the range-20 family\'s error where it was. '
+        'Both point to odometry\'s heading: driving the training layouts 2121–2828 (seeds 100–129) with odometry that slips '
         'no heading at all (its noise model unchanged) took straight driving\'s error in range-20 from 0.321 to '
         '0.036 m, where egomotion bridges most frames on odometry and the few landmarks cannot measure the '
         'turns (on three of those layouts and ten seeds, egomotion\'s heading error at the end went from '
@@ -245,9 +252,13 @@ def main():
         'the protocol\'s two estimates do not move; the command now also runs a third, *compass*, beyond the '
         'protocol. On the training layouts and seeds, straight driving with it ended lower than the default in '
         '21 of the 24 family and wheel cells (0.55–0.99×; range-20 with the veer 0.487 → 0.266 m, its runs on '
-        'the time limit 1 → 0, missing the goal 175 → 81 of 240) and higher in noise-1px (1.01–1.05×). Its '
+        'the time limit 1 → 0, missing the goal 175 → 81 of 240) and higher in noise-1px (1.01–1.05×), on '
+        'the code before an independent review found the first two walls weighed the wrong way round (fixed '
+        'before this run). Its '
         'settings are judgement, not tuned: a line spans 2 m of driving, a wall is taken as straight to 0.3° '
-        '(σ) whatever its echoes\' scatter says. The summary also gives each layout\'s ratio its own interval '
+        '(σ) whatever its echoes\' scatter says. Every family here is one straight corridor with straight, '
+        'parallel, unbroken walls (the layouts redraw the landmarks only), so these are the compass\'s best '
+        'case: its assumption holds exactly. The summary also gives each layout\'s ratio its own interval '
         'now (its seeds resampled in pairs, from a generator of its own, so the protocol\'s intervals are drawn '
         'as before), to tell a layout beyond 1.1× by chance from one beyond it by more than its 30 seeds '
         'explain. The command was run an eleventh time on the same layouts and seeds: this page is that '
@@ -409,7 +420,7 @@ def main():
             'upper end below 0.85; costs: lower end above 1.1), the layouts where the aid ends beyond 1.1× '
             'straight driving'
             + (' (in brackets, beyond the protocol: those whose own interval, their 30 seeds resampled in pairs, '
-               'lies wholly above 1.1, a loss on that layout the seeds\' noise does not explain)' if noise else '')
+               'lies wholly above 1.1: per layout, and not corrected for the hundreds of such intervals)' if noise else '')
             + ', the time ratio, and failed frames per run (straight driving\'s in brackets).')
         say('')
         say('| family | aid | error ÷ straight | verdict | layouts beyond 1.1×'
@@ -465,7 +476,8 @@ def main():
               for real in [beyond_noise(cell(f, e, 'exact', a)['error_vs_straight'], WITHIN)] if real]
     if noise:
         say(f"- **Beyond 1.1× on a layout by more than its seeds' noise** (an addition to the protocol: the "
-            f"layout's own interval, its seeds resampled in pairs, wholly above 1.1): {len(losses)} of {total} "
+            f"layout's own 95 % interval, its seeds resampled in pairs, wholly above 1.1; per layout, and not "
+            f"corrected for the many intervals): {len(losses)} of {total} "
             "combinations"
             + (': ' + '; '.join(f"{a} with the {e} estimate in {f} (layout{'s' if len(real) > 1 else ''} "
                                 f"{', '.join(real)})" for f, e, a, real in losses) if losses else '')
@@ -508,17 +520,22 @@ def main():
         limits = sum(c['time_limit_runs'] for f in families for c in data[f]['compass']['exact'].values()) + sum(
             data[f]['compass'][w]['none']['time_limit_runs'] for f in families for w in ('scale', 'veer'))
         better = [f for f in families if cell(f, 'compass', 'exact', 'none')['error_vs_visual']['ci95'][1] < 1]
-        sixth = sum(cell(f, 'compass', 'exact', 'none')['error_vs_visual']['ratio'] <= 0.6 for f in families)
+        at_most = sum(cell(f, 'compass', 'exact', 'none')['error_vs_visual']['ratio'] <= 0.6 for f in families)
         gains = [f for f in families if cell(f, 'compass', 'exact', 'none')['error_vs_default']['ci95'][1] < 1]
         losses = [f for f in families if cell(f, 'compass', 'exact', 'none')['error_vs_default']['ci95'][0] > 1]
+        # The summary rounds bounds to three places: a bound of exactly 1 is at the edge, not clear of it.
+        edges = [f for f in families if cell(f, 'compass', 'exact', 'none')['error_vs_default']['ci95'][0] == 1]
+        lost = [f for f in gains if verdict_below(cell(f, 'compass', 'exact', 'none')['error_vs_default']) is False]
         within = [(f, a) for f in families for a in AIDS
                   if cell(f, 'compass', 'exact', a)['error_vs_straight']['ratio'] <= WITHIN
                   and not beyond(cell(f, 'compass', 'exact', a)['error_vs_straight'], WITHIN)]
         say(f"- **With the wall compass** (beyond the protocol): runs on the time limit, every aid and wheels, "
             f"{limits}; driving straight with exact wheels, better than the default (interval below 1) in "
             f"{len(gains)} of {len(families)} families{': ' + ', '.join(gains) if gains else ''}, worse (interval "
-            f"above 1) in {len(losses)}{': ' + ', '.join(losses) if losses else ''}; better than the visual "
-            f"estimate in {len(better)} of {len(families)}, at 0.6× or less in {sixth}; within 1.1× straight "
+            f"above 1) in {len(losses)}{': ' + ', '.join(losses) if losses else ''}"
+            f"{'; at the edge (lower end 1.00): ' + ', '.join(edges) if edges else ''}"
+            f"{'; with seeds resampled too, no longer better in: ' + ', '.join(lost) if lost else ''}; better than the visual "
+            f"estimate in {len(better)} of {len(families)}, at 0.6× or less in {at_most}; within 1.1× straight "
             f"driving on every layout, {len(within)} of {len(families) * len(AIDS)} family and aid combinations.")
         for a, name in (('triggered-scan', 'triggered scan'), ('camera', 'steered camera')):
             c = cell('feature-poor', 'compass', 'exact', a) if 'feature-poor' in families else None
