@@ -16,16 +16,6 @@ pub struct LineFit {
 }
 
 impl LineFit {
-    /// The fit to `points`; `None` for fewer than three, which leave no
-    /// residual to judge it by.
-    pub fn of(points: &[(f64, f64)]) -> Option<LineFit> {
-        let mut moments = Moments::default();
-        for &(x, y) in points {
-            moments.add(x, y);
-        }
-        moments.fit()
-    }
-
     /// The variance of [`LineFit::direction`], rad², for points scattered
     /// about the line by at least `noise_m` (σ): the scatter over the
     /// points' spread along it, shared among them. The larger of the
@@ -65,11 +55,6 @@ impl Moments {
         self.sxy += dx * dy;
     }
 
-    /// How many points it holds.
-    pub fn count(&self) -> usize {
-        self.count
-    }
-
     /// The line through the points so far; `None` for fewer than three,
     /// which leave no residual to judge it by.
     pub fn fit(&self) -> Option<LineFit> {
@@ -97,6 +82,17 @@ impl Moments {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    impl LineFit {
+        /// The fit to `points`, as the compass's traces sum them.
+        fn of(points: &[(f64, f64)]) -> Option<LineFit> {
+            let mut moments = Moments::default();
+            for &(x, y) in points {
+                moments.add(x, y);
+            }
+            moments.fit()
+        }
+    }
 
     #[test]
     fn points_on_a_line_give_its_direction_and_no_residual() {

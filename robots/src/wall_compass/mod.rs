@@ -29,7 +29,7 @@
 mod line;
 mod robot;
 
-pub use line::{LineFit, Moments};
+use line::{LineFit, Moments};
 pub use robot::WallCompassRobot;
 
 use serde::Deserialize;
@@ -215,12 +215,6 @@ impl WallCompass {
     /// modulo 90°), once two walls have agreed on them.
     pub fn axes(&self) -> Option<f64> {
         self.axes
-    }
-
-    /// The standard deviation of the corrected heading's error since the
-    /// axes were fixed (before, since the start), rad.
-    pub fn heading_sigma(&self) -> f64 {
-        self.covariance[0][0].sqrt()
     }
 
     /// Takes the next raw odometry pose and the range readings taken with

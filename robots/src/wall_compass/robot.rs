@@ -18,11 +18,6 @@ impl<R: Robot> WallCompassRobot<R> {
         WallCompassRobot { inner, compass: config.map(WallCompass::new) }
     }
 
-    /// The compass, if any.
-    pub fn compass(&self) -> Option<&WallCompass> {
-        self.compass.as_ref()
-    }
-
     /// The inner robot's `odometry` pose as this wrapper would pass it on:
     /// corrected by the walls where there is a compass (with the motion
     /// since its last update, which a robot that acted after it sensed has
