@@ -235,7 +235,9 @@ fn a_run_leaves_a_report_a_trajectory_and_a_plot() {
     let mut lines = csv.lines();
     let header = lines.next().unwrap();
     assert!(
-        header.starts_with("time_s,true_x,true_y,true_theta,odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta"),
+        header.starts_with(
+            "time_s,true_x,true_y,true_theta,pose_x,pose_y,pose_theta,odom_x,odom_y,odom_theta,ego_x,ego_y"
+        ),
         "{header}"
     );
     assert!(header.ends_with("winner,vote:root/Stop,vote:root/AvoidCollision,vote:root/GoTo"), "{header}");
@@ -541,12 +543,15 @@ fn a_veering_robot_that_navigates_by_egomotion_reaches_the_goal_odometry_puts_in
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
     // The report gives the pose the robot steered by at the end: the
-    // trajectory's last `odom_*` row, sensed before the last tick's motion
-    // (0.1 m of it here). Odometry's own pose is off by the veer, 1.9 m.
+    // trajectory's last `pose_*` row, sensed before the last tick's motion
+    // (0.1 m of it here). Odometry's own pose (`odom_*`) is off by the
+    // veer, 1.9 m.
     let (goal, believed) = (by_egomotion.goal.unwrap(), report.final_estimated_pose);
-    let steered = ["odom_x", "odom_y"].map(|c| *trajectory_column(dir.path(), c).last().unwrap());
+    let column = |c| *trajectory_column(dir.path(), c).last().unwrap();
+    let (steered, wheels) = ([column("pose_x"), column("pose_y")], [column("odom_x"), column("odom_y")]);
     assert!(believed.distance_to(steered[0], steered[1]) < 0.15, "{believed:?} against {steered:?}");
     assert!(goal.reached_by(&believed), "{goal:?}: {believed:?}");
+    assert!(believed.distance_to(wheels[0], wheels[1]) > 1.0, "the wheels' own pose is logged: {wheels:?}");
 }
 
 #[test]
@@ -565,11 +570,14 @@ fn a_veering_robot_whose_heading_the_walls_hold_reaches_the_goal_steering_by_odo
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
     assert_eq!(report.collisions, 0, "{report:?}");
     assert!(report.final_true_pose.y.abs() < 0.5, "{report:?}");
-    // Odometry's heading, which the veer turned 2° over the route, ends
-    // within half a degree of the truth.
-    let (truth, held) = (trajectory_column(dir.path(), "true_theta"), trajectory_column(dir.path(), "odom_theta"));
-    let off = (held.last().unwrap() - truth.last().unwrap()).to_degrees();
+    // Odometry's heading as the compass holds it (the pose steered by)
+    // ends within half a degree of the truth; the wheels' own, logged
+    // beside it, is off by the veer's 2°.
+    let last = |c| trajectory_column(dir.path(), c).last().copied().unwrap();
+    let (truth, held, wheels) = (last("true_theta"), last("pose_theta"), last("odom_theta"));
+    let off = (held - truth).to_degrees();
     assert!(off.abs() < 0.5, "{off}°");
+    assert!((wheels - truth).to_degrees().abs() > 1.5, "{}°", (wheels - truth).to_degrees());
 }
 
 #[test]

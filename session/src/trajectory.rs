@@ -12,7 +12,9 @@ use ubf_core::{Hold, TickRecord, TickSink, TreeLayout};
 const FLUSH_EVERY: Duration = Duration::from_secs(1);
 
 /// A [`TickSink`] writing one CSV row per tick: time, true pose (where the
-/// robot has a ground truth: a simulator's), odometric pose, the egomotion
+/// robot has a ground truth: a simulator's), the pose the robot steered by
+/// (`pose_*`), the wheels' own odometric pose (`odom_*`: the two differ
+/// where the wall compass or egomotion corrects odometry), the egomotion
 /// pose with its failures and latest step CV, the stereo frame's number,
 /// the command, the winning behaviour, and every node's vote.
 pub struct TrajectoryWriter {
@@ -62,7 +64,7 @@ impl TrajectoryWriter {
         if self.columns.truth {
             write!(self.out, "true_x,true_y,true_theta,")?;
         }
-        write!(self.out, "odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,ego_anchor,cmd_velocity,cmd_rot_velocity,winner")?;
+        write!(self.out, "pose_x,pose_y,pose_theta,odom_x,odom_y,odom_theta,ego_x,ego_y,ego_theta,ego_failures,ego_step_cv,frame,ego_anchor,cmd_velocity,cmd_rot_velocity,winner")?;
         if self.columns.hold {
             write!(self.out, ",hold")?;
         }
@@ -80,7 +82,7 @@ impl TrajectoryWriter {
     /// no estimator. The command is the tree's; where the hold column says
     /// so, the robot was sent STOP instead.
     fn row(&mut self, record: &TickRecord) -> io::Result<()> {
-        let (odometry, egomotion) = (&record.state.pose, &record.state.egomotion);
+        let (pose, odometry, egomotion) = (&record.state.pose, &record.state.odometry, &record.state.egomotion);
         // A heading command has no rate yet; the robot picks one.
         let (v, w) = (record.command.velocity(), record.command.rot_velocity().unwrap_or(f64::NAN));
         let layout = &self.layout;
@@ -92,7 +94,9 @@ impl TrajectoryWriter {
                 None => write!(self.out, ",,,")?,
             }
         }
-        write!(self.out, "{:.5},{:.5},{:.5},", odometry.x, odometry.y, odometry.theta)?;
+        for p in [pose, odometry] {
+            write!(self.out, "{:.5},{:.5},{:.5},", p.x, p.y, p.theta)?;
+        }
         match egomotion.pose {
             Some(p) => write!(self.out, "{:.5},{:.5},{:.5},{},", p.x, p.y, p.theta, egomotion.failures)?,
             None => write!(self.out, ",,,,")?,

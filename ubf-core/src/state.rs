@@ -111,8 +111,14 @@ pub struct State {
     /// Seconds since the controller started, from its clock.
     pub time: f64,
     /// The robot's own estimate of its pose in the world frame (odometry, or
-    /// odometry fused with egomotion). Never ground truth.
+    /// odometry fused with egomotion): the pose behaviours steer by. Never
+    /// ground truth.
     pub pose: Pose2,
+    /// The wheels' own pose in the world frame, as the robot reported it,
+    /// before anything (the wall compass, egomotion) corrected it: kept
+    /// beside `pose` so that a log can tell the wheels' error from the
+    /// estimate's.
+    pub odometry: Pose2,
     /// Measured forward velocity, m/s.
     pub velocity: f64,
     /// Measured rotational velocity, rad/s, counter-clockwise positive.
@@ -153,6 +159,7 @@ impl State {
         let State {
             time: _,
             pose,
+            odometry,
             velocity,
             rot_velocity,
             ranges,
@@ -168,6 +175,7 @@ impl State {
             goal: _,
         } = other;
         self.pose = *pose;
+        self.odometry = *odometry;
         self.velocity = *velocity;
         self.rot_velocity = *rot_velocity;
         self.ranges.clone_from(ranges);

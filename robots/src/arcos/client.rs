@@ -574,6 +574,7 @@ impl Robot for ArcosRobot {
             origin.compose(&Pose2::default().relative_to(&first))
         });
         state.pose = to_world.compose(&odometry);
+        state.odometry = state.pose;
         let (v, w) = self.speeds(sip);
         state.velocity = v / 1000.0;
         state.rot_velocity = w.to_radians();

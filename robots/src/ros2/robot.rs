@@ -203,6 +203,7 @@ impl Robot for Ros2Robot {
         }
         let odometry = &self.latest_odom.0;
         state.pose = self.world_pose(odometry);
+        state.odometry = state.pose;
         state.velocity = odometry.twist.twist.linear.x;
         state.rot_velocity = odometry.twist.twist.angular.z;
         state.sensor_age = age.as_secs_f64();

@@ -251,6 +251,7 @@ impl Robot for SimRobot {
         let pose = self.body.true_pose;
         self.sensed = pose;
         state.pose = self.body.odometry;
+        state.odometry = state.pose;
         state.velocity = self.body.velocity;
         state.rot_velocity = self.body.rot_velocity;
         self.sonar.sense(&pose, self.reach, &self.world.segments, &self.people, &mut self.sonar_rng, &mut state.ranges);
