@@ -6,7 +6,8 @@ use ubf_perception::egomotion::Tracker;
 
 /// Wraps a robot and, when given a tracker, runs egomotion on its stereo
 /// frames every tick, filling [`State::egomotion`] (and, where the tracker
-/// navigates, replacing the odometric [`State::pose`] with egomotion's).
+/// navigates, replacing the odometric [`State::pose`] with egomotion's). A
+/// [`State::heading_fix`] (the wall compass's) turns egomotion's heading.
 /// Without a tracker it passes everything straight through.
 pub struct EgomotionRobot<R> {
     inner: R,
@@ -39,6 +40,9 @@ impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some(tracker) = &mut self.tracker {
+            if let Some(fix) = state.heading_fix {
+                tracker.fix_heading(fix, &state.pose);
+            }
             tracker.update(&state.stereo, &state.pose);
             state.egomotion = tracker.state();
             if let Some(pose) = tracker.navigation_pose(&state.pose) {

@@ -59,6 +59,16 @@ impl Bumpers {
     }
 }
 
+/// A heading measured by a sensor other than the wheels (the wall
+/// compass), for an estimator to take in.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HeadingFix {
+    /// The robot's heading, rad, in the world frame of [`State::pose`].
+    pub heading: f64,
+    /// Its error's variance, rad².
+    pub variance: f64,
+}
+
 /// What visual egomotion has made of the stereo frames so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EgomotionState {
@@ -137,6 +147,10 @@ pub struct State {
     pub battery_volts: Option<f64>,
     /// The latest stereo frame from the camera, if the robot has one.
     pub stereo: StereoFrame,
+    /// A heading measured this tick by something other than the wheels
+    /// (the wall compass, when it has just corrected odometry's heading by
+    /// a wall), for egomotion to take in; `None` on every other tick.
+    pub heading_fix: Option<HeadingFix>,
     /// What egomotion has made of the stereo frames, if the robot runs an
     /// estimator.
     pub egomotion: EgomotionState,
@@ -169,6 +183,7 @@ impl State {
             estop,
             battery_volts,
             stereo,
+            heading_fix,
             egomotion,
             camera_aim,
             sensor_age,
@@ -185,6 +200,7 @@ impl State {
         self.estop = *estop;
         self.battery_volts = *battery_volts;
         self.stereo.copy_from(stereo);
+        self.heading_fix = *heading_fix;
         self.egomotion = *egomotion;
         self.camera_aim = *camera_aim;
         self.sensor_age = *sensor_age;

@@ -35,7 +35,7 @@ pub use robot::WallCompassRobot;
 use serde::Deserialize;
 use std::f64::consts::FRAC_PI_4;
 use ubf_core::config::{non_negative, number_in, positive};
-use ubf_core::{angle_difference, wrap_angle, Pose2, RangeReading};
+use ubf_core::{angle_difference, wrap_angle, HeadingFix, Pose2, RangeReading};
 use ubf_perception::egomotion::OdometryNoise;
 
 /// The wall compass's settings, as written in a scenario file.
@@ -176,6 +176,8 @@ pub struct WallCompass {
     /// The left and right sides' traces.
     traces: [Trace; 2],
     corrections: u64,
+    /// Whether the latest update corrected the heading.
+    just_corrected: bool,
 }
 
 impl WallCompass {
@@ -190,6 +192,7 @@ impl WallCompass {
             covariance: [[0.0; 2]; 2],
             traces: Default::default(),
             corrections: 0,
+            just_corrected: false,
         }
     }
 
@@ -204,6 +207,14 @@ impl WallCompass {
     /// taken in.
     pub fn corrected(&self, odometry: &Pose2) -> Pose2 {
         self.last_odometry.map_or(*odometry, |last| self.pose.compose(&odometry.relative_to(&last)))
+    }
+
+    /// The corrected heading with its error's variance, if the latest
+    /// update corrected it by a wall: a measure of the heading for an
+    /// estimator that has its own (egomotion), taken only when a wall was
+    /// just seen, as between walls the heading drifts with the wheels.
+    pub fn heading_fix(&self) -> Option<HeadingFix> {
+        self.just_corrected.then_some(HeadingFix { heading: self.pose.theta, variance: self.covariance[0][0] })
     }
 
     /// How many walls have corrected the heading.
@@ -222,6 +233,7 @@ impl WallCompass {
     /// passed on as it is and otherwise ignored: the next good one carries
     /// on from the last.
     pub fn update(&mut self, odometry: &Pose2, ranges: &[RangeReading]) -> Pose2 {
+        self.just_corrected = false;
         if !(odometry.x.is_finite() && odometry.y.is_finite() && odometry.theta.is_finite()) {
             return *odometry;
         }
@@ -251,6 +263,7 @@ impl WallCompass {
             corrected += self.take(line.fit.direction - corrected, line);
         }
         if corrected != 0.0 {
+            self.just_corrected = true;
             // The traces under way were laid with the heading just
             // corrected: start them afresh, so no echo counts twice.
             for trace in &mut self.traces {

@@ -5,8 +5,9 @@ use ubf_core::{Pose2, Robot, RobotError, RobotWrapper, State, Wraps};
 
 /// Wraps a robot and, when given a compass, replaces the odometric
 /// [`State::pose`] with odometry's heading held by the walls
-/// ([`WallCompass`]) every tick. Without one it passes everything straight
-/// through.
+/// ([`WallCompass`]) every tick, and gives each wall's correction as
+/// [`State::heading_fix`] for egomotion. Without one it passes everything
+/// straight through.
 pub struct WallCompassRobot<R> {
     inner: R,
     compass: Option<WallCompass>,
@@ -42,6 +43,7 @@ impl<R: Robot> RobotWrapper for WallCompassRobot<R> {
         self.inner.sense(state)?;
         if let Some(compass) = &mut self.compass {
             state.pose = compass.update(&state.pose, &state.ranges);
+            state.heading_fix = compass.heading_fix();
         }
         Ok(())
     }
