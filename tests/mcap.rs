@@ -52,7 +52,7 @@ fn a_run_log_reads_back_and_a_cut_one_up_to_its_last_chunk() {
     let bytes = std::fs::read(dir.path().join("run.mcap")).unwrap();
     let Read { topics, schemas, error } = read(&bytes, enumset::EnumSet::empty());
     assert_eq!(error, None);
-    for topic in ["/pose/true", "/pose/odometry", "/pose/egomotion", "/tree", "/ranges"] {
+    for topic in ["/pose/true", "/pose/odometry", "/pose/wheels", "/pose/egomotion", "/tree", "/ranges"] {
         assert_eq!(topics[topic].len() as u64, report.ticks, "{topic}: one message a tick");
     }
     for topic in ["/goal", "/scene", "/world", "/run", "/report"] {

@@ -6,8 +6,10 @@
 //! world and the report are JSON too, under `ubf.*` schemas.
 //!
 //! Topics:
-//! - `/pose/true`, `/pose/odometry`, `/pose/egomotion`
-//!   (`foxglove.PoseInFrame`, frame `world`): every tick;
+//! - `/pose/true`, `/pose/odometry` (the pose steered by),
+//!   `/pose/wheels` (the wheels' own odometry, before the wall compass or
+//!   egomotion corrected it), `/pose/egomotion` (`foxglove.PoseInFrame`,
+//!   frame `world`): every tick;
 //! - `/goal` (`foxglove.PoseInFrame`) and `/scene` (`foxglove.SceneUpdate`:
 //!   walls as lines, landmarks as spheres), at the start;
 //! - `/world` (`ubf.World`) and `/run` (`ubf.Run`: scenario, seed, start
@@ -270,6 +272,7 @@ impl JsonTopics {
             ("/camera/right", IMAGE),
             ("/pose/true", POSE),
             ("/pose/odometry", POSE),
+            ("/pose/wheels", POSE),
             ("/pose/egomotion", POSE),
             ("/goal", POSE),
             ("/scene", SCENE),
@@ -354,6 +357,7 @@ impl JsonTopics {
             send(out, "/pose/true", time, &pose_json(time, &truth.pose))?;
         }
         send(out, "/pose/odometry", time, &pose_json(time, &state.pose))?;
+        send(out, "/pose/wheels", time, &pose_json(time, &state.odometry))?;
         if let Some(e) = &state.egomotion.pose {
             send(out, "/pose/egomotion", time, &pose_json(time, e))?;
         }
