@@ -67,6 +67,12 @@ pub struct HeadingFix {
     pub heading: f64,
     /// Its error's variance, rad².
     pub variance: f64,
+    /// How far the sensor turned odometry's heading with this measurement,
+    /// rad (the wall compass corrects the odometry it passes on; a sensor
+    /// that leaves odometry alone gives 0). Egomotion leaves it out of the
+    /// turn it carries a frame across on odometry, and takes the heading
+    /// in by its own weighing instead.
+    pub correction: f64,
 }
 
 /// What visual egomotion has made of the stereo frames so far.
@@ -120,12 +126,14 @@ pub struct EgomotionState {
 pub struct State {
     /// Seconds since the controller started, from its clock.
     pub time: f64,
-    /// The robot's own estimate of its pose in the world frame (odometry, or
-    /// odometry fused with egomotion): the pose behaviours steer by. Never
-    /// ground truth.
+    /// The robot's own estimate of its pose in the world frame (odometry,
+    /// its heading held by the wall compass where there is one, fused with
+    /// egomotion where that navigates): the pose behaviours steer by.
+    /// Never ground truth.
     pub pose: Pose2,
-    /// The wheels' own pose in the world frame, as the robot reported it,
-    /// before anything (the wall compass, egomotion) corrected it: kept
+    /// The wheels' own pose in the world frame, as the robot reported it
+    /// (a ROS 2 robot's `/odom`, which its driver may already have fused),
+    /// before anything here (the wall compass, egomotion) corrected it: kept
     /// beside `pose` so that a log can tell the wheels' error from the
     /// estimate's.
     pub odometry: Pose2,

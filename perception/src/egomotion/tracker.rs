@@ -148,6 +148,11 @@ pub struct Tracker {
     /// The latest heading measured by another sensor, with odometry's pose
     /// when it was, waiting for the next frame.
     heading_fix: Option<(HeadingFix, Pose2)>,
+    /// The turns other sensors have put into odometry's heading so far
+    /// (each [`HeadingFix::correction`]), rad, and that sum at the newest
+    /// frame.
+    corrections: f64,
+    corrections_at_newest: f64,
 }
 
 /// The rig's disparity offset as the frames put it.
@@ -239,6 +244,8 @@ impl Tracker {
             veer: ProportionalFit::default(),
             odometry_path: VeerPath::default(),
             heading_fix: None,
+            corrections: 0.0,
+            corrections_at_newest: 0.0,
         }
     }
 
@@ -513,14 +520,19 @@ impl Tracker {
     /// and with every step's small turn error, and nothing visual pins it
     /// back; a heading measured against the building does.
     pub fn fix_heading(&mut self, fix: HeadingFix, odometry: &Pose2) {
+        self.corrections += fix.correction;
         self.heading_fix = Some((fix, *odometry));
     }
 
     /// Turns egomotion's pose towards the heading `fix` measured when
     /// odometry read `at` (carried to `odometry`, now, by odometry's turn
     /// since), by how much of the pose's heading is odometry's against how
-    /// sure the fix is. Every keyframe is turned with it about the pose,
-    /// so that the next match to one keeps the turn instead of undoing it.
+    /// sure the fix is: a Kalman update of the heading error the bridges
+    /// laid down. A keyframe shares the part of that error laid down
+    /// before it, and is turned (about the pose, so that the next match to
+    /// it lands where the pose now is) by that share: one laid on vision
+    /// alone keeps its heading, one laid after the same bridges turns with
+    /// the pose.
     fn take_heading(&mut self, fix: HeadingFix, at: &Pose2, odometry: &Pose2) {
         let (Some(pose), Some(origin)) = (self.state.pose, self.odometry_origin) else { return };
         // The fix is in odometry's frame; egomotion's pose starts at
@@ -537,23 +549,30 @@ impl Tracker {
         // feature-poor and ordinary-near families.
         let own = self.bridged[(2, 2)];
         // Written so that NaN fails it.
-        if !(error.is_finite() && own > 0.0 && fix.variance >= 0.0) {
+        if !(error.is_finite() && own > 0.0 && fix.variance > 0.0) {
             return;
         }
-        let turn = error * own / (own + fix.variance);
-        let (sin, cos) = turn.sin_cos();
-        let about_pose = |p: &Pose2| {
-            let (dx, dy) = (p.x - pose.x, p.y - pose.y);
-            Pose2::new(pose.x + cos * dx - sin * dy, pose.y + sin * dx + cos * dy, wrap_angle(p.theta + turn))
+        let innovation = own + fix.variance;
+        // Turned by `share`·error about the pose, with the bridges'
+        // covariance (and `extra`, which holds it) reduced by what the fix
+        // told: `share` is the part of the pose's bridged heading variance
+        // `bridged` shares, which keeps the update's covariance positive.
+        let update = |pose_of: &mut Pose2, bridged: &mut Matrix3<f64>, extra: &mut Matrix3<f64>| {
+            let share = bridged[(2, 2)].min(own);
+            if share <= 0.0 {
+                return;
+            }
+            *pose_of =
+                pose.compose(&Pose2::new(0.0, 0.0, error * share / innovation)).compose(&pose_of.relative_to(&pose));
+            let told = bridged.column(2) * bridged.row(2) * (share / bridged[(2, 2)]).powi(2) / innovation;
+            *bridged -= told;
+            *extra -= told;
         };
-        self.state.pose = Some(about_pose(&pose));
-        // What the fix has corrected is no longer owed to the bridges: a
-        // Kalman update of their covariance by a heading measurement.
-        let taken = |p: &Matrix3<f64>| p - p.column(2) * p.row(2) / (p[(2, 2)] + fix.variance);
-        self.bridged = taken(&self.bridged);
+        let mut now = pose;
+        update(&mut now, &mut self.bridged, &mut self.extra);
+        self.state.pose = Some(now);
         for keyframe in &mut self.keyframes {
-            keyframe.pose = about_pose(&keyframe.pose);
-            keyframe.bridged = taken(&keyframe.bridged);
+            update(&mut keyframe.pose, &mut keyframe.bridged, &mut keyframe.extra);
         }
     }
 
@@ -561,6 +580,7 @@ impl Tracker {
     fn take_frame(&mut self, frame: &StereoFrame, odometry: &Pose2) {
         let (previous_frame, previous_odometry) = std::mem::replace(&mut self.newest, (frame.number, *odometry));
         let previous_time = std::mem::replace(&mut self.newest_time, frame.time);
+        let corrected_since = self.corrections - std::mem::replace(&mut self.corrections_at_newest, self.corrections);
         // The commands between the last frame and this one.
         self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
         let Some(pose) = self.state.pose else { return };
@@ -654,6 +674,9 @@ impl Tracker {
                 // since the last frame, and say so; its distance in the
                 // wheels' measured scale when fusion has measured it.
                 let bridged = self.scaled(odometry.relative_to(&previous_odometry));
+                // A turn another sensor put into odometry's heading is taken
+                // in by `take_heading`, by how sure each is, not here whole.
+                let bridged = Pose2 { theta: wrap_angle(bridged.theta - corrected_since), ..bridged };
                 // Why a frame was bridged: how much it saw, and against what.
                 tracing::debug!(
                     frame = frame.number,
@@ -1111,11 +1134,51 @@ mod tests {
         };
         let unfixed = heading_after(None);
         assert!((unfixed - 2.0).abs() < 0.2, "{unfixed}°");
-        let fixed = heading_after(Some(HeadingFix { heading: 0.0, variance: 0.1f64.to_radians().powi(2) }));
+        let fixed =
+            heading_after(Some(HeadingFix { heading: 0.0, variance: 0.1f64.to_radians().powi(2), correction: 0.0 }));
         assert!(fixed.abs() < 0.3, "{fixed}°");
         // A fix no surer than the bridge moves it part way.
-        let vague = heading_after(Some(HeadingFix { heading: 0.0, variance: 0.4f64.to_radians().powi(2) }));
+        let vague =
+            heading_after(Some(HeadingFix { heading: 0.0, variance: 0.4f64.to_radians().powi(2), correction: 0.0 }));
         assert!(vague > fixed + 0.5 && vague < unfixed - 0.5, "{vague}°");
+    }
+
+    #[test]
+    fn a_compass_correction_bridged_into_the_pose_turns_what_odometry_laid_and_nothing_vision_did() {
+        // As above, with 1° of odometry's error (a compass corrects less
+        // than the odometry gate allows over a keyframe's reach), and the
+        // fix from a compass that corrects the odometry it passes on: from
+        // the fix on, odometry's heading jumps to the truth, and the next
+        // frame sees nothing and is bridged. The bridge leaves the jump
+        // out, and the fix turns the pose and, by its share, the keyframe
+        // laid 1° off by the bridge; the first keyframe, laid by vision
+        // alone, keeps its heading.
+        let camera = StereoCamera::default();
+        let far = landmarks();
+        let unseen: Vec<[f64; 3]> = far.iter().map(|_| [-100.0, 0.0, 0.0]).collect();
+        let later: Vec<[f64; 3]> = unseen.iter().copied().chain(far.iter().map(|p| [p[0] + 3.0, p[1], p[2]])).collect();
+        let erring = Pose2::new(2.0, 0.0175, 1f64.to_radians());
+        let corrected = |x: f64| Pose2::new(x, 0.0175, 0.0);
+        let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
+        tracker.update(&at(1, 0.0, frame(&far, Pose2::default(), &camera)), &Pose2::default());
+        tracker.update(&at(2, 4.0, frame(&later, Pose2::new(2.0, 0.0, 0.0), &camera)), &erring);
+        let fix = HeadingFix { heading: 0.0, variance: 0.05f64.to_radians().powi(2), correction: -1f64.to_radians() };
+        tracker.fix_heading(fix, &corrected(2.5));
+        tracker.update(&at(3, 6.0, Vec::new()), &corrected(3.0));
+        assert!(tracker.state().bridging);
+        let heading = |t: &Tracker| t.state().pose.unwrap().theta.to_degrees();
+        assert!(heading(&tracker).abs() < 0.1, "the bridged pose: {}°", heading(&tracker));
+        // Matched to the keyframe the bridge laid 1° off, which the fix
+        // turned by the share of the pose's bridged error laid down before
+        // it (the pose bridged 1 m more since): over half the way.
+        tracker.update(&at(4, 8.0, frame(&later, Pose2::new(4.0, 0.0, 0.0), &camera)), &corrected(4.0));
+        assert_eq!(tracker.state().anchor_frame, Some(2));
+        assert!(heading(&tracker) > 0.0 && heading(&tracker) < 0.5, "{}°", heading(&tracker));
+        // Matched to the first keyframe, which vision laid and the fix
+        // left alone: the truth, to the estimator's precision.
+        tracker.update(&at(5, 9.0, frame(&far, Pose2::new(4.5, 0.0, 0.0), &camera)), &corrected(4.5));
+        assert_eq!(tracker.state().anchor_frame, Some(1));
+        assert!(heading(&tracker).abs() < 0.05, "{}°", heading(&tracker));
     }
 
     #[test]
@@ -1126,7 +1189,7 @@ mod tests {
         let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
         tracker.update(&at(1, 0.0, frame(&landmarks(), Pose2::default(), &camera)), &Pose2::default());
         let truth = Pose2::new(1.0, 0.0, 0.0);
-        tracker.fix_heading(HeadingFix { heading: 1f64.to_radians(), variance: 1e-6 }, &truth);
+        tracker.fix_heading(HeadingFix { heading: 1f64.to_radians(), variance: 1e-6, correction: 0.0 }, &truth);
         tracker.update(&at(2, 2.0, frame(&landmarks(), truth, &camera)), &truth);
         assert!(!tracker.state().bridging);
         let pose = tracker.state().pose.unwrap();

@@ -176,8 +176,9 @@ pub struct WallCompass {
     /// The left and right sides' traces.
     traces: [Trace; 2],
     corrections: u64,
-    /// Whether the latest update corrected the heading.
-    just_corrected: bool,
+    /// The turn the latest update gave the heading, rad (0 where no wall
+    /// corrected it).
+    last_correction: f64,
 }
 
 impl WallCompass {
@@ -192,7 +193,7 @@ impl WallCompass {
             covariance: [[0.0; 2]; 2],
             traces: Default::default(),
             corrections: 0,
-            just_corrected: false,
+            last_correction: 0.0,
         }
     }
 
@@ -214,7 +215,11 @@ impl WallCompass {
     /// estimator that has its own (egomotion), taken only when a wall was
     /// just seen, as between walls the heading drifts with the wheels.
     pub fn heading_fix(&self) -> Option<HeadingFix> {
-        self.just_corrected.then_some(HeadingFix { heading: self.pose.theta, variance: self.covariance[0][0] })
+        (self.last_correction != 0.0).then_some(HeadingFix {
+            heading: self.pose.theta,
+            variance: self.covariance[0][0],
+            correction: self.last_correction,
+        })
     }
 
     /// How many walls have corrected the heading.
@@ -233,7 +238,7 @@ impl WallCompass {
     /// passed on as it is and otherwise ignored: the next good one carries
     /// on from the last.
     pub fn update(&mut self, odometry: &Pose2, ranges: &[RangeReading]) -> Pose2 {
-        self.just_corrected = false;
+        self.last_correction = 0.0;
         if !(odometry.x.is_finite() && odometry.y.is_finite() && odometry.theta.is_finite()) {
             return *odometry;
         }
@@ -263,7 +268,7 @@ impl WallCompass {
             corrected += self.take(line.fit.direction - corrected, line);
         }
         if corrected != 0.0 {
-            self.just_corrected = true;
+            self.last_correction = -corrected;
             // The traces under way were laid with the heading just
             // corrected: start them afresh, so no echo counts twice.
             for trace in &mut self.traces {
