@@ -1103,6 +1103,13 @@ mod tests {
         assert!((pose.theta - odometry.theta).abs() < 1e-12, "{pose:?} against {odometry:?}");
     }
 
+    /// [`landmarks`] 3 m further on, under indices (and so descriptors) of
+    /// their own: a keyframe of [`landmarks`] matches none of them.
+    fn landmarks_further_on() -> Vec<[f64; 3]> {
+        let unseen = landmarks().into_iter().map(|_| [-100.0, 0.0, 0.0]);
+        unseen.chain(landmarks().into_iter().map(|p| [p[0] + 3.0, p[1], p[2]])).collect()
+    }
+
     #[test]
     fn a_heading_fix_turns_what_odometry_bridged_and_the_keyframe_the_next_frames_match() {
         // The robot drives straight along x. Odometry turns 2° it did not
@@ -1112,11 +1119,7 @@ mod tests {
         // 2°, unless a heading measured by another sensor (the truth, 0°)
         // turns the pose and the keyframe.
         let camera = StereoCamera::default();
-        let far = landmarks();
-        // The same landmarks 3 m further on, under indices (and so
-        // descriptors) of their own: the first keyframe's are out of view.
-        let unseen: Vec<[f64; 3]> = far.iter().map(|_| [-100.0, 0.0, 0.0]).collect();
-        let later: Vec<[f64; 3]> = unseen.iter().copied().chain(far.iter().map(|p| [p[0] + 3.0, p[1], p[2]])).collect();
+        let (far, later) = (landmarks(), landmarks_further_on());
         let odometry = |x: f64| Pose2::new(x, 0.035 + (x - 2.0) * 0.035, 2f64.to_radians());
         let heading_after = |fix: Option<HeadingFix>| {
             let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
@@ -1154,9 +1157,7 @@ mod tests {
         // laid 1° off by the bridge; the first keyframe, laid by vision
         // alone, keeps its heading.
         let camera = StereoCamera::default();
-        let far = landmarks();
-        let unseen: Vec<[f64; 3]> = far.iter().map(|_| [-100.0, 0.0, 0.0]).collect();
-        let later: Vec<[f64; 3]> = unseen.iter().copied().chain(far.iter().map(|p| [p[0] + 3.0, p[1], p[2]])).collect();
+        let (far, later) = (landmarks(), landmarks_further_on());
         let erring = Pose2::new(2.0, 0.0175, 1f64.to_radians());
         let corrected = |x: f64| Pose2::new(x, 0.0175, 0.0);
         let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 0);
