@@ -71,7 +71,10 @@ def main():
         if args[0] == "--nudge-at-m":
             nudge_at = [float(v) for v in args[1].split(",")]
         elif args[0] == "--nudge-deg":
+            # Whole degrees: SIM_SET_POSE and SIMSTAT carry no finer heading.
             nudge_deg = int(args[1])
+        else:
+            sys.exit(f"truth-proxy.py: unknown option {args[0]} (see the usage above)")
         args = args[2:]
 
     ls = socket.socket()
