@@ -532,7 +532,11 @@ impl Tracker {
     /// before it, and is turned (about the pose, so that the next match to
     /// it lands where the pose now is) by that share: one laid on vision
     /// alone keeps its heading, one laid after the same bridges turns with
-    /// the pose.
+    /// the pose. Each fix is taken as independent of the last, which a
+    /// compass's are not (they share its error in the building's axes):
+    /// fixes with no bridging between them shrink the bridges' variance
+    /// below the compass's own, and each later one then moves the pose
+    /// less. Bridging again restores their weight.
     fn take_heading(&mut self, fix: HeadingFix, at: &Pose2, odometry: &Pose2) {
         let (Some(pose), Some(origin)) = (self.state.pose, self.odometry_origin) else { return };
         // The fix is in odometry's frame; egomotion's pose starts at
