@@ -39,7 +39,7 @@ struct Keyframe {
     /// steps on too few landmarks chained into it.
     extra: Matrix3<f64>,
     /// The odometry bridges' part of `extra`.
-    bridged: Matrix3<f64>,
+    bridges_covariance: Matrix3<f64>,
     /// Where the camera looked on the robot (a pan-tilt unit's measured
     /// angles), to lift its landmarks into the robot frame.
     mount: CameraMount,
@@ -107,7 +107,7 @@ pub struct Tracker {
     extra: Matrix3<f64>,
     /// The bridges' part of `extra` alone: what the pose owes to
     /// odometry, without the margin starving steps are given.
-    bridged: Matrix3<f64>,
+    bridges_covariance: Matrix3<f64>,
     /// The consistent landmarks the latest step rested on; `None` when it
     /// failed or there was none.
     step_landmarks: Option<usize>,
@@ -148,11 +148,10 @@ pub struct Tracker {
     /// The latest heading measured by another sensor, with odometry's pose
     /// when it was, waiting for the next frame.
     heading_fix: Option<(HeadingFix, Pose2)>,
-    /// The turns other sensors have put into odometry's heading so far
-    /// (each [`HeadingFix::correction`]), rad, and that sum at the newest
-    /// frame.
-    corrections: f64,
-    corrections_at_newest: f64,
+    /// The turn other sensors have put into odometry's heading since the
+    /// newest frame (each [`HeadingFix::correction`]), rad: no motion, so
+    /// not for the next bridge to carry.
+    uncounted_turn: f64,
 }
 
 /// The rig's disparity offset as the frames put it.
@@ -222,7 +221,7 @@ impl Tracker {
             newest_time: 0.0,
             covariance: Matrix3::zeros(),
             extra: Matrix3::zeros(),
-            bridged: Matrix3::zeros(),
+            bridges_covariance: Matrix3::zeros(),
             step_landmarks: None,
             last_match: 0.0,
             odometry_driven_m: 0.0,
@@ -244,8 +243,7 @@ impl Tracker {
             veer: ProportionalFit::default(),
             odometry_path: VeerPath::default(),
             heading_fix: None,
-            corrections: 0.0,
-            corrections_at_newest: 0.0,
+            uncounted_turn: 0.0,
         }
     }
 
@@ -520,7 +518,7 @@ impl Tracker {
     /// and with every step's small turn error, and nothing visual pins it
     /// back; a heading measured against the building does.
     pub fn fix_heading(&mut self, fix: HeadingFix, odometry: &Pose2) {
-        self.corrections += fix.correction;
+        self.uncounted_turn += fix.correction;
         self.heading_fix = Some((fix, *odometry));
     }
 
@@ -551,7 +549,7 @@ impl Tracker {
         // degree was handed to the fix's half degree: straight driving
         // ended 1.8–2.9× further off on training layouts of the
         // feature-poor and ordinary-near families.
-        let own = self.bridged[(2, 2)];
+        let own = self.bridges_covariance[(2, 2)];
         // Written so that NaN fails it.
         if !(error.is_finite() && own > 0.0 && fix.variance > 0.0) {
             return;
@@ -560,23 +558,23 @@ impl Tracker {
         // Turned by `share`·error about the pose, with the bridges'
         // covariance (and `extra`, which holds it) reduced by what the fix
         // told: `share` is the part of the pose's bridged heading variance
-        // `bridged` shares, which keeps the update's covariance positive.
-        let update = |pose_of: &mut Pose2, bridged: &mut Matrix3<f64>, extra: &mut Matrix3<f64>| {
-            let share = bridged[(2, 2)].min(own);
+        // `bridges` shares, which keeps the update's covariance positive.
+        let update = |pose_of: &mut Pose2, bridges: &mut Matrix3<f64>, extra: &mut Matrix3<f64>| {
+            let share = bridges[(2, 2)].min(own);
             if share <= 0.0 {
                 return;
             }
             *pose_of =
                 pose.compose(&Pose2::new(0.0, 0.0, error * share / innovation)).compose(&pose_of.relative_to(&pose));
-            let told = bridged.column(2) * bridged.row(2) * (share / bridged[(2, 2)]).powi(2) / innovation;
-            *bridged -= told;
+            let told = bridges.column(2) * bridges.row(2) * (share / bridges[(2, 2)]).powi(2) / innovation;
+            *bridges -= told;
             *extra -= told;
         };
         let mut now = pose;
-        update(&mut now, &mut self.bridged, &mut self.extra);
+        update(&mut now, &mut self.bridges_covariance, &mut self.extra);
         self.state.pose = Some(now);
         for keyframe in &mut self.keyframes {
-            update(&mut keyframe.pose, &mut keyframe.bridged, &mut keyframe.extra);
+            update(&mut keyframe.pose, &mut keyframe.bridges_covariance, &mut keyframe.extra);
         }
     }
 
@@ -584,7 +582,7 @@ impl Tracker {
     fn take_frame(&mut self, frame: &StereoFrame, odometry: &Pose2) {
         let (previous_frame, previous_odometry) = std::mem::replace(&mut self.newest, (frame.number, *odometry));
         let previous_time = std::mem::replace(&mut self.newest_time, frame.time);
-        let corrected_since = self.corrections - std::mem::replace(&mut self.corrections_at_newest, self.corrections);
+        let uncounted_turn = std::mem::take(&mut self.uncounted_turn);
         // The commands between the last frame and this one.
         self.phase = std::mem::replace(&mut self.commanded, MotionPhase::Still);
         let Some(pose) = self.state.pose else { return };
@@ -641,8 +639,12 @@ impl Tracker {
                     }
                 }
                 self.extra = composed_covariance(&keyframe.pose, &keyframe.extra, &estimate.motion, &step_extra);
-                self.bridged =
-                    composed_covariance(&keyframe.pose, &keyframe.bridged, &estimate.motion, &Matrix3::zeros());
+                self.bridges_covariance = composed_covariance(
+                    &keyframe.pose,
+                    &keyframe.bridges_covariance,
+                    &estimate.motion,
+                    &Matrix3::zeros(),
+                );
                 self.step_landmarks = Some(estimate.landmarks);
                 self.state.pose = Some(pose);
                 self.state.last_step_cv = estimate.step_cv;
@@ -680,7 +682,7 @@ impl Tracker {
                 let bridged = self.scaled(odometry.relative_to(&previous_odometry));
                 // A turn another sensor put into odometry's heading is taken
                 // in by `take_heading`, by how sure each is, not here whole.
-                let bridged = Pose2 { theta: wrap_angle(bridged.theta - corrected_since), ..bridged };
+                let bridged = Pose2 { theta: wrap_angle(bridged.theta - uncounted_turn), ..bridged };
                 // Why a frame was bridged: how much it saw, and against what.
                 tracing::debug!(
                     frame = frame.number,
@@ -692,7 +694,7 @@ impl Tracker {
                 let step = PlanarMotion { forward: bridged.x, left: bridged.y, yaw: bridged.theta };
                 let bridge = self.bridge_covariance(frame.time - previous_time, driven);
                 self.extra = composed_covariance(&pose, &self.extra, &step, &bridge);
-                self.bridged = composed_covariance(&pose, &self.bridged, &step, &bridge);
+                self.bridges_covariance = composed_covariance(&pose, &self.bridges_covariance, &step, &bridge);
                 self.step_landmarks = None;
                 let pose = pose.compose(&bridged);
                 self.state.pose = Some(pose);
@@ -792,7 +794,7 @@ impl Tracker {
             bridges,
             covariance: self.covariance,
             extra: self.extra,
-            bridged: self.bridged,
+            bridges_covariance: self.bridges_covariance,
             mount: self.mount_of(frame),
             travel: self.odometry_path.travel(),
         });
