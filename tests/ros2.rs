@@ -178,7 +178,8 @@ fn a_run_published_on_ros2_is_heard_by_cyclone() {
     let script = r#""$UBF" run "$ROOT/scenarios/goto-open-floor.ron" --ros2 --speed 4 >/dev/null & run=$!
 python3 "$ROOT/scripts/ros2/listen.py" /odom=nav_msgs/msg/Odometry /tf=tf2_msgs/msg/TFMessage \
     /scan=sensor_msgs/msg/LaserScan:best_effort /ubf/tick=ubf_msgs/msg/Tick \
-    /ubf/goal=geometry_msgs/msg/PoseStamped /ubf/pose/true=geometry_msgs/msg/PoseStamped --min 5 --duration 30
+    /ubf/goal=geometry_msgs/msg/PoseStamped /ubf/pose/true=geometry_msgs/msg/PoseStamped \
+    /ubf/pose/steered=geometry_msgs/msg/PoseStamped --min 5 --duration 30
 code=$?; wait $run; exit $code"#;
     let Some(out) = in_namespace(script, &[]) else { return };
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -190,10 +191,25 @@ code=$?; wait $run; exit $code"#;
     );
     let transform = &heard["/tf"]["last"]["transforms"][0];
     assert_eq!(transform["child_frame_id"], "base_link");
-    assert_eq!(transform["transform"]["translation"]["x"], odom["pose"]["pose"]["position"]["x"]);
+    // The transform is the odometry's pose, tick by tick. The listener stops
+    // once every topic is heard, so their last samples may be a tick apart:
+    // the samples are paired by stamp.
+    let recent = |topic: &str| heard[topic]["recent"].as_array().unwrap().clone();
+    let odometry = recent("/odom");
+    let pairs: Vec<(Value, Value)> = recent("/tf")
+        .iter()
+        .filter_map(|tf| {
+            let transform = &tf["transforms"][0];
+            let odom = odometry.iter().find(|o| o["header"]["stamp"] == transform["header"]["stamp"])?;
+            Some((transform["transform"]["translation"]["x"].clone(), odom["pose"]["pose"]["position"]["x"].clone()))
+        })
+        .collect();
+    assert!(!pairs.is_empty(), "no /tf and /odom of the same stamp: {heard}");
+    assert!(pairs.iter().all(|(tf, odom)| tf == odom), "{pairs:?}");
     // Stamped with the wall clock, as tf2 wants: after 2026.
     assert!(odom["header"]["stamp"]["sec"].as_i64().unwrap() > 1_767_225_600, "{odom}");
     assert_eq!(heard["/ubf/goal"]["last"]["pose"]["position"]["x"], 8.0);
+    assert_eq!(heard["/ubf/pose/steered"]["last"]["header"]["frame_id"], "odom", "{heard}");
     let scan = &heard["/scan"]["last"];
     assert_eq!(scan["ranges"].as_array().unwrap().len(), 360);
     assert!(heard["/ubf/tick"]["last"]["nodes"].as_array().unwrap().len() >= 2);
@@ -324,13 +340,22 @@ fn a_run_logged_for_ros2_decodes_with_the_standard_readers_and_repeats_its_bytes
     for file in ["metadata.yaml", "run-rosbag2_0.mcap"] {
         assert!(std::fs::read(a.join(file)).unwrap() == std::fs::read(b.join(file)).unwrap(), "{file} differs");
     }
-    let topics =
-        ["/tf", "/odom", "/scan", "/ubf/tick", "/ubf/goal", "/ubf/pose/true", "/ubf/pose/egomotion", "/ubf/report"];
+    let topics = [
+        "/tf",
+        "/odom",
+        "/scan",
+        "/ubf/tick",
+        "/ubf/goal",
+        "/ubf/pose/true",
+        "/ubf/pose/egomotion",
+        "/ubf/pose/steered",
+        "/ubf/report",
+    ];
     let verdict = check_bag(&a.join("run-rosbag2_0.mcap"), &topics);
     assert_eq!(verdict["ok"], true, "{verdict}");
     let report: Value = serde_json::from_slice(&std::fs::read(dir.path().join("a/report.json")).unwrap()).unwrap();
     let ticks = report["ticks"].as_u64().unwrap();
-    for topic in ["/tf", "/odom", "/ubf/tick"] {
+    for topic in ["/tf", "/odom", "/ubf/pose/steered", "/ubf/tick"] {
         let counted = &verdict["topics"][topic];
         assert_eq!((counted["mcap_ros2"].as_u64(), counted["rosbags"].as_u64()), (Some(ticks), Some(ticks)), "{topic}");
     }

@@ -8,8 +8,9 @@ implementation nobody here wrote. Each topic is read with ROS 2's default
 QoS (reliable, keep last 10), or with `:best_effort` sensor data QoS (best
 effort, keep last 5), which also hears reliable writers. After --duration
 seconds, or as soon as every topic has --min samples when --min is given, it
-prints one JSON object {topic: {"type", "count", "last"}} ("last" is the last
-sample as a dict, or null) and exits 0 if every topic got at least --min
+prints one JSON object {topic: {"type", "count", "last", "recent"}} ("last" is
+the last sample as a dict, or null; "recent" the last ten, oldest first: two
+topics published each tick may stop a tick apart) and exits 0 if every topic got at least --min
 samples (default 1), else 1. Prints "listen ready" to stderr once subscribed.
 Run it inside scripts/ros2/netns.sh.
 """
@@ -19,6 +20,7 @@ import math
 import os
 import sys
 import time
+from collections import deque
 from dataclasses import asdict
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -71,7 +73,7 @@ def main():
                             qos(sensor_data=best_effort))
         waitset.attach(ReadCondition(reader, SampleState.Any | ViewState.Any | InstanceState.Any))
         readers[topic] = reader
-        report[topic] = {"type": type_name, "count": 0, "last": None}
+        report[topic] = {"type": type_name, "count": 0, "last": None, "recent": deque(maxlen=10)}
     print("listen ready", file=sys.stderr, flush=True)
 
     deadline = time.monotonic() + args.duration
@@ -84,7 +86,10 @@ def main():
                 if sample.sample_info.valid_data:
                     report[topic]["count"] += 1
                     report[topic]["last"] = asdict(sample)
+                    report[topic]["recent"].append(report[topic]["last"])
 
+    for entry in report.values():
+        entry["recent"] = list(entry["recent"])
     print(json.dumps(finite(report)))
     sys.exit(0 if all(entry["count"] >= needed for entry in report.values()) else 1)
 

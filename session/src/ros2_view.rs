@@ -3,7 +3,9 @@
 //! what `ros2 bag play` replays are the same messages.
 //!
 //! Frames follow REP 105: ubf's world frame is `odom`, the robot is
-//! `base_link`.
+//! `base_link`, and `odom` → `base_link` is the wheels' own odometry, which
+//! moves continuously. The pose the tree steers by, which the wall compass
+//! and egomotion correct in steps, is a topic of its own.
 
 use ubf_core::{Pose2, StereoImages, TickRecord, TreeLayout};
 use ubf_robots::ros2::msg::{
@@ -14,9 +16,9 @@ use ubf_robots::ros2::msg::{
 /// Where each message goes. Relative names go under a namespace; `/tf` is
 /// absolute, as tf2 expects.
 pub mod topics {
-    /// The robot's pose in `odom` as a transform.
+    /// The wheels' pose in `odom` as a transform.
     pub const TF: &str = "/tf";
-    /// The robot's odometry.
+    /// The wheels' odometry.
     pub const ODOM: &str = "odom";
     /// The range sensors, as one planar scan.
     pub const SCAN: &str = "scan";
@@ -32,6 +34,9 @@ pub mod topics {
     pub const TRUE_POSE: &str = "ubf/pose/true";
     /// Where egomotion puts the robot.
     pub const EGOMOTION_POSE: &str = "ubf/pose/egomotion";
+    /// The pose the tree steers by: odometry as the wall compass and
+    /// egomotion corrected it.
+    pub const STEERED_POSE: &str = "ubf/pose/steered";
 }
 
 /// A message of the view, by type.
@@ -99,7 +104,8 @@ pub struct Shown {
     pub robot: bool,
     /// The camera's images, at each new stereo frame that carries them.
     pub images: bool,
-    /// The tree's decision (`ubf/tick`) and its goal (`ubf/goal`).
+    /// The tree's decision (`ubf/tick`), its goal (`ubf/goal`) and the pose
+    /// it steers by (`ubf/pose/steered`).
     pub tree: bool,
 }
 
@@ -144,12 +150,9 @@ impl Ros2View {
     pub fn messages(&mut self, record: &TickRecord, mut emit: impl FnMut(&'static str, f64, Message)) {
         let (state, t) = (&record.state, self.stamp(record.time()));
         if self.shown.robot {
-            emit(topics::TF, t, Message::Tf(TFMessage::planar(t, "odom", "base_link", &state.pose)));
-            emit(
-                topics::ODOM,
-                t,
-                Message::Odometry(Box::new(odometry(t, &state.pose, state.velocity, state.rot_velocity))),
-            );
+            let wheels = &state.odometry;
+            emit(topics::TF, t, Message::Tf(TFMessage::planar(t, "odom", "base_link", wheels)));
+            emit(topics::ODOM, t, Message::Odometry(Box::new(odometry(t, wheels, state.velocity, state.rot_velocity))));
             if !state.ranges.is_empty() {
                 emit(topics::SCAN, t, Message::Scan(scan(t, record)));
             }
@@ -180,6 +183,7 @@ impl Ros2View {
             }
         }
         if self.shown.tree {
+            emit(topics::STEERED_POSE, t, Message::Pose(pose_stamped(t, &state.pose)));
             emit(topics::TICK, t, Message::Tick(self.tick(t, record)));
         }
     }
@@ -259,5 +263,36 @@ fn image(stamp: f64, frame: &str, images: &StereoImages, pixels: &[u8]) -> Image
         is_bigendian: 0,
         step: images.width,
         data: pixels.to_vec(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn odom_is_the_wheels_and_the_steered_pose_a_topic_of_its_own() {
+        // The wheels say one pose, the pose steered by (a compass's or
+        // egomotion's correction) another: tf and odom follow the wheels,
+        // as REP 105's continuous odom frame asks, and the tree's pose has
+        // its own topic.
+        let mut record = TickRecord::default();
+        record.state.odometry = Pose2::new(2.0, 0.5, 0.1);
+        record.state.pose = Pose2::new(2.2, 0.3, 0.05);
+        let mut view = Ros2View::new(Shown { robot: true, images: false, tree: true }, 0.0);
+        let mut poses = Vec::new();
+        view.messages(&record, |topic, _, message| match message {
+            Message::Tf(tf) => poses.push((topic, tf.transforms[0].transform.translation.x)),
+            Message::Odometry(odom) => poses.push((topic, odom.pose.pose.position.x)),
+            Message::Pose(pose) => poses.push((topic, pose.pose.position.x)),
+            _ => {}
+        });
+        assert_eq!(poses, [(topics::TF, 2.0), (topics::ODOM, 2.0), (topics::STEERED_POSE, 2.2)]);
+        // Without the tree (a simulator served to another stack), no pose
+        // of a tree.
+        let mut view = Ros2View::new(Shown { robot: true, images: false, tree: false }, 0.0);
+        let mut topics_seen = Vec::new();
+        view.messages(&record, |topic, _, _| topics_seen.push(topic));
+        assert_eq!(topics_seen, [topics::TF, topics::ODOM]);
     }
 }

@@ -7,7 +7,10 @@ use crate::{Command, Hold, Limits, Pose2, RobotError, State};
 pub trait Robot: Send {
     /// Updates the sensor fields of `state` with the latest readings. The
     /// state's buffers are reused from tick to tick; mission fields (the
-    /// goal) and `time` belong to the controller and are left alone.
+    /// goal) and `time` belong to the controller and are left alone. A
+    /// robot reporting its wheels' odometry sets both `pose` and
+    /// `odometry` to it: wrappers that correct the pose (the wall compass,
+    /// egomotion) leave `odometry` as the wheels said, and logs show it.
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError>;
 
     /// Executes one command. Must not block for long: it runs inside the
