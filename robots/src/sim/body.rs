@@ -80,11 +80,22 @@ pub struct OdometryErrors {
     /// Random heading slip, ° per √m driven.
     #[serde(deserialize_with = "non_negative")]
     pub slip_deg_per_sqrt_m: f64,
+    /// Random distance slip, m per √m driven: both wheels over- or
+    /// under-count together (a floor's give, wheels skidding on a start),
+    /// an error of distance that no fixed scale describes.
+    #[serde(deserialize_with = "non_negative")]
+    pub distance_slip_m_per_sqrt_m: f64,
 }
 
 impl Default for OdometryErrors {
     fn default() -> Self {
-        OdometryErrors { left_scale: 1.0, right_scale: 1.0, veer_deg_per_m: 0.0, slip_deg_per_sqrt_m: 0.0 }
+        OdometryErrors {
+            left_scale: 1.0,
+            right_scale: 1.0,
+            veer_deg_per_m: 0.0,
+            slip_deg_per_sqrt_m: 0.0,
+            distance_slip_m_per_sqrt_m: 0.0,
+        }
     }
 }
 
@@ -231,12 +242,22 @@ impl Body {
         let half_track = self.config.track_width / 2.0;
         let left = (self.velocity - self.rot_velocity * half_track) * errors.left_scale;
         let right = (self.velocity + self.rot_velocity * half_track) * errors.right_scale;
-        let v_true = (left + right) / 2.0;
+        let mut v_true = (left + right) / 2.0;
         let mut w_true = (right - left) / self.config.track_width + errors.veer_deg_per_m.to_radians() * v_true;
-        let ds = v_true.abs() * dt;
+        let mut ds = v_true.abs() * dt;
         if errors.slip_deg_per_sqrt_m > 0.0 && ds > 0.0 {
             let slip: f64 = StandardNormal.sample(rng);
             w_true += slip * errors.slip_deg_per_sqrt_m.to_radians() * ds.sqrt() / dt;
+        }
+        // Drawn after the heading's slip and only when asked for, so that
+        // runs without it keep their random sequence.
+        if errors.distance_slip_m_per_sqrt_m > 0.0 && ds > 0.0 {
+            let slip: f64 = StandardNormal.sample(rng);
+            let slipped = slip * errors.distance_slip_m_per_sqrt_m * ds.sqrt();
+            // A slip never turns the wheels' motion round.
+            let moved = (ds + slipped).max(0.0);
+            v_true *= moved / ds;
+            ds = moved;
         }
         Move {
             true_pose: integrate(self.true_pose, v_true, w_true, dt),
@@ -320,6 +341,27 @@ mod tests {
         drive(&mut body, Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) }, 400);
         let expected = -body.distance.to_radians();
         assert!((body.true_pose.theta - expected).abs() < 1e-9, "{} vs {expected}", body.true_pose.theta);
+    }
+
+    #[test]
+    fn distance_slip_moves_the_truth_along_the_way_at_random_as_the_square_root_of_distance() {
+        // 20 m at 0.5 m/s with 1 cm/√m: the truth ends ahead of or behind
+        // odometry by about 4.5 cm (σ), on odometry's line and heading.
+        let errors = OdometryErrors { distance_slip_m_per_sqrt_m: 0.01, ..OdometryErrors::default() };
+        let along: Vec<f64> = (0..200)
+            .map(|seed| {
+                let mut body = Body::new(config(MotionProfile::Continuous, errors));
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                while body.odometry.x < 20.0 {
+                    let m = body.plan(&Command::Drive { velocity: 0.5, turn: Turn::Rate(0.0) }, 0.1, &mut rng);
+                    body.commit(m);
+                }
+                assert_eq!((body.true_pose.y, body.true_pose.theta), (0.0, 0.0));
+                body.true_pose.x - body.odometry.x
+            })
+            .collect();
+        let sigma = (along.iter().map(|d| d * d).sum::<f64>() / along.len() as f64).sqrt();
+        assert!((0.035..0.055).contains(&sigma), "σ {sigma:.4} m over 20 m");
     }
 
     #[test]
