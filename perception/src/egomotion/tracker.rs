@@ -626,6 +626,7 @@ impl Tracker {
                     },
                     sigma = ?estimate.covariance.map(|c| (c[(0, 0)].sqrt(), c[(1, 1)].sqrt(), c[(2, 2)].sqrt().to_degrees())),
                     veer_deg_per_m = ?self.veer().map(|v| (v.rad_per_m.to_degrees(), v.sigma.to_degrees())),
+                    wheel_scale = ?self.wheel_scale().map(|s| (s.factor, s.sigma)),
                     "egomotion matched"
                 );
                 let bridges = keyframe.bridges;
@@ -937,7 +938,7 @@ impl Tracker {
         }
         if let Some(gate) = &self.config.odometry_gate {
             let odometric = odometry.relative_to(&keyframe.odometry);
-            let scale = self.wheel_scale.scale();
+            let scale = self.wheel_scale();
             (motion, covariance) = gate.pass(self.config.odometry_fusion, motion, covariance, &odometric, scale)?;
         }
         Some(Estimate {
