@@ -3,7 +3,7 @@
 
 use super::step::PlanarMotion;
 use super::wheel_calibration::WheelScale;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use serde::Deserialize;
 use ubf_core::config::{non_negative, positive};
 use ubf_core::{angle_difference, Pose2};
@@ -13,20 +13,21 @@ use ubf_core::{angle_difference, Pose2};
 pub enum OdometryFusion {
     /// Nothing: egomotion stays purely visual, as the thesis measured it.
     Off,
-    /// Odometry's sideways motion, and its forward motion once the wheels'
-    /// scale has been measured. Matched mostly to far landmarks, a visual
-    /// motion cannot tell a sideways slide from a slight turn (both move a
-    /// far bearing alike), while the wheels barely err sideways over a few
-    /// metres; a wheel scale error, which odometry's distance and turns
-    /// carry, leaves its sideways motion alone. Odometry's distance is
-    /// taken only as corrected by the scale the visual steps have measured
-    /// (see [`WheelScale`]), and as uncertain as that measure: where the
-    /// visual forward motion is poor (far landmarks through pixel noise)
-    /// the wheels then carry it. Odometry's turn is never taken: a veer it
-    /// does not see would be (the steps measure that veer instead, see
-    /// [`OdometryNoise::veer_deg_per_m`]). The default: it measured best over held-out
-    /// layouts and stayed better than no fusion with wheels 1 % off in
-    /// scale or veering unseen.
+    /// Odometry's sideways motion and its distance. Matched mostly to far
+    /// landmarks, a visual motion cannot tell a sideways slide from a
+    /// slight turn (both move a far bearing alike), while the wheels barely
+    /// err sideways over a few metres; a wheel scale error, which
+    /// odometry's distance and turns carry, leaves its sideways motion
+    /// alone. Odometry's distance is taken as counted until the visual
+    /// steps have measured the wheels' scale (see [`WheelScale`]), then
+    /// corrected by it and as uncertain as that measure, and the pose is
+    /// reported with all the distance it took put in the scale measured
+    /// last: where the visual forward motion is poor (far landmarks
+    /// through pixel noise) the wheels then carry it. Odometry's turn is
+    /// never taken: a veer it does not see would be (the steps measure that
+    /// veer instead, see [`OdometryNoise::veer_deg_per_m`]). The default:
+    /// it measured best over held-out layouts and stayed better than no
+    /// fusion with wheels 1 % off in scale or veering unseen.
     #[default]
     Sideways,
     /// Forward, sideways and heading: better still where odometry errs only
@@ -62,8 +63,9 @@ pub struct OdometryGate {
 impl OdometryGate {
     /// The visual `motion` (with `covariance`, where the estimator gives
     /// one) if odometry's `odometric` motion over the same stretch can
-    /// explain it, combined with odometry's as `fusion` says; `None` if it
-    /// cannot, for a wrong match.
+    /// explain it, combined with odometry's as `fusion` says, and how much
+    /// of odometry's forward and sideways distance went into it (see
+    /// [`OdometryNoise::fuse`]); `None` if it cannot, for a wrong match.
     ///
     /// `wheel_scale` is the wheels' scale as the visual steps have measured
     /// it so far, if they have.
@@ -74,7 +76,7 @@ impl OdometryGate {
         covariance: Option<Matrix3<f64>>,
         odometric: &Pose2,
         wheel_scale: Option<WheelScale>,
-    ) -> Option<(PlanarMotion, Option<Matrix3<f64>>)> {
+    ) -> Option<(PlanarMotion, Option<Matrix3<f64>>, Vector2<f64>)> {
         // Far landmarks fix a bearing well and a range poorly, so a wrong
         // consensus among them can shift the motion along the line of sight
         // by metres; such a motion disagrees with odometry by far more than
@@ -92,12 +94,13 @@ impl OdometryGate {
             if !noise.consistent(&motion, visual, odometric, driven) {
                 return None;
             }
-            if let Some((fused, fused_covariance)) = noise.fuse(fusion, &motion, visual, odometric, driven, wheel_scale)
+            if let Some((fused, fused_covariance, gain)) =
+                noise.fuse(fusion, &motion, visual, odometric, driven, wheel_scale)
             {
-                return Some((fused, Some(fused_covariance)));
+                return Some((fused, Some(fused_covariance), gain));
             }
         }
-        Some((motion, covariance))
+        Some((motion, covariance, Vector2::zeros()))
     }
 }
 
@@ -223,8 +226,14 @@ impl OdometryNoise {
     /// landmarks, the visual motion cannot tell a sideways slide from a
     /// slight turn, while odometry's sideways error over a few metres is
     /// centimetres; with the sideways motion pinned, the far bearings fix
-    /// the turn. `Sideways` takes odometry's distance only scaled by
-    /// `wheel_scale`, with its error added to the distance's.
+    /// the turn. `Sideways` takes odometry's distance scaled by
+    /// `wheel_scale`, with its error added to the distance's, or as counted
+    /// while there is none yet.
+    ///
+    /// Also returns the share of odometry's forward and of its sideways
+    /// distance in the fused motion's (the gain on each, 0 where not
+    /// taken), so that distance taken in a scale measured since can be
+    /// put in the newer one.
     fn fuse(
         &self,
         fusion: OdometryFusion,
@@ -233,7 +242,7 @@ impl OdometryNoise {
         odometric: &Pose2,
         driven: f64,
         wheel_scale: Option<WheelScale>,
-    ) -> Option<(PlanarMotion, Matrix3<f64>)> {
+    ) -> Option<(PlanarMotion, Matrix3<f64>, Vector2<f64>)> {
         if fusion == OdometryFusion::Off {
             return None;
         }
@@ -242,25 +251,29 @@ impl OdometryNoise {
         // The covariance is diagonal: dropping a row and column of its
         // information leaves the others as they were.
         if fusion == OdometryFusion::Sideways {
-            odometry_info[(0, 0)] = match wheel_scale {
-                Some(scale) => {
-                    (odometric.x, odometric.y) = (odometric.x * scale.factor, odometric.y * scale.factor);
-                    self.covariance_in_scale(driven, Some(scale))[(0, 0)].recip()
-                }
-                None => 0.0,
-            };
+            // Until the steps have measured the wheels' scale, the distance
+            // is taken as counted: the tracker puts what it took in the
+            // scale measured later (`DistanceLedger`), so a scale 1 % off
+            // costs the first metres nothing in the end, and leaving the
+            // wheels out there left them to vision alone, whose error then
+            // stayed in the whole run.
+            if let Some(scale) = wheel_scale {
+                (odometric.x, odometric.y) = (odometric.x * scale.factor, odometric.y * scale.factor);
+            }
+            odometry_info[(0, 0)] = self.covariance_in_scale(driven, wheel_scale)[(0, 0)].recip();
             odometry_info[(2, 2)] = 0.0;
         }
         let covariance = (visual_info + odometry_info).try_inverse()?;
+        let gain = covariance * odometry_info;
         // The correction to the visual motion, from the difference alone, so
         // that a yaw near ±π does not wrap.
-        let correction = covariance * odometry_info * -Self::difference(motion, &odometric);
+        let correction = gain * -Self::difference(motion, &odometric);
         let fused = PlanarMotion {
             forward: motion.forward + correction[0],
             left: motion.left + correction[1],
             yaw: motion.yaw + correction[2],
         };
-        Some((fused, covariance))
+        Some((fused, covariance, Vector2::new(gain[(0, 0)], gain[(1, 1)])))
     }
 }
 
@@ -322,7 +335,7 @@ mod tests {
         let seen = PlanarMotion { forward: 5.0, left: 0.3, yaw: -0.3 / lever };
         let odometric = Pose2::new(5.0, 0.02, 0.3f64.to_radians());
         for fusion in [OdometryFusion::Sideways, OdometryFusion::Full] {
-            let (fused, covariance) = noise.fuse(fusion, &seen, &visual, &odometric, 5.0, None).unwrap();
+            let (fused, covariance, _) = noise.fuse(fusion, &seen, &visual, &odometric, 5.0, None).unwrap();
             assert!(fused.left.abs() < 0.03, "{fusion:?}: {fused:?}");
             // Odometry's 2 cm sideways over the 30 m lever: 0.04°.
             assert!(fused.yaw.abs() < 0.2 * odometric.theta, "{fusion:?}: {fused:?}");
@@ -332,27 +345,31 @@ mod tests {
             assert!(covariance[(0, 0)] <= visual[(0, 0)] + 1e-12, "{fusion:?}: {covariance}");
         }
         assert_eq!(noise.fuse(OdometryFusion::Off, &seen, &visual, &odometric, 5.0, None), None);
-        // Sideways only, a forward distance odometry has 2 % long stays the
-        // visual one.
+        // Before the wheels' scale is measured, odometry's distance is taken
+        // as counted, as uncertain as the noise model says (7 cm over 5 m):
+        // 2 % long, it barely moves a sharp visual distance (σ 1 cm), and
+        // it carries a poor one (σ 1 m), with a gain near 1 to say so.
         let long = Pose2::new(5.1, 0.02, 0.3f64.to_radians());
-        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, None).unwrap();
-        assert!((fused.forward - 5.0).abs() < 1e-3, "{fused:?}");
+        let (fused, _, gain) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, None).unwrap();
+        assert!(fused.forward > 5.0 && fused.forward < 5.005 && gain.x < 0.05, "{fused:?} {gain}");
+        let poor = visual + Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 0.0));
+        let astray = PlanarMotion { forward: 5.8, ..seen };
+        let (fused, _, gain) = noise.fuse(OdometryFusion::Sideways, &astray, &poor, &long, 5.0, None).unwrap();
+        assert!((fused.forward - 5.1).abs() < 0.01 && gain.x > 0.99, "{fused:?} {gain}");
         // With the wheels measured 2 % long, that distance is taken
         // corrected, and where the visual forward motion is poor (σ 1 m) it
         // carries it.
         let measured = Some(WheelScale { factor: 1.0 / 1.02, sigma: 0.005 });
-        let poor = visual + Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 0.0));
-        let astray = PlanarMotion { forward: 5.8, ..seen };
-        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &astray, &poor, &long, 5.0, measured).unwrap();
+        let (fused, _, _) = noise.fuse(OdometryFusion::Sideways, &astray, &poor, &long, 5.0, measured).unwrap();
         assert!((fused.forward - 5.0).abs() < 0.02, "{fused:?}");
         // A sharp visual distance (σ 1 cm) stays itself against wheels
         // measured exact that say 5.1 m.
         let exact = Some(WheelScale { factor: 1.0, sigma: 0.005 });
-        let (fused, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, exact).unwrap();
+        let (fused, _, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, 5.0, exact).unwrap();
         assert!((fused.forward - 5.0).abs() < 0.01, "{fused:?}");
         // Across ±π the two headings are 0.02 rad apart, not 2π.
         let back = PlanarMotion { forward: 0.0, left: 0.0, yaw: PI - 0.01 };
-        let (fused, _) = noise
+        let (fused, _, _) = noise
             .fuse(OdometryFusion::Full, &back, &Matrix3::identity(), &Pose2::new(0.0, 0.0, -PI + 0.01), 0.0, None)
             .unwrap();
         assert!(angle_difference(fused.yaw, PI).abs() < 0.011, "{fused:?}");

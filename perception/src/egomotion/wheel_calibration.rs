@@ -137,6 +137,41 @@ impl Veer {
     }
 }
 
+/// Odometry's distance that went into egomotion's pose, summed along the
+/// chain of steps the pose rests on, in egomotion's frame: as counted, and
+/// as put in the wheels' scale when it was taken. The scale is measured
+/// from the same steps, and the first keyframes' measure of it errs most,
+/// yet the distance taken in it stays in every pose chained on after;
+/// with the scale measured since, `factor·counted − taken` is what the
+/// pose lacks. (Knowing the wheels' true scale from the start took
+/// straight driving's end-point error on training layouts to 0.35–0.7× in
+/// every family whose camera sees beyond 20 m, wheels 1 % off included.)
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct DistanceLedger {
+    counted: Vector2<f64>,
+    taken: Vector2<f64>,
+}
+
+impl DistanceLedger {
+    /// The ledger with `counted` (odometry's distance, as counted, in
+    /// egomotion's frame) taken in `factor`.
+    pub(super) fn plus(&self, counted: Vector2<f64>, factor: f64) -> DistanceLedger {
+        DistanceLedger { counted: self.counted + counted, taken: self.taken + counted * factor }
+    }
+
+    /// What the pose lacks with the wheels' scale now `factor`, in
+    /// egomotion's frame.
+    pub(super) fn correction(&self, factor: f64) -> Vector2<f64> {
+        self.counted * factor - self.taken
+    }
+
+    /// The ledger of a path turned by `angle` about a point.
+    pub(super) fn turned(&self, angle: f64) -> DistanceLedger {
+        let rotation = Rotation2::new(angle);
+        DistanceLedger { counted: rotation * self.counted, taken: rotation * self.taken }
+    }
+}
+
 /// How far odometry drove forward and turned (either way), along its path
 /// or a stretch of it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
