@@ -396,6 +396,12 @@ impl Tracker {
         Some(Pose2::new(pose.x + correction.x, pose.y + correction.y, pose.theta))
     }
 
+    /// The latest pose as chained, before [`Tracker::pose_in_scale`].
+    #[cfg(test)]
+    pub(super) fn chained_pose(&self) -> Option<Pose2> {
+        self.state.pose
+    }
+
     /// Odometry's metres per metre counted as measured now: 1 (as counted)
     /// until the steps have measured it.
     fn scale_factor(&self) -> f64 {

@@ -266,6 +266,19 @@ impl VeerPath {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ledger_puts_distance_taken_in_one_scale_in_another_and_turns_with_its_path() {
+        // 2 m counted taken as counted, then 3 m taken 1 % long; with the
+        // scale now 1.02, the first lacks 4 cm, the second 3 cm.
+        let ledger = DistanceLedger::default().plus(Vector2::new(2.0, 0.0), 1.0).plus(Vector2::new(3.0, 0.0), 1.01);
+        let correction = ledger.correction(1.02);
+        assert!((correction - Vector2::new(0.07, 0.0)).norm() < 1e-12, "{correction}");
+        assert!((ledger.correction(1.0) - Vector2::new(-0.03, 0.0)).norm() < 1e-12);
+        // Turned a quarter left, so is what it lacks.
+        let turned = ledger.turned(std::f64::consts::FRAC_PI_2).correction(1.02);
+        assert!((turned - Vector2::new(0.0, 0.07)).norm() < 1e-12, "{turned}");
+    }
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
