@@ -10,8 +10,8 @@ effort, keep last 5), which also hears reliable writers. After --duration
 seconds, or as soon as every topic has --min samples when --min is given, it
 prints one JSON object {topic: {"type", "count", "last", "recent"}} ("last" is
 the last sample as a dict, or null; "recent" the last ten, oldest first: two
-topics published each tick may stop a tick apart) and exits 0 if every topic got at least --min
-samples (default 1), else 1. Prints "listen ready" to stderr once subscribed.
+topics published each tick may stop a tick apart) and exits 0 if every topic
+got at least --min samples (default 1), else 1. Prints "listen ready" to stderr once subscribed.
 Run it inside scripts/ros2/netns.sh.
 """
 import argparse

@@ -10,7 +10,7 @@ use super::OdometryFusion;
 use crate::error_model::{CvTable, MODEL_STEP_M};
 use crate::fusion::fuse_cv;
 use crate::stereo::StereoCamera;
-use nalgebra::{Matrix3, Rotation2, Vector2, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use rand_chacha::ChaCha8Rng;
 use ubf_core::{
     angle_difference, wrap_angle, CameraMount, Command, EgomotionState, HeadingFix, LandmarkObservation, Pose2,
@@ -648,7 +648,7 @@ impl Tracker {
                 let pose = keyframe.pose.compose(&estimate.motion.as_pose());
                 let odometric = odometry.relative_to(&keyframe.odometry);
                 let counted = Vector2::new(odometric.x, odometric.y).component_mul(&estimate.distance_gain);
-                self.ledger = keyframe.ledger.plus(Rotation2::new(keyframe.pose.theta) * counted, self.scale_factor());
+                self.ledger = keyframe.ledger.plus(keyframe.pose.theta, counted, self.scale_factor());
                 // What a replay needs to see why a frame landed where it did
                 // (the fields are only evaluated with debug logging on).
                 tracing::debug!(
@@ -716,9 +716,7 @@ impl Tracker {
                 // since the last frame, and say so; its distance in the
                 // wheels' measured scale when fusion has measured it.
                 let counted = odometry.relative_to(&previous_odometry);
-                self.ledger = self
-                    .ledger
-                    .plus(Rotation2::new(pose.theta) * Vector2::new(counted.x, counted.y), self.scale_factor());
+                self.ledger = self.ledger.plus(pose.theta, Vector2::new(counted.x, counted.y), self.scale_factor());
                 let bridged = self.scaled(counted);
                 // A turn another sensor put into odometry's heading is taken
                 // in by `take_heading`, by how sure each is, not here whole.

@@ -153,9 +153,11 @@ pub(super) struct DistanceLedger {
 }
 
 impl DistanceLedger {
-    /// The ledger with `counted` (odometry's distance, as counted, in
-    /// egomotion's frame) taken in `factor`.
-    pub(super) fn plus(&self, counted: Vector2<f64>, factor: f64) -> DistanceLedger {
+    /// The ledger with `counted` (odometry's distance, as counted, forward
+    /// and left of a pose heading `heading` in egomotion's frame) taken in
+    /// `factor`.
+    pub(super) fn plus(&self, heading: f64, counted: Vector2<f64>, factor: f64) -> DistanceLedger {
+        let counted = Rotation2::new(heading) * counted;
         DistanceLedger { counted: self.counted + counted, taken: self.taken + counted * factor }
     }
 
@@ -271,7 +273,8 @@ mod tests {
     fn a_ledger_puts_distance_taken_in_one_scale_in_another_and_turns_with_its_path() {
         // 2 m counted taken as counted, then 3 m taken 1 % long; with the
         // scale now 1.02, the first lacks 4 cm, the second 3 cm.
-        let ledger = DistanceLedger::default().plus(Vector2::new(2.0, 0.0), 1.0).plus(Vector2::new(3.0, 0.0), 1.01);
+        let ledger =
+            DistanceLedger::default().plus(0.0, Vector2::new(2.0, 0.0), 1.0).plus(0.0, Vector2::new(3.0, 0.0), 1.01);
         let correction = ledger.correction(1.02);
         assert!((correction - Vector2::new(0.07, 0.0)).norm() < 1e-12, "{correction}");
         assert!((ledger.correction(1.0) - Vector2::new(-0.03, 0.0)).norm() < 1e-12);
