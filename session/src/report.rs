@@ -79,6 +79,14 @@ pub struct RunReport {
     pub outage_s: Option<f64>,
     /// Metres driven across outages.
     pub outage_m: Option<f64>,
+    /// Metres driven per metre the wheels counted, as egomotion's steps
+    /// measured it by the end (with `Sideways` fusion): 0.99 is wheels
+    /// that count 1 % long. Calibrate the robot's distance by it where
+    /// drives agree; the pose steered by keeps the wheels' distance as
+    /// counted.
+    pub wheel_scale: Option<f64>,
+    /// The standard error of `wheel_scale`.
+    pub wheel_scale_sigma: Option<f64>,
     /// |true stop − egomotion stop|, m (thesis §4.4.3), both taken at the
     /// last stereo frame: the estimate is only as new as the frame.
     pub endpoint_error_m: Option<f64>,
@@ -145,6 +153,12 @@ impl std::fmt::Display for RunReport {
                 self.outage_s.unwrap_or(0.0),
                 self.outage_m.unwrap_or(0.0)
             )?;
+            if let (Some(scale), Some(sigma)) = (self.wheel_scale, self.wheel_scale_sigma) {
+                writeln!(
+                    f,
+                    "wheels          {scale:.4} m driven per metre counted (σ {sigma:.4}, measured by the camera)"
+                )?;
+            }
         }
         writeln!(f, "wall time       {:.3} s", self.wall_time_s)
     }

@@ -274,6 +274,8 @@ pub fn run_until(
         outages: egomotion.map(|e| e.outages),
         outage_s: egomotion.map(|e| e.outage_s),
         outage_m: egomotion.map(|e| e.outage_m),
+        wheel_scale: egomotion.and_then(|e| e.wheel_scale).map(|s| s.factor),
+        wheel_scale_sigma: egomotion.and_then(|e| e.wheel_scale).map(|s| s.sigma),
         endpoint_error_m: endpoint_error,
         endpoint_error_pct: endpoint_error.filter(|_| distance > 0.0).map(|e| 100.0 * e / distance),
         path_overhead_pct: straight.map(|s| 100.0 * (distance / s - 1.0)),

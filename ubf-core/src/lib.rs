@@ -98,5 +98,5 @@ pub use robot_error::{LinkLoss, RobotError};
 pub use safety::{Hold, SafetyGuard, SafetyPolicy};
 pub use session::{Ends, Session, SessionEnd, TreeSource};
 pub use sink::{BackgroundSink, TickSink, TracingSink};
-pub use state::{Bumpers, EgomotionState, Goal, HeadingFix, RangeReading, State};
+pub use state::{Bumpers, EgomotionState, Goal, HeadingFix, RangeReading, State, WheelScale};
 pub use stereo::{CameraMount, PrincipalPoint, StereoCamera};

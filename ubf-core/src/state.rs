@@ -75,6 +75,17 @@ pub struct HeadingFix {
     pub correction: f64,
 }
 
+/// The wheels' distance as a camera measured it while driving:
+/// odometry's metres times `factor` are the metres driven, to within
+/// `sigma` (a share of the distance).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WheelScale {
+    /// Metres driven per metre odometry counts.
+    pub factor: f64,
+    /// The factor's standard error.
+    pub sigma: f64,
+}
+
 /// What visual egomotion has made of the stereo frames so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EgomotionState {
@@ -115,6 +126,10 @@ pub struct EgomotionState {
     /// model), which changes which views serve vision best. `false` with
     /// `Off` or `Full` fusion, and where no estimator runs.
     pub sideways_fusion: bool,
+    /// The wheels' scale as the visual steps have measured it (with
+    /// `Sideways` fusion, once steps from five keyframes agree on it);
+    /// `None` before, or where nothing measures it.
+    pub wheel_scale: Option<WheelScale>,
 }
 
 /// Everything a behaviour may know this tick.

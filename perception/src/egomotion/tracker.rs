@@ -383,7 +383,12 @@ impl Tracker {
     pub fn state(&self) -> EgomotionState {
         // Symmetric, so nalgebra's columns are its rows too.
         let covariance = self.state.pose.map(|_| self.pose_covariance().into());
-        EgomotionState { pose: self.pose_in_scale(), pose_covariance: covariance, ..self.state }
+        EgomotionState {
+            pose: self.pose_in_scale(),
+            pose_covariance: covariance,
+            wheel_scale: self.wheel_scale(),
+            ..self.state
+        }
     }
 
     /// The latest pose with odometry's distance chained into it put in the

@@ -9,15 +9,7 @@
 use nalgebra::{Matrix3, Rotation2, Vector2, Vector3};
 use ubf_core::Pose2;
 
-/// Odometry's distances times `factor` are the distances driven, to within
-/// `sigma` (a share of the distance).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WheelScale {
-    /// Metres driven per metre odometry counts.
-    pub factor: f64,
-    /// The factor's standard error.
-    pub sigma: f64,
-}
+pub use ubf_core::WheelScale;
 
 /// The robot turns `rad_per_m` for each metre it drives forward beyond
 /// the turns odometry counts (negative: to the right), to within `sigma`:
