@@ -624,3 +624,19 @@ fn a_robot_that_gets_nowhere_gives_up_instead_of_bumping_a_wall_to_the_time_limi
     let report = run(&edited("lab/scenarios/thesis/route-2-1.ron", &edits[1..]), 104, None).unwrap();
     assert_eq!(report.end, EndReason::GoalReached, "{report:?}");
 }
+
+#[test]
+fn a_run_reports_the_wheels_scale_its_camera_measured() {
+    // Route 1→2 with wheels that count 1 % long (0.99 m driven per metre
+    // counted), egomotion fusing odometry's sideways motion: the report
+    // gives the scale the steps measured, for calibrating the robot. With
+    // image-only egomotion nothing measures it.
+    let short = ("slip_deg_per_sqrt_m: 0.2", "slip_deg_per_sqrt_m: 0.2, left_scale: 0.99, right_scale: 0.99");
+    let fused = ("odometry_fusion: Off, navigate: false", "odometry_fusion: Sideways, navigate: true");
+    let report = run(&edited("lab/scenarios/thesis/route-1-2.ron", &[short, fused]), 3, None).unwrap();
+    let (scale, sigma) = (report.wheel_scale.unwrap(), report.wheel_scale_sigma.unwrap());
+    assert!((scale - 0.99).abs() < 2.0 * sigma && sigma < 0.01, "{scale} ± {sigma}");
+    assert!(report.to_string().contains("m driven per metre counted"), "{report}");
+    let report = run(&edited("lab/scenarios/thesis/route-1-2.ron", &[short]), 3, None).unwrap();
+    assert_eq!((report.wheel_scale, report.wheel_scale_sigma), (None, None), "{report:?}");
+}
