@@ -1,7 +1,7 @@
 //! `report.json`: what a run did, and the summary `ubf run` prints.
 
 use serde::Serialize;
-use ubf_core::Pose2;
+use ubf_core::{Pose2, WheelScale};
 // For the fields' links only: their docs are also the JSON log's schema
 // descriptions, so a link's target is named here rather than in the text.
 #[cfg(doc)]
@@ -153,11 +153,8 @@ impl std::fmt::Display for RunReport {
                 self.outage_s.unwrap_or(0.0),
                 self.outage_m.unwrap_or(0.0)
             )?;
-            if let (Some(scale), Some(sigma)) = (self.wheel_scale, self.wheel_scale_sigma) {
-                writeln!(
-                    f,
-                    "wheels          {scale:.4} m driven per metre counted (σ {sigma:.4}, measured by the camera)"
-                )?;
+            if let (Some(factor), Some(sigma)) = (self.wheel_scale, self.wheel_scale_sigma) {
+                writeln!(f, "wheels          {}, measured by the camera", WheelScale { factor, sigma })?;
             }
         }
         writeln!(f, "wall time       {:.3} s", self.wall_time_s)

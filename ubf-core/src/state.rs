@@ -86,6 +86,13 @@ pub struct WheelScale {
     pub sigma: f64,
 }
 
+/// "0.9879 m driven per metre counted (σ 0.0062)".
+impl std::fmt::Display for WheelScale {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.4} m driven per metre counted (σ {:.4})", self.factor, self.sigma)
+    }
+}
+
 /// What visual egomotion has made of the stereo frames so far.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct EgomotionState {

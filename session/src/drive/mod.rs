@@ -311,6 +311,13 @@ fn drive_sessions(
         let (mut controller, shutdown) = session.finish();
         pose = controller.settled_pose();
         *settled = Some(pose);
+        if let Some(scale) = controller.state().egomotion.wheel_scale {
+            // Egomotion's steered pose keeps the wheels' distance as
+            // counted: this is what calibrating the robot's would fix.
+            eprintln!(
+                "the camera measured the wheels: {scale}; calibrate the robot's distance by it if other drives agree"
+            );
+        }
         if let Some(file) = &config.pose_file {
             if let Err(e) = pose_file::write(file, &pose) {
                 tracing::warn!("pose file {}: {e}", file.display());
