@@ -344,9 +344,10 @@ def main():
         f'{on_time_limit(thirteenth, "default")} → {on_time_limit(data, "default")}; the change was not aimed at '
         'them, and a run or two pinned by the wall can come and go with any small shift.')
     say('')
-    say('The protocol\'s wheels off in scale are 1 % long, which leaves the pose steered by behind the truth, '
-        'and the robot drives on past where it stops believing itself. Wheels 1 % short do the opposite: on the '
-        'training layouts (seeds 110–129, straight, with this run\'s code) the default stopped outside the '
+    say('The protocol\'s wheels off in scale are 1 % larger than the encoders think, which leaves the pose steered by behind the truth, '
+        'and the robot drives on past where it stops believing itself. Wheels 1 % smaller do the opposite: on the '
+        'training layouts (seeds 110–129, straight, with this run\'s code; `WHEELS=short` in '
+        '`lab/scripts/aiding-families.sh`) the default stopped outside the '
         'goal\'s tolerance in 1030 of 1280 runs (1119 before the change above), against 208 with exact wheels, '
         'though egomotion\'s end point was as good as with exact wheels. The pose steered by keeps odometry\'s '
         'distance as counted; put in the scale vision measures, it missed far less often with wheels short but '
