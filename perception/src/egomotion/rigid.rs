@@ -369,6 +369,26 @@ mod tests {
         assert!((end.x - 0.25).abs() < 1e-6 && end.y.abs() < 1e-6, "{end:?}");
     }
 
+    /// Where the camera, at `from`, puts a landmark on the floor plane at
+    /// the camera's height, seen through `pixel_noise` px (σ) on each
+    /// pixel coordinate: robot frame, m.
+    fn sighting(
+        camera: &StereoCamera,
+        landmark: (f64, f64),
+        from: &Pose2,
+        pixel_noise: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> [f64; 3] {
+        let seen = Pose2::new(landmark.0, landmark.1, 0.0).relative_to(from);
+        let exact = camera.project(camera.mount.robot_to_cam([seen.x, seen.y, camera.mount.height])).unwrap();
+        let noisy = StereoPixels {
+            u_left: exact.u_left + pixel_noise * standard_normal(rng),
+            u_right: exact.u_right + pixel_noise * standard_normal(rng),
+            v: exact.v + pixel_noise * standard_normal(rng),
+        };
+        camera.mount.cam_to_robot(camera.triangulate(&noisy).unwrap())
+    }
+
     #[test]
     fn the_residual_information_matches_the_spread_of_stereo_residuals() {
         use rand::SeedableRng;
@@ -384,18 +404,7 @@ mod tests {
         let motion = Pose2::new(10.0, 0.5, 3f64.to_radians());
         let landmark = (40.0, 8.0);
         let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let mut gaussian = move || standard_normal(&mut rng);
-        let mut observe = |from: &Pose2| {
-            let seen = Pose2::new(landmark.0, landmark.1, 0.0).relative_to(from);
-            let (x, y) = (seen.x, seen.y);
-            let exact = camera.project(camera.mount.robot_to_cam([x, y, camera.mount.height])).unwrap();
-            let noisy = StereoPixels {
-                u_left: exact.u_left + pixel_sigma.0 * gaussian(),
-                u_right: exact.u_right + pixel_sigma.0 * gaussian(),
-                v: exact.v + pixel_sigma.0 * gaussian(),
-            };
-            camera.mount.cam_to_robot(camera.triangulate(&noisy).unwrap())
-        };
+        let mut observe = |from: &Pose2| sighting(&camera, landmark, from, pixel_sigma.0, &mut rng);
         let (mut new, mut old, n) = (0.0, 0.0, 4000);
         for _ in 0..n {
             let (a, b) = (observe(&Pose2::default()), observe(&motion));
@@ -426,16 +435,7 @@ mod tests {
         let motion = Pose2::new(0.5, 0.0, 0.0);
         let scale_over_information = |pixel_noise: f64| {
             let mut rng = ChaCha8Rng::seed_from_u64(3);
-            let mut observe = |point: (f64, f64), from: &Pose2| {
-                let seen = Pose2::new(point.0, point.1, 0.0).relative_to(from);
-                let exact = camera.project(camera.mount.robot_to_cam([seen.x, seen.y, camera.mount.height])).unwrap();
-                let noisy = StereoPixels {
-                    u_left: exact.u_left + pixel_noise * standard_normal(&mut rng),
-                    u_right: exact.u_right + pixel_noise * standard_normal(&mut rng),
-                    v: exact.v,
-                };
-                camera.mount.cam_to_robot(camera.triangulate(&noisy).unwrap())
-            };
+            let mut observe = |point: (f64, f64), from: &Pose2| sighting(&camera, point, from, pixel_noise, &mut rng);
             let pairs: Vec<Pair> = (0..20)
                 .map(|i| {
                     let point = (6.0 + f64::from(i), if i % 2 == 0 { 1.5 } else { -1.5 });

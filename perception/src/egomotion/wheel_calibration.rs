@@ -260,6 +260,8 @@ impl VeerPath {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn a_ledger_puts_distance_taken_in_one_scale_in_another_and_turns_with_its_path() {
@@ -274,8 +276,6 @@ mod tests {
         let turned = ledger.turned(std::f64::consts::FRAC_PI_2).correction(1.02);
         assert!((turned - Vector2::new(0.0, 0.07)).norm() < 1e-12, "{turned}");
     }
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn wheels_a_percent_long_are_found_from_noisy_steps() {

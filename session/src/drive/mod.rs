@@ -312,8 +312,9 @@ fn drive_sessions(
         pose = controller.settled_pose();
         *settled = Some(pose);
         if let Some(scale) = controller.state().egomotion.wheel_scale {
-            // Egomotion's steered pose keeps the wheels' distance as
-            // counted: this is what calibrating the robot's would fix.
+            // The pose steered by keeps the wheels' distance as counted,
+            // so wheels off in scale stop the robot short or long of its
+            // goals until the robot's own distance is calibrated.
             eprintln!(
                 "the camera measured the wheels: {scale}; calibrate the robot's distance by it if other drives agree"
             );
