@@ -119,8 +119,8 @@ impl Default for OdometryGate {
 /// Odometry's error over a stretch of `d` metres, as standard deviations:
 /// position `position_m + position_share·d`, heading
 /// `√(heading_deg² + heading_deg_per_sqrt_m²·d)` (a floor and a random slip);
-/// and how far its wheels may veer unseen, a steady error the random slip
-/// does not describe.
+/// and how far its wheels may veer unseen or be off in scale, steady errors
+/// the random slip does not describe.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OdometryNoise {
@@ -149,6 +149,14 @@ pub struct OdometryNoise {
     /// `Tracker::navigation_pose`); 0 takes odometry's turns for unbiased.
     #[serde(deserialize_with = "non_negative")]
     pub veer_deg_per_m: f64,
+    /// How far the wheels' scale may be off, unseen by odometry, as a
+    /// steady error (a σ, metres per metre): tyre pressure, load, wear.
+    /// With `Sideways` fusion the visual steps measure the scale, and the
+    /// pose the robot steers by takes odometry's own pose in the scale
+    /// measured, weighed against this (see `Tracker::navigation_pose`); 0
+    /// takes odometry's distance as counted.
+    #[serde(deserialize_with = "non_negative")]
+    pub scale_sigma: f64,
 }
 
 /// The default veer σ, ° per metre: the pull of two wheels a tenth of a
@@ -164,6 +172,19 @@ pub struct OdometryNoise {
 /// seeds 110–129; scanning there, 70 → 97 of 160 on those seeds.
 const VEER_DEG_PER_M: f64 = 0.1;
 
+/// The default σ of the wheels' scale: half a percent, what a wheel's load
+/// and tyre pressure move its radius by (the floor of the scale's measure,
+/// `wheel_calibration.rs`, for the same reason). Chosen on training
+/// layouts (seeds 100–109) against 0.01 and 0.02 over exact wheels, wheels
+/// 1 % long and 1 % short, a veer and a distance slip: the pose steered by
+/// ended 0.85× as far off as with none (0.01: 0.79×, 0.02: 0.79×), the only
+/// one not worse than the visual estimate's anywhere beyond what none
+/// already was; 0.85× on seeds 110–129. Its cost is with exact wheels,
+/// where any scale measured is an error: 1.14× as far off, and with 1 px
+/// of pixel noise 1.4× (0.16 → 0.24 m), where vision's scale errs by a
+/// percent.
+const SCALE_SIGMA: f64 = 0.005;
+
 impl Default for OdometryNoise {
     /// The slip is the heading drift `ubf model fit-costs` measured on the
     /// odometry bridge of the thesis routes (0.20° per √m); the floors are
@@ -176,6 +197,7 @@ impl Default for OdometryNoise {
             heading_deg_per_sqrt_m: 0.2,
             chi2: 16.27,
             veer_deg_per_m: VEER_DEG_PER_M,
+            scale_sigma: SCALE_SIGMA,
         }
     }
 }
@@ -544,7 +566,9 @@ mod tests {
         let counted = |k: usize| Pose2::new(0.25 * k as f64, 0.0, 0.0);
         let end = truth[144];
         let drive = |veer_deg_per_m, trusted_landmarks| {
-            let noise = OdometryNoise { veer_deg_per_m, ..OdometryNoise::default() };
+            // The wheels' scale is exact here; a measure of it, a little
+            // off, would only blur what the veer does.
+            let noise = OdometryNoise { veer_deg_per_m, scale_sigma: 0.0, ..OdometryNoise::default() };
             let gate = OdometryGate { noise: Some(noise), ..OdometryGate::default() };
             let config = EgomotionConfig { odometry_gate: Some(gate), trusted_landmarks, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
@@ -574,6 +598,63 @@ mod tests {
         assert!(expected < 0.8, "too little of the veer measured to tell: {measured:?}");
         assert!(
             (steered / counted_error - expected).abs() < 0.1,
+            "steered by {steered} m, odometry {counted_error} m: {} of it, expected {expected}",
+            steered / counted_error
+        );
+    }
+
+    #[test]
+    fn wheels_off_in_scale_are_measured_and_taken_out_of_the_pose_steered_by() {
+        // Driving 36 m on wheels 2 % small, so odometry counts 2 % more
+        // than the robot drives: the first 24 m towards a far wall, the
+        // last 12 m with nothing in view. The steps measure the scale, and
+        // the pose steered by, which leans on odometry's own pose over the
+        // blind stretch, has odometry's distance put in it as far as the
+        // measure outweighs the prior (`scale_sigma`). With the distance
+        // taken as counted (`scale_sigma: 0`), the pose steered by is
+        // ahead of the robot by a sixth of odometry's 72 cm, the weight the
+        // blend gives odometry's pose here (when written: 11 cm, and 2.5 cm
+        // in the scale measured, 0.979 ± 0.008).
+        let camera = StereoCamera::default();
+        let truth = |k: usize| Pose2::new(0.25 * k as f64, 0.0, 0.0);
+        let counted = |k: usize| Pose2::new(1.02 * 0.25 * k as f64, 0.0, 0.0);
+        let end = truth(144);
+        let drive = |scale_sigma, trusted_landmarks| {
+            let noise = OdometryNoise { scale_sigma, ..OdometryNoise::default() };
+            let gate = OdometryGate { noise: Some(noise), ..OdometryGate::default() };
+            let config = EgomotionConfig { odometry_gate: Some(gate), trusted_landmarks, ..EgomotionConfig::default() };
+            let mut tracker = Tracker::new(config, camera, Pose2::default(), 2);
+            for k in 0..=144 {
+                let seen = if k <= 96 { towards_a_far_wall(truth(k), k as u32, 0.01, &camera) } else { Vec::new() };
+                tracker.update(&at(k as u64 + 1, 0.5 * k as f64, seen), &counted(k));
+            }
+            (tracker.wheel_scale(), tracker.navigation_pose(&counted(144)).unwrap().distance_to(end.x, end.y))
+        };
+        let prior = OdometryNoise::default().scale_sigma;
+        let trusted = EgomotionConfig::default().trusted_landmarks;
+        let (measured, steered) = drive(prior, trusted);
+        let measured = measured.unwrap();
+        assert!((measured.factor - 1.0 / 1.02).abs() < 2.0 * measured.sigma, "{measured:?}");
+        let (_, steered_as_counted) = drive(0.0, trusted);
+        let counted_error = counted(144).distance_to(end.x, end.y);
+        assert!(steered_as_counted > 0.1 * counted_error, "{steered_as_counted} m");
+        assert!(steered < 0.5 * steered_as_counted, "steered by {steered} m, {steered_as_counted} m as counted");
+        // With egomotion's pose taken for worthless, the pose steered by is
+        // odometry's own: its error shrinks by the share of the scale's
+        // error the prior lets the measure correct.
+        let worthless = 1_000_000_000;
+        let (_, steered_as_counted) = drive(0.0, worthless);
+        // (To within what the veer the steps measured turns it by.)
+        assert!(
+            (steered_as_counted - counted_error).abs() < 0.03,
+            "{steered_as_counted} m, odometry {counted_error} m"
+        );
+        let (_, steered) = drive(prior, worthless);
+        let weighed = super::super::wheel_calibration::scale_given_prior(Some(measured), prior);
+        let expected = (1.02 * weighed.factor - 1.0).abs() / 0.02;
+        assert!(expected < 0.8, "too little of the scale measured to tell: {weighed:?}");
+        assert!(
+            (steered / counted_error - expected).abs() < 0.05,
             "steered by {steered} m, odometry {counted_error} m: {} of it, expected {expected}",
             steered / counted_error
         );

@@ -114,19 +114,36 @@ impl Veer {
     /// prior moves the veer little, so a few steps on scattered landmarks
     /// do not turn odometry's whole path.
     pub(super) fn given_prior(measured: Option<Veer>, prior_sigma: f64) -> Veer {
-        let Some(measured) = measured.filter(|m| !m.sigma.is_nan()) else {
-            return Veer { rad_per_m: 0.0, sigma: prior_sigma };
-        };
-        if prior_sigma <= 0.0 {
-            return Veer { rad_per_m: 0.0, sigma: 0.0 };
-        }
-        if measured.sigma <= 0.0 {
-            return measured;
-        }
-        let (prior_info, measured_info) = (prior_sigma.powi(-2), measured.sigma.powi(-2));
-        let info = prior_info + measured_info;
-        Veer { rad_per_m: measured.rad_per_m * measured_info / info, sigma: info.sqrt().recip() }
+        let (rad_per_m, sigma) = weighed_against_prior(measured.map(|m| (m.rad_per_m, m.sigma)), (0.0, prior_sigma));
+        Veer { rad_per_m, sigma }
     }
+}
+
+/// The wheels' scale as `measured` by the steps (if they have) and what was
+/// known before, calibrated wheels (a factor of 1) to within `prior_sigma`,
+/// weighed as [`Veer::given_prior`] weighs the veer.
+pub(super) fn scale_given_prior(measured: Option<WheelScale>, prior_sigma: f64) -> WheelScale {
+    let (factor, sigma) = weighed_against_prior(measured.map(|m| (m.factor, m.sigma)), (1.0, prior_sigma));
+    WheelScale { factor, sigma }
+}
+
+/// A `measured` value and its σ combined with a `prior` (mean, σ) by their
+/// precision: the prior alone where nothing (or nothing usable) was
+/// measured, the prior's mean where the prior is certain, and the measure
+/// where it is.
+fn weighed_against_prior(measured: Option<(f64, f64)>, (prior_mean, prior_sigma): (f64, f64)) -> (f64, f64) {
+    let Some((value, sigma)) = measured.filter(|(_, sigma)| !sigma.is_nan()) else {
+        return (prior_mean, prior_sigma);
+    };
+    if prior_sigma <= 0.0 {
+        return (prior_mean, 0.0);
+    }
+    if sigma <= 0.0 {
+        return (value, sigma);
+    }
+    let (prior_info, measured_info) = (prior_sigma.powi(-2), sigma.powi(-2));
+    let info = prior_info + measured_info;
+    (prior_mean + (value - prior_mean) * measured_info / info, info.sqrt().recip())
 }
 
 /// Odometry's distance that went into egomotion's pose, summed along the
@@ -301,6 +318,23 @@ mod tests {
             wild.add(i, driven, driven * if i % 2 == 0 { 1.1 } else { 0.9 }, 1e-4 + 1e-6);
         }
         assert!(wild.scale().unwrap().sigma > 0.005, "{:?}", wild.scale());
+    }
+
+    #[test]
+    fn the_measured_scale_is_weighed_against_calibrated_wheels() {
+        let close = |scale: WheelScale, factor: f64, sigma: f64| {
+            assert!((scale.factor - factor).abs() < 1e-12 && (scale.sigma - sigma).abs() < 1e-12, "{scale:?}");
+        };
+        // Measured as well as the prior knows it: half way, √2 surer.
+        let measured = WheelScale { factor: 0.99, sigma: 0.005 };
+        close(scale_given_prior(Some(measured), 0.005), 0.995, 0.005 / 2f64.sqrt());
+        // Measured twice as well: four fifths of the way.
+        close(scale_given_prior(Some(WheelScale { sigma: 0.0025, ..measured }), 0.005), 0.992, 0.005 / 5f64.sqrt());
+        // Nothing measured, or wheels known calibrated, or a measure with
+        // no error.
+        close(scale_given_prior(None, 0.005), 1.0, 0.005);
+        close(scale_given_prior(Some(measured), 0.0), 1.0, 0.0);
+        close(scale_given_prior(Some(WheelScale { sigma: 0.0, ..measured }), 0.005), 0.99, 0.0);
     }
 
     #[test]
