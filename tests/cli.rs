@@ -113,6 +113,12 @@ fn nan_and_negative_values_are_refused_where_they_make_no_sense() {
         ("goal: (x: 3.0, y: 0.0)", "goal: (x: 3.0, y: 0.0, tolerance: -0.1)", "-0.1 is out of range"),
         ("weight: 2.0", "weight: -2.0", "-2 is out of range"),
         ("cruise_speed: 0.5", "cruise_speed: inf", "inf is out of range"),
+        // Half a percent written as a percentage, not a fraction.
+        (
+            "max_time_s: 30.0,",
+            "max_time_s: 30.0, robot: (egomotion: (odometry_gate: (noise: (scale_sigma: 0.5)))),",
+            "0.5 is out of range: must be a fraction from 0 to 0.2",
+        ),
     ] {
         let (code, err) = check(&GOOD.replace(from, to));
         assert_eq!(code, 2, "{to}");

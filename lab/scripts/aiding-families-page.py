@@ -346,6 +346,7 @@ def main():
         'aimed at them, and a run or two pinned by the wall can come and go with any small shift.')
     say('')
     steered = lambda run, f, w: run[f]['default'][w]['none']['steered_error_m']  # noqa: E731
+    nearer = [f for f in families if steered(data, f, 'scale') < 0.95 * steered(fourteenth, f, 'scale')]
     missed = lambda run, w: sum(run[f]['default'][w]['none']['missed_goal_runs'] for f in families)  # noqa: E731
     say('The protocol\'s wheels off in scale are 1 % larger than the encoders think, which leaves the pose '
         'steered by behind the truth, and the robot drives on past where it stops believing itself. Wheels 1 % '
@@ -380,8 +381,9 @@ def main():
         'seeds, the fourteenth run\'s code against this one\'s), the pose steered by ended 0.43–0.52× as far off '
         'in six families (ordinary-near 0.127 → 0.054 m) and 0.90–0.91× in noise-1px and range-20, and the runs '
         'outside the goal\'s tolerance went from 2355 to 1441 of 2880. With exact wheels and the protocol\'s, '
-        'more runs end outside it, though the pose steered by is nearer with the protocol\'s wheels and a few '
-        'centimetres further with exact ones (listed below): the pose steered by had lagged the truth with '
+        'more runs end outside it (listed below), though with the protocol\'s wheels the pose steered by ended '
+        'nearer in ' + (', '.join(nearer) or 'no family') + ' (by 5 % or more) and level or further in '
+        + (', '.join(f for f in families if f not in nearer) or 'none') + ': it had lagged the truth with '
         'wheels 1 % long, so the robot drove on past where it stopped believing itself, and with exact wheels it '
         'leans a little less on odometry\'s distance, exact in the simulator, and more on egomotion\'s.')
     rose = [(f, w, fourteenth[f]['default'][w]['none'], cell(f, 'default', w, 'none')) for f in families

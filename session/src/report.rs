@@ -82,8 +82,8 @@ pub struct RunReport {
     /// Metres driven per metre the wheels counted, as egomotion's steps
     /// measured it by the end (with `Sideways` fusion): 0.99 is wheels
     /// that count 1 % long. Calibrate the robot's distance by it where
-    /// drives agree; the pose steered by keeps the wheels' distance as
-    /// counted.
+    /// drives agree: the pose steered by takes only part of it (weighed
+    /// against the odometry noise model's `scale_sigma`).
     pub wheel_scale: Option<f64>,
     /// The standard error of `wheel_scale`.
     pub wheel_scale_sigma: Option<f64>,

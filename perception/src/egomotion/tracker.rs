@@ -479,7 +479,9 @@ impl Tracker {
             return Some(visual);
         };
         // Odometry's own pose is put in the wheels' scale the visual steps
-        // measured, weighed against the noise model's `scale_sigma`: the
+        // measured, weighed by precision against the noise model's
+        // `scale_sigma` (the measure's σ has a floor of its own, half a
+        // percent, so with the default prior at most half of it): the
         // scale is measured by the steps, so taken whole it would carry
         // vision's own distance error into odometry's pose rather than
         // check it (with 1 px of pixel noise, where that error is about a

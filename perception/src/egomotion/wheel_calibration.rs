@@ -2,9 +2,11 @@
 //! how far the robot goes for each metre its odometry counts (the scale),
 //! and how far it turns that odometry does not see for each metre (the
 //! veer). With the scale, odometry's distance is fused and a blind stretch
-//! bridged without carrying a wheel radius a percent off into every step;
-//! with the veer, odometry's own pose, which the pose steered by leans on,
-//! no longer walks off sideways with a soft tyre's pull.
+//! bridged without carrying a wheel radius a percent off into every step,
+//! and odometry's own pose, which the pose steered by leans on, is put in
+//! it as far as the measure is surer than the wheels' calibration; with
+//! the veer, that pose no longer walks off sideways with a soft tyre's
+//! pull.
 
 use nalgebra::{Matrix3, Rotation2, Vector2, Vector3};
 use ubf_core::Pose2;

@@ -312,9 +312,10 @@ fn drive_sessions(
         pose = controller.settled_pose();
         *settled = Some(pose);
         if let Some(scale) = controller.state().egomotion.wheel_scale {
-            // The pose steered by keeps the wheels' distance as counted,
-            // so wheels off in scale stop the robot short or long of its
-            // goals until the robot's own distance is calibrated.
+            // The pose steered by takes only part of the measured scale
+            // (weighed against the noise model's `scale_sigma`), so wheels
+            // off in scale still stop the robot a little short or long of
+            // its goals until the robot's own distance is calibrated.
             eprintln!(
                 "the camera measured the wheels: {scale}; calibrate the robot's distance by it if other drives agree"
             );
