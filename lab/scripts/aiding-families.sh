@@ -82,7 +82,7 @@ for file in "$work"/*.ron; do
         && { echo "$file: the estimate's edit did not match" >&2; exit 1; }
     [ "$e" = compass ] && ! grep -q "wall_compass: ()" "$file" && { echo "$file: the compass did not go in" >&2; exit 1; }
     [ "$a" = none ] || ! grep -q "technique: None" "$file" || { echo "$file: the aid's edit did not match" >&2; exit 1; }
-    [ "$w" = exact ] || grep -q "_scale: 1.01\|_scale: 0.99\|veer_deg_per_m\|distance_slip" "$file" || { echo "$file: the wheels' edit did not match" >&2; exit 1; }
+    [ "$w" = exact ] || grep -qF "$(wheel_errors "$w")" "$file" || { echo "$file: the wheels' edit did not match" >&2; exit 1; }
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2
 python3 lab/scripts/aiding-families.py "$work/runs"

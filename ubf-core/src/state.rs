@@ -86,6 +86,14 @@ pub struct WheelScale {
     pub sigma: f64,
 }
 
+impl WheelScale {
+    /// Where the robot went by a pose odometry `counted` from where it began
+    /// counting: its distance in this scale, its heading as counted.
+    pub fn driven(&self, counted: Pose2) -> Pose2 {
+        Pose2::new(counted.x * self.factor, counted.y * self.factor, counted.theta)
+    }
+}
+
 /// "0.9879 m driven per metre counted (σ 0.0062)".
 impl std::fmt::Display for WheelScale {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -317,6 +317,7 @@ impl OdometryNoise {
 mod tests {
     use super::*;
     use crate::egomotion::testing::{at, frame, landmarks, standard_normal};
+    use crate::egomotion::wheel_calibration::scale_given_prior;
     use crate::egomotion::{EgomotionConfig, Tracker};
     use crate::stereo::StereoCamera;
     use rand_chacha::ChaCha8Rng;
@@ -665,7 +666,7 @@ mod tests {
             "{steered_as_counted} m, odometry {counted_error} m"
         );
         let (_, steered) = drive(prior, worthless);
-        let weighed = super::super::wheel_calibration::scale_given_prior(Some(measured), prior);
+        let weighed = scale_given_prior(Some(measured), prior);
         let expected = (1.02 * weighed.factor - 1.0).abs() / 0.02;
         assert!(expected < 0.8, "too little of the scale measured to tell: {weighed:?}");
         assert!(

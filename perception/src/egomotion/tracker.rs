@@ -330,10 +330,7 @@ impl Tracker {
     /// range: 0.276 → 0.321 m and 0.234 → 0.307 m on two sets of seeds),
     /// as the veer is then measured from those few landmarks' own turns.
     fn scaled(&self, odometric: Pose2) -> Pose2 {
-        match self.wheel_scale() {
-            Some(scale) => Pose2::new(odometric.x * scale.factor, odometric.y * scale.factor, odometric.theta),
-            None => odometric,
-        }
+        self.wheel_scale().map_or(odometric, |scale| scale.driven(odometric))
     }
 
     /// Takes in the chosen step's visual forward motion against
@@ -385,21 +382,18 @@ impl Tracker {
     pub fn state(&self) -> EgomotionState {
         // Symmetric, so nalgebra's columns are its rows too.
         let covariance = self.state.pose.map(|_| self.pose_covariance().into());
-        EgomotionState {
-            pose: self.pose_in_scale(),
-            pose_covariance: covariance,
-            wheel_scale: self.wheel_scale(),
-            ..self.state
-        }
+        let wheel_scale = self.wheel_scale();
+        EgomotionState { pose: self.pose_in_scale(wheel_scale), pose_covariance: covariance, wheel_scale, ..self.state }
     }
 
     /// The latest pose with odometry's distance chained into it put in the
-    /// wheels' scale as measured now (see [`DistanceLedger`]). The chain
-    /// itself, keyframes and all, keeps the distance as it was taken, so a
-    /// newer measure of the scale moves every pose alike.
-    fn pose_in_scale(&self) -> Option<Pose2> {
+    /// wheels' scale as measured now, `scale` (from [`Tracker::wheel_scale`],
+    /// passed in by callers that need it too; see [`DistanceLedger`]). The
+    /// chain itself, keyframes and all, keeps the distance as it was taken,
+    /// so a newer measure of the scale moves every pose alike.
+    fn pose_in_scale(&self, scale: Option<WheelScale>) -> Option<Pose2> {
         let pose = self.state.pose?;
-        let correction = self.ledger.correction(self.scale_factor());
+        let correction = self.ledger.correction(scale.map_or(1.0, |scale| scale.factor));
         Some(Pose2::new(pose.x + correction.x, pose.y + correction.y, pose.theta))
     }
 
@@ -470,7 +464,8 @@ impl Tracker {
         if !self.config.navigate || self.newest.0 == 0 {
             return None;
         }
-        let visual = self.pose_in_scale()?.compose(&odometry.relative_to(&self.newest.1));
+        let measured = self.wheel_scale();
+        let visual = self.pose_in_scale(measured)?.compose(&odometry.relative_to(&self.newest.1));
         // Only the rigid estimator gives a covariance to weigh its pose by.
         let rigid = matches!(self.config.estimator, EstimatorKind::Rigid(_));
         let (true, Some(noise), Some(origin)) =
@@ -502,12 +497,10 @@ impl Tracker {
         let by_odometry = match self.veer() {
             Some(veer) => {
                 let newest = self.odometry_path.corrected(&self.newest.1.relative_to(&origin), &veer);
-                let scale = scale_given_prior(self.wheel_scale(), noise.scale_sigma);
+                let scale = scale_given_prior(measured, noise.scale_sigma);
                 odometric = noise.covariance_in_scale(driven, Some(scale))
                     + self.odometry_path.covariance(&veer, self.start.theta);
-                let travelled = newest.compose(&odometry.relative_to(&self.newest.1));
-                let k = scale.factor;
-                self.start.compose(&Pose2::new(k * travelled.x, k * travelled.y, travelled.theta))
+                self.start.compose(&scale.driven(newest.compose(&odometry.relative_to(&self.newest.1))))
             }
             None => self.start.compose(&odometry.relative_to(&origin)),
         };
