@@ -3,10 +3,11 @@
 
 use super::config::{DisparityOffsetEstimate, EgomotionConfig, EstimatorKind};
 use super::matching::match_frames;
+use super::odometry::Stretch;
 use super::offset::{self, OffsetReading};
 use super::step::{MotionPhase, Mounts, Pair, PlanarMotion, StepInput, StepMotion};
 use super::wheel_calibration::{
-    scale_given_prior, DistanceLedger, ProportionalFit, Travel, Veer, VeerPath, WheelScale, TURN_SHARE,
+    scale_given_prior, DistanceLedger, OdometryPath, ProportionalFit, Travel, Veer, WheelScale, TURN_SHARE,
 };
 use super::OdometryFusion;
 use crate::error_model::{CvTable, MODEL_STEP_M};
@@ -45,8 +46,9 @@ struct Keyframe {
     /// Where the camera looked on the robot (a pan-tilt unit's measured
     /// angles), to lift its landmarks into the robot frame.
     mount: CameraMount,
-    /// How far odometry had driven and turned along its path then.
-    travel: Travel,
+    /// Odometry's path up to then: how far it had driven and turned, and
+    /// the sums a stretch from here is read against.
+    path: OdometryPath,
     /// Odometry's distance chained into its pose, and the scale it was
     /// taken in.
     ledger: DistanceLedger,
@@ -149,7 +151,7 @@ pub struct Tracker {
     /// The wheels' veer as the same steps measure it, and odometry's path
     /// since its origin, which the veer corrects.
     veer: ProportionalFit,
-    odometry_path: VeerPath,
+    odometry_path: OdometryPath,
     /// Odometry's distance chained into the latest pose, and the scale it
     /// was taken in: the pose is reported in the scale measured now.
     ledger: DistanceLedger,
@@ -251,7 +253,7 @@ impl Tracker {
             offset_applied: 0.0,
             wheel_scale: ProportionalFit::default(),
             veer: ProportionalFit::default(),
-            odometry_path: VeerPath::default(),
+            odometry_path: OdometryPath::default(),
             ledger: DistanceLedger::default(),
             heading_fix: None,
             uncounted_turn: 0.0,
@@ -698,7 +700,7 @@ impl Tracker {
                 self.state.bridging = false;
                 self.state.anchor_frame = Some(keyframe.number);
                 self.last_match = frame.time;
-                let travel = self.odometry_path.travel().since(&keyframe.travel);
+                let travel = self.odometry_path.travel().since(&keyframe.path.travel());
                 self.measure_wheels(keyframe.number, &estimate, &odometric, &travel);
                 if self.config.disparity_offset != DisparityOffsetEstimate::Off {
                     let sigma = match self.config.estimator {
@@ -843,7 +845,7 @@ impl Tracker {
             extra: self.extra,
             bridges_covariance: self.bridges_covariance,
             mount: self.mount_of(frame),
-            travel: self.odometry_path.travel(),
+            path: self.odometry_path,
             ledger: self.ledger,
         });
     }
@@ -985,10 +987,13 @@ impl Tracker {
             return None;
         }
         if let Some(gate) = &self.config.odometry_gate {
-            let odometric = odometry.relative_to(&keyframe.odometry);
+            let stretch = Stretch {
+                motion: odometry.relative_to(&keyframe.odometry),
+                drift_lever: self.odometry_path.drift_lever_since(&keyframe.path),
+            };
             let scale = self.wheel_scale();
             (motion, covariance, distance_gain) =
-                gate.pass(self.config.odometry_fusion, motion, covariance, &odometric, scale)?;
+                gate.pass(self.config.odometry_fusion, motion, covariance, &stretch, scale)?;
         }
         Some(Estimate {
             motion,

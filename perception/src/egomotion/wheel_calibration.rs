@@ -218,6 +218,10 @@ impl Travel {
 /// after bumping the wall).
 pub(super) const TURN_SHARE: f64 = 0.02;
 
+/// Below this distance driven a stretch has no drift lever: its heading
+/// error is the turns', not the distance's.
+const MIN_LEVER_DISTANCE_M: f64 = 1e-3;
+
 /// Odometry's path since its origin, summed as a veer's correction needs
 /// it: a veer of `v` rad/m turns the robot `v·s` beyond odometry's count
 /// after `s` metres forward, so each stretch `dq` odometry counted was
@@ -226,16 +230,22 @@ pub(super) const TURN_SHARE: f64 = 0.02;
 /// so three sums correct the whole path for whichever veer is measured
 /// last, back to the origin: the readings the veer is fitted to come from
 /// the same path, and the correction puts back what it measured there.
+///
+/// The first sum also gives, for any stretch of the path, how a heading
+/// error growing with the distance moves the stretch's end (see
+/// [`OdometryPath::drift_lever_since`]).
 #[derive(Clone, Copy, Debug, Default)]
-pub(super) struct VeerPath {
+pub(super) struct OdometryPath {
     /// How far odometry drove forward (`s`) and turned along the path.
     travel: Travel,
     /// Σ s·J·dq and Σ s²·dq, in the origin's frame.
     first: Vector2<f64>,
     second: Vector2<f64>,
+    /// Odometry's pose at the path's end, relative to the origin.
+    end: Pose2,
 }
 
-impl VeerPath {
+impl OdometryPath {
     /// Takes in odometry's motion from `before` to `after`, both relative
     /// to the origin.
     pub(super) fn add(&mut self, before: &Pose2, after: &Pose2) {
@@ -248,6 +258,30 @@ impl VeerPath {
         self.second += s * s * dq;
         self.travel.forward_m += ds;
         self.travel.turned_rad += step.theta.abs();
+        self.end = *after;
+    }
+
+    /// How far the end of the stretch since `earlier` (this path as it
+    /// was then) moves for each radian of heading odometry lacks at that
+    /// end, where the heading error grew in step with the distance driven
+    /// along the stretch: as a veer's does, and as a random slip's is
+    /// expected to, given where it ended. In the frame odometry had at the
+    /// stretch's start; zero over a stretch that drove nowhere (a turn on
+    /// the spot).
+    ///
+    /// Driving straight it is half the distance, sideways: a heading that
+    /// drifted by `ε` has moved the end `ε·d/2` aside. So the sideways
+    /// position less `ε` times this is the same whatever the drift: the
+    /// path's shape, which the drift does not bend, only turns.
+    pub(super) fn drift_lever_since(&self, earlier: &OdometryPath) -> Vector2<f64> {
+        let driven = self.travel.forward_m - earlier.travel.forward_m;
+        if driven.abs() < MIN_LEVER_DISTANCE_M {
+            return Vector2::zeros();
+        }
+        // Σ (s − s₀)·J·dq over the stretch, from the sums from the origin.
+        let dq = Vector2::new(self.end.x - earlier.end.x, self.end.y - earlier.end.y);
+        let sum = self.first - earlier.first - earlier.travel.forward_m * Vector2::new(-dq.y, dq.x);
+        Rotation2::new(-earlier.end.theta) * sum / driven
     }
 
     /// How far odometry has driven forward and turned (either way) along
@@ -360,6 +394,51 @@ mod tests {
     }
 
     #[test]
+    fn a_drift_moves_a_stretch_s_end_by_its_lever_times_the_turn_it_adds() {
+        // Odometry counts a path that turns 90° on the spot, drives 3 m on
+        // a curve left, turns back 40° on the spot and drives 2 m; the
+        // robot drifts 0.3°/m left beyond that as it drives. Over the
+        // stretch from 1 m in (its start turned 30° from the origin), the
+        // driven end lies from the counted one by the lever times the
+        // heading the drift added, in the frame of the stretch's start.
+        let drift = 0.3f64.to_radians();
+        let mut path = OdometryPath::default();
+        let (mut counted, mut driven) = (Pose2::new(0.0, 0.0, 30f64.to_radians()), Pose2::default());
+        let mut start = (path, counted, driven);
+        let mut steps: Vec<(f64, f64)> = vec![(0.0, 90f64.to_radians())];
+        steps.extend(std::iter::repeat_n((0.1, 1f64.to_radians()), 30));
+        steps.push((0.0, -40f64.to_radians()));
+        steps.extend(std::iter::repeat_n((0.1, 0.0), 20));
+        for (k, (forward, turn)) in steps.into_iter().enumerate() {
+            // Half the turn before moving and half after.
+            let step = |extra: f64| {
+                Pose2::new(0.0, 0.0, (turn + extra) / 2.0).compose(&Pose2::new(forward, 0.0, (turn + extra) / 2.0))
+            };
+            let next = counted.compose(&step(0.0));
+            path.add(&counted, &next);
+            counted = next;
+            driven = driven.compose(&step(drift * forward));
+            if k == 10 {
+                start = (path, counted, driven);
+            }
+        }
+        let (earlier, counted_then, driven_then) = start;
+        let (counted_stretch, driven_stretch) = (counted.relative_to(&counted_then), driven.relative_to(&driven_then));
+        let added = driven_stretch.theta - counted_stretch.theta;
+        assert!((added - drift * 4.0).abs() < 1e-9, "{added}");
+        let lever = path.drift_lever_since(&earlier);
+        let moved = Vector2::new(driven_stretch.x - counted_stretch.x, driven_stretch.y - counted_stretch.y);
+        // The lever is exact to first order in the drift: of the 4 cm that
+        // 1.2° of it moved the end, it leaves under a millimetre.
+        assert!(moved.norm() > 0.035, "{moved}");
+        assert!((moved - lever * added).norm() < 0.001, "moved {moved}, lever × turn {}", lever * added);
+        // A stretch that only turned has none.
+        let mut turned = earlier;
+        turned.add(&earlier.end, &earlier.end.compose(&Pose2::new(0.0, 0.0, 1.0)));
+        assert_eq!(turned.drift_lever_since(&earlier), Vector2::zeros());
+    }
+
+    #[test]
     fn a_path_corrected_for_a_veer_is_the_path_driven() {
         // A robot veering 0.1° per metre right drives 40 m in steps of
         // 0.2 m, steering 0.02° left each step: odometry counts a gentle
@@ -369,7 +448,7 @@ mod tests {
         let veer = Veer { rad_per_m: -0.1f64.to_radians(), sigma: 0.0 };
         let step = |turn: f64| Pose2::new(0.0, 0.0, turn / 2.0).compose(&Pose2::new(0.2, 0.0, turn / 2.0));
         let (mut counted, mut driven) = (Pose2::default(), Pose2::default());
-        let mut path = VeerPath::default();
+        let mut path = OdometryPath::default();
         for _ in 0..200 {
             let next = counted.compose(&step(0.02f64.to_radians()));
             path.add(&counted, &next);
