@@ -24,13 +24,15 @@ pub enum OdometryFusion {
     /// reported with all the distance it took put in the scale measured
     /// last: where the visual forward motion is poor (far landmarks
     /// through pixel noise) the wheels then carry it. Odometry's turn is
-    /// never taken: a veer it does not see would be (the steps measure that
-    /// veer instead, see [`OdometryNoise::veer_deg_per_m`]). Its sideways
-    /// position is read against its turn, as the path's shape: a heading
-    /// that drifts unseen as the robot drives (a veer, a slip) turns the
-    /// path without bending it, so driving straight the end moves aside by
-    /// half the distance times the drift, and the sideways position less
-    /// that stays what odometry counted. The default: it measured best over
+    /// not taken on its own: a veer it does not see would be (the steps
+    /// measure that veer instead, see [`OdometryNoise::veer_deg_per_m`]).
+    /// Only the path's shape is: its sideways position read against its
+    /// turn. A heading that drifts unseen as the robot drives (a veer, a
+    /// slip) turns the path without bending it, so driving straight the end
+    /// moves aside by half the distance times the drift, and the sideways
+    /// position less that stays, to first order, what odometry counted. A
+    /// turn on the spot that errs, unlike a drift, moves that measure. The
+    /// default: it measured best over
     /// held-out layouts and stayed better than no fusion with wheels 1 %
     /// off in scale or veering unseen.
     #[default]
@@ -744,28 +746,31 @@ mod tests {
                 let seen = if k <= 96 { towards_a_far_wall(truth(k), k as u32, 0.01, &camera) } else { Vec::new() };
                 tracker.update(&at(k as u64 + 1, 0.5 * k as f64, seen), &counted(k));
             }
-            (tracker.wheel_scale(), (tracker.navigation_pose(&counted(144)).unwrap().x - end.x).abs())
+            let steered = tracker.navigation_pose(&counted(144)).unwrap();
+            (tracker.wheel_scale(), (steered.x - end.x).abs(), steered.y.abs())
         };
         let prior = OdometryNoise::default().scale_sigma;
         let trusted = EgomotionConfig::default().trusted_landmarks;
-        let (measured, steered) = drive(prior, trusted);
+        let (measured, steered, aside) = drive(prior, trusted);
         let measured = measured.unwrap();
         assert!((measured.factor - 1.0 / 1.02).abs() < 2.0 * measured.sigma, "{measured:?}");
-        let (_, steered_as_counted) = drive(0.0, trusted);
+        let (_, steered_as_counted, _) = drive(0.0, trusted);
         let counted_error = counted(144).distance_to(end.x, end.y);
         assert!(steered_as_counted > 0.1 * counted_error, "{steered_as_counted} m");
         assert!(steered < 0.5 * steered_as_counted, "steered by {steered} m, {steered_as_counted} m as counted");
+        // (Sideways 6 cm when written.)
+        assert!(aside < 0.1, "{aside} m aside");
         // With egomotion's pose taken for worthless, the pose steered by is
         // odometry's own: its error shrinks by the share of the scale's
         // error the prior lets the measure correct.
         let worthless = 1_000_000_000;
-        let (_, steered_as_counted) = drive(0.0, worthless);
+        let (_, steered_as_counted, _) = drive(0.0, worthless);
         // (To within what the veer the steps measured turns it by.)
         assert!(
             (steered_as_counted - counted_error).abs() < 0.03,
             "{steered_as_counted} m, odometry {counted_error} m"
         );
-        let (_, steered) = drive(prior, worthless);
+        let (_, steered, _) = drive(prior, worthless);
         let weighed = scale_given_prior(Some(measured), prior);
         let expected = (1.02 * weighed.factor - 1.0).abs() / 0.02;
         assert!(expected < 0.8, "too little of the scale measured to tell: {weighed:?}");

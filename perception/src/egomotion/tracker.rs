@@ -357,7 +357,8 @@ impl Tracker {
         );
         // The turn odometry did not count, against the distance: the
         // visual turn is taken before odometry was combined with it, and
-        // `Sideways` never takes odometry's turn anyway. It is not quite
+        // `Sideways` takes odometry's turn only as its path's shape anyway,
+        // which a veer does not bend. It is not quite
         // free of odometry: the rigid estimator lays the later lines of
         // sight by odometry's turn, and on far landmarks its yaw follows
         // an error there by about a third (`rigid.rs`), so the veer is

@@ -222,6 +222,11 @@ pub(super) const TURN_SHARE: f64 = 0.02;
 /// error is the turns', not the distance's.
 const MIN_LEVER_DISTANCE_M: f64 = 1e-3;
 
+/// A stretch has a drift lever only if its net distance is at least this
+/// share of the distance it moved: one that backed up by more than a
+/// twentieth of its way forward (a manoeuvre off a wall) is left without.
+const ONE_WAY_SHARE: f64 = 0.9;
+
 /// Odometry's path since its origin, summed as a veer's correction needs
 /// it: a veer of `v` rad/m turns the robot `v·s` beyond odometry's count
 /// after `s` metres forward, so each stretch `dq` odometry counted was
@@ -243,6 +248,8 @@ pub(super) struct OdometryPath {
     second: Vector2<f64>,
     /// Odometry's pose at the path's end, relative to the origin.
     end: Pose2,
+    /// Metres moved, forward and backward alike.
+    moved_m: f64,
 }
 
 impl OdometryPath {
@@ -259,6 +266,7 @@ impl OdometryPath {
         self.travel.forward_m += ds;
         self.travel.turned_rad += step.theta.abs();
         self.end = *after;
+        self.moved_m += ds.abs();
     }
 
     /// How far the end of the stretch since `earlier` (this path as it
@@ -267,15 +275,17 @@ impl OdometryPath {
     /// along the stretch: as a veer's does, and as a random slip's is
     /// expected to, given where it ended. In the frame odometry had at the
     /// stretch's start; zero over a stretch that drove nowhere (a turn on
-    /// the spot).
+    /// the spot) or backed up on the way, where a drift's growth with the
+    /// distance, forward and back, no longer follows the net distance.
     ///
     /// Driving straight it is half the distance, sideways: a heading that
     /// drifted by `ε` has moved the end `ε·d/2` aside. So the sideways
-    /// position less `ε` times this is the same whatever the drift: the
-    /// path's shape, which the drift does not bend, only turns.
+    /// position less `ε` times this is, to first order, the same whatever
+    /// the drift: the path's shape, which the drift turns without bending.
     pub(super) fn drift_lever_since(&self, earlier: &OdometryPath) -> Vector2<f64> {
         let driven = self.travel.forward_m - earlier.travel.forward_m;
-        if driven.abs() < MIN_LEVER_DISTANCE_M {
+        let moved = self.moved_m - earlier.moved_m;
+        if driven.abs() < MIN_LEVER_DISTANCE_M || driven.abs() < ONE_WAY_SHARE * moved {
             return Vector2::zeros();
         }
         // Σ (s − s₀)·J·dq over the stretch, from the sums from the origin.
@@ -398,9 +408,10 @@ mod tests {
         // Odometry counts a path that turns 90° on the spot, drives 3 m on
         // a curve left, turns back 40° on the spot and drives 2 m; the
         // robot drifts 0.3°/m left beyond that as it drives. Over the
-        // stretch from 1 m in (its start turned 30° from the origin), the
-        // driven end lies from the counted one by the lever times the
-        // heading the drift added, in the frame of the stretch's start.
+        // stretch from 1 m in (the path starts turned 30° from the origin,
+        // the stretch 130°), the driven end lies from the counted one by
+        // the lever times the heading the drift added, in the frame of the
+        // stretch's start.
         let drift = 0.3f64.to_radians();
         let mut path = OdometryPath::default();
         let (mut counted, mut driven) = (Pose2::new(0.0, 0.0, 30f64.to_radians()), Pose2::default());
@@ -432,10 +443,19 @@ mod tests {
         // 1.2° of it moved the end, it leaves under a millimetre.
         assert!(moved.norm() > 0.035, "{moved}");
         assert!((moved - lever * added).norm() < 0.001, "moved {moved}, lever × turn {}", lever * added);
-        // A stretch that only turned has none.
+        // A stretch that only turned has none, nor one that backed up.
         let mut turned = earlier;
         turned.add(&earlier.end, &earlier.end.compose(&Pose2::new(0.0, 0.0, 1.0)));
         assert_eq!(turned.drift_lever_since(&earlier), Vector2::zeros());
+        let mut back_and_forth = earlier;
+        let ahead = earlier.end.compose(&Pose2::new(1.0, 0.0, 0.2));
+        back_and_forth.add(&earlier.end, &ahead);
+        back_and_forth.add(&ahead, &ahead.compose(&Pose2::new(-0.9, 0.0, 0.0)));
+        assert_eq!(back_and_forth.drift_lever_since(&earlier), Vector2::zeros());
+        // Backing straight up has one, the other way.
+        let mut backed = earlier;
+        backed.add(&earlier.end, &earlier.end.compose(&Pose2::new(-2.0, 0.0, 0.0)));
+        assert!((backed.drift_lever_since(&earlier) - Vector2::new(0.0, -1.0)).norm() < 1e-12);
     }
 
     #[test]
