@@ -630,6 +630,14 @@ mod tests {
         );
     }
 
+    /// The poses of a robot driving `steps` steps of 0.25 m from the
+    /// origin, turning `veer` rad for each metre.
+    fn veering(steps: usize, veer: f64) -> Vec<Pose2> {
+        std::iter::successors(Some(Pose2::default()), |last| Some(last.compose(&Pose2::new(0.25, 0.0, veer * 0.25))))
+            .take(steps + 1)
+            .collect()
+    }
+
     #[test]
     fn a_veer_odometry_does_not_count_is_measured_and_turned_out_of_the_pose_steered_by() {
         // Driving 36 m on wheels that pull 0.2° per metre to the right while
@@ -643,11 +651,7 @@ mod tests {
         // default's prior.)
         let camera = StereoCamera::default();
         let veer = -0.2f64.to_radians();
-        let mut truth = vec![Pose2::default()];
-        for k in 1..=144 {
-            let last: Pose2 = truth[k - 1];
-            truth.push(last.compose(&Pose2::new(0.25, 0.0, veer * 0.25)));
-        }
+        let truth = veering(144, veer);
         let counted = |k: usize| Pose2::new(0.25 * k as f64, 0.0, 0.0);
         let end = truth[144];
         let drive = |veer_deg_per_m, trusted_landmarks| {
@@ -698,12 +702,7 @@ mod tests {
         // 3.4 cm against 2.0; with the sideways position taken alone,
         // 5.2 cm, and its heading 0.45° off against 0.31°).
         let camera = StereoCamera::default();
-        let veer = -0.2f64.to_radians();
-        let mut truth = vec![Pose2::default()];
-        for k in 1..=96 {
-            let last: Pose2 = truth[k - 1];
-            truth.push(last.compose(&Pose2::new(0.25, 0.0, veer * 0.25)));
-        }
+        let truth = veering(96, -0.2f64.to_radians());
         let end_error = |counted: &dyn Fn(usize) -> Pose2| {
             let mut tracker = Tracker::new(EgomotionConfig::default(), camera, Pose2::default(), 2);
             for (k, pose) in truth.iter().enumerate() {
