@@ -475,6 +475,12 @@ mod tests {
         // stays vision's.
         let (fused, _, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &straight, None).unwrap();
         assert!((fused.yaw - drift).abs() < 0.02 * drift && (fused.left - seen.left).abs() < 1e-3, "{fused:?}");
+        // The lever is a length: on wheels measured 10 % long, odometry's
+        // 5.56 m counted is 5 m, and so is the lever's.
+        let long = Stretch::arc(Pose2::new(5.0 / 0.9, 0.0, 0.0));
+        let measured = Some(WheelScale { factor: 0.9, sigma: 0.005 });
+        let (fused, _, _) = noise.fuse(OdometryFusion::Sideways, &seen, &visual, &long, measured).unwrap();
+        assert!((fused.yaw - drift).abs() < 0.005 * drift, "{fused:?}");
         // Its sideways position taken alone pins the slide at odometry's
         // line, and the turn moves by the 2.2 cm over 8 m: a third of it.
         let pinned = Stretch { drift_lever: Vector2::zeros(), ..straight };
