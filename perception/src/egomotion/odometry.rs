@@ -32,9 +32,8 @@ pub enum OdometryFusion {
     /// moves aside by half the distance times the drift, and the sideways
     /// position less that stays, to first order, what odometry counted. A
     /// turn on the spot that errs, unlike a drift, moves that measure. The
-    /// default: it measured best over
-    /// held-out layouts and stayed better than no fusion with wheels 1 %
-    /// off in scale or veering unseen.
+    /// default: it measured best over held-out layouts and stayed better
+    /// than no fusion with wheels 1 % off in scale or veering unseen.
     #[default]
     Sideways,
     /// Forward, sideways and heading: better still where odometry errs only
@@ -327,11 +326,13 @@ impl OdometryNoise {
             // costs the first metres nothing in the end, and leaving the
             // wheels out there left them to vision alone, whose error then
             // stayed in the whole run.
-            let factor = wheel_scale.map_or(1.0, |scale| scale.factor);
-            (odometric.x, odometric.y) = (odometric.x * factor, odometric.y * factor);
+            if let Some(scale) = wheel_scale {
+                odometric = scale.driven(odometric);
+            }
             // Odometry measures `position − lever·turn` (forward, left): a
             // drift of its heading moves the position and the turn alike.
-            let lever = stretch.drift_lever * factor;
+            // The lever is a length, in the same scale.
+            let lever = stretch.drift_lever * wheel_scale.map_or(1.0, |scale| scale.factor);
             let measures = Matrix2x3::new(1.0, 0.0, -lever.x, 0.0, 1.0, -lever.y);
             let precision = Matrix2::from_diagonal(&Vector2::new(
                 self.covariance_in_scale(driven, wheel_scale)[(0, 0)].recip(),
