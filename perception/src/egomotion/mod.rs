@@ -16,12 +16,15 @@
 //!   uncertainty (bearing precise, range not), without which a far wall's
 //!   depth noise tilts the solution into metres of false sideways motion.
 //!   It needs three consistent landmarks; two with odometry fused in
-//!   (`Tracker` decides, from the settings).
+//!   (`Tracker` decides, from the settings). With `Sideways` fusion one
+//!   landmark alone still fixes the turn against odometry's position
+//!   (`one_landmark`).
 //!
 //! The files, by job: `config` (the settings a scenario file gives),
 //! `matching` (which landmarks of two frames are the same), `step` (what
 //! the estimators share), `simple2d` and `rigid` (the estimators),
-//! `odometry` (the odometry gate and fusion), `wheel_calibration` (the
+//! `odometry` (the odometry gate and fusion), `one_landmark` (a step on
+//! one landmark and odometry), `wheel_calibration` (the
 //! wheels' scale and veer the steps measure) and `tracker` (the keyframe
 //! bank that integrates the steps over a run).
 
@@ -29,6 +32,7 @@ mod config;
 mod matching;
 mod odometry;
 mod offset;
+mod one_landmark;
 mod rigid;
 mod simple2d;
 mod step;

@@ -80,7 +80,7 @@ pub(super) struct Stretch {
 
 impl Stretch {
     /// How far the stretch's end lies from its start, m.
-    fn driven(&self) -> f64 {
+    pub(super) fn driven(&self) -> f64 {
         self.motion.x.hypot(self.motion.y)
     }
 
@@ -113,17 +113,13 @@ impl OdometryGate {
         // consensus among them can shift the motion along the line of sight
         // by metres; such a motion disagrees with odometry by far more than
         // odometry ever errs over a keyframe's reach.
-        let (odometric, driven) = (&stretch.motion, stretch.driven());
-        let off = (motion.forward - odometric.x).hypot(motion.left - odometric.y);
-        let turned = angle_difference(motion.yaw, odometric.theta).abs();
-        if off > self.metres + self.share * driven || turned > (self.degrees + self.degrees_per_m * driven).to_radians()
-        {
+        if !self.within_bounds(&motion, stretch) {
             return None;
         }
         // Far landmarks with a few gross mismatches among them can agree on
         // a motion decimetres off whose covariance claims centimetres.
         if let (Some(noise), Some(visual)) = (&self.noise, &covariance) {
-            if !noise.consistent(&motion, visual, odometric, driven) {
+            if !noise.consistent(&motion, visual, &stretch.motion, stretch.driven()) {
                 return None;
             }
             if let Some((fused, fused_covariance, gain)) = noise.fuse(fusion, &motion, visual, stretch, wheel_scale) {
@@ -131,6 +127,15 @@ impl OdometryGate {
             }
         }
         Some((motion, covariance, Vector2::zeros()))
+    }
+
+    /// Whether `motion` lies within the gate's bounds of odometry's over
+    /// `stretch`, in position and in heading.
+    pub(super) fn within_bounds(&self, motion: &PlanarMotion, stretch: &Stretch) -> bool {
+        let (odometric, driven) = (&stretch.motion, stretch.driven());
+        let off = (motion.forward - odometric.x).hypot(motion.left - odometric.y);
+        let turned = angle_difference(motion.yaw, odometric.theta).abs();
+        off <= self.metres + self.share * driven && turned <= (self.degrees + self.degrees_per_m * driven).to_radians()
     }
 }
 
@@ -246,6 +251,31 @@ impl Default for OdometryNoise {
     }
 }
 
+/// What `Sideways` fusion takes of odometry over a stretch: the measure
+/// `measures · (forward, left, yaw)` of the motion, which odometry counted
+/// as `measures · motion`, with a precision on each of its two rows.
+pub(super) struct SidewaysMeasure {
+    /// Odometry's motion, its distance in the wheels' measured scale.
+    pub(super) motion: Pose2,
+    /// `[I | −lever]`: the position less the drift lever times the turn.
+    pub(super) measures: Matrix2x3<f64>,
+    /// The inverse variance of each row (forward, left).
+    pub(super) precision: Matrix2<f64>,
+}
+
+impl SidewaysMeasure {
+    /// The information it gives on (forward, left, yaw): rank two, as it
+    /// says nothing of a turn on its own.
+    pub(super) fn information(&self) -> Matrix3<f64> {
+        self.measures.transpose() * self.precision * self.measures
+    }
+
+    /// The measure's residual at `motion`, against what odometry counted.
+    pub(super) fn residual(&self, motion: &PlanarMotion) -> Vector2<f64> {
+        self.measures * OdometryNoise::difference(motion, &self.motion)
+    }
+}
+
 impl OdometryNoise {
     /// The covariance (forward, left, yaw) of odometry's motion over a
     /// stretch of `driven` metres.
@@ -272,6 +302,30 @@ impl OdometryNoise {
             motion.left - odometric.y,
             angle_difference(motion.yaw, odometric.theta),
         )
+    }
+
+    /// What `Sideways` fusion takes of odometry over `stretch`.
+    ///
+    /// Until the steps have measured the wheels' scale, the distance is
+    /// taken as counted: the tracker puts what it took in the scale
+    /// measured later (`DistanceLedger`), so a scale 1 % off costs the
+    /// first metres nothing in the end, and leaving the wheels out there
+    /// left them to vision alone, whose error then stayed in the whole run.
+    pub(super) fn sideways_measure(&self, stretch: &Stretch, wheel_scale: Option<WheelScale>) -> SidewaysMeasure {
+        let driven = stretch.driven();
+        let motion = wheel_scale.map_or(stretch.motion, |scale| scale.driven(stretch.motion));
+        // Odometry measures `position − lever·turn` (forward, left): a drift
+        // of its heading moves the position and the turn alike. The lever
+        // is a length, in the same scale.
+        let lever = stretch.drift_lever * wheel_scale.map_or(1.0, |scale| scale.factor);
+        SidewaysMeasure {
+            motion,
+            measures: Matrix2x3::new(1.0, 0.0, -lever.x, 0.0, 1.0, -lever.y),
+            precision: Matrix2::from_diagonal(&Vector2::new(
+                self.covariance_in_scale(driven, wheel_scale)[(0, 0)].recip(),
+                self.covariance(driven)[(1, 1)].recip(),
+            )),
+        }
     }
 
     /// Whether a visual `motion` with covariance `visual` (forward, left,
@@ -316,29 +370,12 @@ impl OdometryNoise {
         if fusion == OdometryFusion::Off {
             return None;
         }
-        let driven = stretch.driven();
-        let (visual_info, mut odometry_info) = (visual.try_inverse()?, self.covariance(driven).try_inverse()?);
+        let (visual_info, mut odometry_info) =
+            (visual.try_inverse()?, self.covariance(stretch.driven()).try_inverse()?);
         let mut odometric = stretch.motion;
         if fusion == OdometryFusion::Sideways {
-            // Until the steps have measured the wheels' scale, the distance
-            // is taken as counted: the tracker puts what it took in the
-            // scale measured later (`DistanceLedger`), so a scale 1 % off
-            // costs the first metres nothing in the end, and leaving the
-            // wheels out there left them to vision alone, whose error then
-            // stayed in the whole run.
-            if let Some(scale) = wheel_scale {
-                odometric = scale.driven(odometric);
-            }
-            // Odometry measures `position − lever·turn` (forward, left): a
-            // drift of its heading moves the position and the turn alike.
-            // The lever is a length, in the same scale.
-            let lever = stretch.drift_lever * wheel_scale.map_or(1.0, |scale| scale.factor);
-            let measures = Matrix2x3::new(1.0, 0.0, -lever.x, 0.0, 1.0, -lever.y);
-            let precision = Matrix2::from_diagonal(&Vector2::new(
-                self.covariance_in_scale(driven, wheel_scale)[(0, 0)].recip(),
-                self.covariance(driven)[(1, 1)].recip(),
-            ));
-            odometry_info = measures.transpose() * precision * measures;
+            let measure = self.sideways_measure(stretch, wheel_scale);
+            (odometric, odometry_info) = (measure.motion, measure.information());
         }
         let covariance = (visual_info + odometry_info).try_inverse()?;
         let gain = covariance * odometry_info;

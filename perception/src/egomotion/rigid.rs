@@ -55,10 +55,14 @@ fn rotation(yaw: f64) -> Matrix2<f64> {
 /// 1 on training layouts) 5 % better on fresh seeds.
 const MIN_VARIANCE_FACTOR: f64 = 0.3;
 
+/// χ² with 1 degree of freedom at 99 %: the test of a fit that leaves one
+/// dimension to check it by.
+pub(super) const PAIR_GATE: f64 = 6.63;
+
 /// A length in image pixels: the pixel noise the estimator assumes, kept
 /// apart from the metres its helpers take beside it.
 #[derive(Clone, Copy, Debug)]
-struct Pixels(f64);
+pub(super) struct Pixels(pub(super) f64);
 
 /// The information matrix (inverse covariance) of the residual
 /// `a − (R b + t)` of one landmark seen as `a` before and `b` after a move
@@ -73,7 +77,7 @@ struct Pixels(f64);
 /// taken to lie along the other line, passes for a precise bearing (laying
 /// both ellipses along `a`'s line, as this model once did, left egomotion
 /// 20 % further off after 35 m of straight driving; see the results page).
-fn residual_information(
+pub(super) fn residual_information(
     camera: &StereoCamera,
     pixel_sigma: Pixels,
     a: [f64; 3],
@@ -119,7 +123,7 @@ impl Rigid {
     /// The Gauss–Newton normal equations at `(yaw, t)` in the unknowns
     /// `(tx, ty, yaw)`: the information matrix `H = Σ Jᵀ Λ J`, the gradient
     /// `Σ Jᵀ Λ e`, and the cost `Σ eᵀ Λ e`.
-    fn normal_equations(
+    pub(super) fn normal_equations(
         pairs: &[Pair],
         info: &[Matrix2<f64>],
         yaw: f64,
@@ -191,8 +195,6 @@ impl Rigid {
         };
         // χ² with 2 degrees of freedom at 99 %.
         const GATE: f64 = 9.21;
-        // χ² with 1 degree of freedom at 99 %.
-        const PAIR_GATE: f64 = 6.63;
         let ones = [1.0; 2];
         let mut best: Option<Vec<usize>> = None;
         for _ in 0..config.iterations {
