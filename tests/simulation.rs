@@ -588,7 +588,9 @@ fn the_walls_hold_egomotions_heading_where_it_bridges_on_odometry() {
     // fix for egomotion too (`State::heading_fix`), which turns its pose
     // and its keyframes. Over a dozen seeds egomotion's heading at the end
     // is less than half as far off (RMS), while the wheels' own heading is
-    // as far off as without.
+    // about as far off as without. (It once asserted one seed, where
+    // egomotion bridged 2.5° of the wheels' slip; steps on one landmark
+    // now measure most of that.)
     let edits = |compass: bool| {
         let mut edits = vec![
             ("seed: 12)", "seed: 2121)"),
@@ -614,8 +616,13 @@ fn the_walls_hold_egomotions_heading_where_it_bridges_on_odometry() {
         (rms(ego), rms(wheels))
     };
     let ((without, wheels_without), (with, wheels_with)) = (heading_errors(false), heading_errors(true));
-    assert!(with < 0.5 * without, "{with}° against {without}°");
-    assert!(wheels_with > 0.8 * wheels_without, "the wheels {wheels_with}° against {wheels_without}°");
+    // Without the compass 1.24° RMS, with it 0.43°; the wheels 1.26° and
+    // 1.21° (when written).
+    assert!(without > 1.0 && with < 0.5 && with < 0.5 * without, "{with}° against {without}°");
+    assert!(
+        (0.8..1.25).contains(&(wheels_with / wheels_without)),
+        "the wheels {wheels_with}° against {wheels_without}°"
+    );
 }
 
 #[test]

@@ -25,8 +25,8 @@ pub struct DecisionRules {
     /// Nearer than this, the two cameras see a landmark from too different
     /// directions for their descriptors to match (thesis §4.4.10.3), m.
     pub min_stereo_range_m: f64,
-    /// Fewer landmarks in view than this and egomotion would fail: the
-    /// heading is infeasible.
+    /// Fewer landmarks in view than this and egomotion's steps fail or lean
+    /// on odometry: the heading is infeasible.
     pub min_landmarks: usize,
     /// The cameras' height above the floor, m: landmarks' heights are
     /// measured from it.
@@ -358,7 +358,7 @@ const BANDS: usize = 4;
 /// from here: the tracking list drops those seen from too far round): the
 /// one of least `objective` over the landmarks predicted in view after one
 /// projected step. A heading with
-/// fewer than `min_landmarks` in view (egomotion would fail) or with one
+/// fewer than `min_landmarks` in view (egomotion's steps fail or lean on odometry) or with one
 /// nearer than the slant limit is rejected, except that under the
 /// end-point objective the goal's bearing with too few in view stays, at
 /// the odometry bridge's cost. Ties go to the candidate listed first.

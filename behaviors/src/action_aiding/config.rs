@@ -384,7 +384,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "4",
                 "",
                 "a heading must keep at least this many landmarks predicted in both images, within range and beyond \
-                 the stereo-matching distance; fewer and egomotion would fail (under `EndPoint` the goal bearing \
+                 the stereo-matching distance; fewer and egomotion's steps fail or lean on odometry (under `EndPoint` the goal bearing \
                  stays, at the odometry bridge's cost)",
             ),
             Field::new(

@@ -153,7 +153,10 @@ pub struct EgomotionConfig {
     /// trusted at its estimator's word: it is reported as starving
     /// ([`crate::egomotion::Tracker::starving`]) and its covariance is
     /// scaled up by this over the landmarks it has in the pose's
-    /// uncertainty ([`crate::egomotion::Tracker::pose_covariance`]).
+    /// uncertainty ([`crate::egomotion::Tracker::pose_covariance`]). A step
+    /// on one landmark with `Sideways` fusion, whose translation is
+    /// odometry's and whose turn is as sure as that allows, is reported as
+    /// starving but not widened.
     #[serde(deserialize_with = "at_least_one")]
     pub trusted_landmarks: usize,
     /// The robot's top speed: motions faster than this are impossible and

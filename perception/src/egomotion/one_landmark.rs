@@ -2,7 +2,8 @@
 //! the stretch (as the fusion takes it) and the landmark's line of sight
 //! for the turn.
 //!
-//! The rigid estimator needs two landmarks to fix a motion. Where a short
+//! The rigid estimator needs two landmarks to fix a motion (three without
+//! fusion). Where a short
 //! detection range or walls seen only obliquely leave one in view at a
 //! time, those frames were bridged on odometry, turn and all, and its
 //! heading slip went into the pose unmeasured. Odometry's position fixes

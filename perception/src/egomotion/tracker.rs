@@ -111,7 +111,8 @@ pub struct Tracker {
     /// The uncertainty of the pose that `covariance` leaves out: failed
     /// steps bridged by odometry (or, with none, by standing still), and
     /// steps on fewer than `trusted_landmarks` landmarks taken at more than
-    /// their estimator's word.
+    /// their estimator's word (but for steps on one landmark, whose
+    /// translation is odometry's).
     extra: Matrix3<f64>,
     /// The bridges' part of `extra` alone: what the pose owes to
     /// odometry, without the margin starving steps are given.
@@ -207,7 +208,9 @@ struct Estimate {
     covariance: Option<Matrix3<f64>>,
     /// The visual motion before any odometry was combined with it, the
     /// landmarks consistent with it and the mounts of its two frames: the
-    /// disparity offset is read from them, for the chosen match only.
+    /// disparity offset is read from them, for the chosen match only. (A
+    /// step on one landmark has no visual motion of its own: the fused one
+    /// stands here, and no offset is read.)
     visual: PlanarMotion,
     /// The visual motion's own covariance, before odometry, where the
     /// estimator gives one: the wheels' scale and veer are measured
@@ -342,9 +345,10 @@ impl Tracker {
     /// Takes in the chosen step's visual forward motion against
     /// odometry's, for the wheels' scale, and its visual turn less
     /// odometry's against odometry's distance, for their veer, if
-    /// `Sideways` fusion will use them. Every step the odometry gate passed
-    /// counts, weighed by its own variance: a step on few landmarks says so
-    /// in its covariance.
+    /// `Sideways` fusion will use them. Every visual step the odometry gate
+    /// passed counts (not a step on one landmark, whose motion rests on
+    /// odometry's), weighed by its own variance: a step on few landmarks
+    /// says so in its covariance.
     fn measure_wheels(&mut self, anchor: u64, estimate: &Estimate, odometric: &Pose2, travel: &Travel) {
         let noise = self.config.odometry_gate.and_then(|gate| gate.noise);
         let (OdometryFusion::Sideways, Some(noise), Some(visual)) =
@@ -422,7 +426,8 @@ impl Tracker {
     /// bridged (by odometry's noise, or with no odometry gate by the
     /// largest step the speed limits allow), and each step on fewer than
     /// `trusted_landmarks` landmarks taken as `trusted_landmarks / n` times
-    /// as uncertain as its estimator says.
+    /// as uncertain as its estimator says (a step on one landmark, whose
+    /// translation is odometry's, as uncertain as its fit says).
     pub fn pose_covariance(&self) -> Matrix3<f64> {
         self.covariance + self.extra
     }
@@ -714,7 +719,7 @@ impl Tracker {
                 self.last_match = frame.time;
                 let travel = self.odometry_path.travel().since(&keyframe.path.travel());
                 self.measure_wheels(keyframe.number, &estimate, &odometric, &travel);
-                if self.config.disparity_offset != DisparityOffsetEstimate::Off {
+                if self.config.disparity_offset != DisparityOffsetEstimate::Off && !estimate.on_one_landmark {
                     let sigma = match self.config.estimator {
                         EstimatorKind::Rigid(rigid) => rigid.pixel_sigma,
                         EstimatorKind::Simple2d(simple) => simple.pixel_sigma,
@@ -991,7 +996,8 @@ impl Tracker {
             self.pairs.push(pair);
         }
         let dt = (frame.time - keyframe.time).max(1e-6);
-        if self.pairs.len() == 1 {
+        // (The simplified estimator makes steps of one landmark its own way.)
+        if self.pairs.len() == 1 && self.config.fuses_sideways() {
             return self.one_landmark_estimate(index, odometry, dt, mounts);
         }
         let input = StepInput {
@@ -1040,7 +1046,10 @@ impl Tracker {
     /// landmark matched to keyframe `index` (in `self.pairs`) makes with
     /// odometry's position (see `one_landmark.rs`), if it fits. Its motion
     /// is not measured by vision alone, so it neither measures the wheels
-    /// nor reads the disparity offset.
+    /// nor reads the disparity offset. Elsewhere it counts as a step on
+    /// one landmark: no outage, and its landmark's CV is the step's, which
+    /// the journey CV, the end-point predictor and action aiding's vote
+    /// read.
     fn one_landmark_estimate(&self, index: usize, odometry: &Pose2, dt: f64, mounts: Mounts) -> Option<Estimate> {
         let (true, EstimatorKind::Rigid(rigid), Some(gate), [pair]) =
             (self.config.fuses_sideways(), self.config.estimator, self.config.odometry_gate, self.pairs.as_slice())
@@ -1220,14 +1229,17 @@ mod tests {
     fn one_landmark_corrects_a_turn_odometry_invents_when_odometry_is_fused() {
         // One landmark ahead and the robot driving straight 0.3 m a frame,
         // while odometry counts 0.1° of turn a frame that never happened.
-        // Fused with odometry, the landmark alone makes a step, and the
-        // pose's heading stays true; without it every frame is bridged,
-        // and the pose turns with odometry.
+        // Fused sideways, the landmark alone makes a step, and the pose's
+        // heading stays true; with no fusion, or with `Full` (which takes
+        // odometry's turn whole), every frame is bridged, and the pose
+        // turns with odometry.
         let camera = StereoCamera::default();
         let one = [[8.0, 1.5, 0.8]];
-        for (fusion, failures, heading_deg, within_deg) in
-            [(OdometryFusion::Sideways, 0, 0.0, 0.05), (OdometryFusion::Off, 8, 0.8, 1e-9)]
-        {
+        for (fusion, failures, heading_deg, within_deg) in [
+            (OdometryFusion::Sideways, 0, 0.0, 0.05),
+            (OdometryFusion::Off, 8, 0.8, 1e-9),
+            (OdometryFusion::Full, 8, 0.8, 1e-9),
+        ] {
             let config = EgomotionConfig { odometry_fusion: fusion, ..EgomotionConfig::default() };
             let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
             let mut odometry = Pose2::default();
@@ -1241,6 +1253,30 @@ mod tests {
             let heading = s.pose.unwrap().theta.to_degrees();
             assert!((heading - heading_deg).abs() < within_deg, "{fusion:?}: {heading}° against {heading_deg}°");
         }
+    }
+
+    #[test]
+    fn the_simplified_estimator_still_steps_on_one_landmark_its_own_way() {
+        // Three landmarks in the first frame, then only the first of them:
+        // the simplified estimator reads its change of range as a step, as
+        // it did before the rigid estimator's steps on one landmark.
+        let camera = StereoCamera::default();
+        let three = [[8.0, 1.5, 0.8], [9.0, -1.5, 1.0], [10.0, 0.5, 1.2]];
+        let simple = EstimatorKind::Simple2d(super::super::config::Simple2dConfig::default());
+        let mut tracker = Tracker::new(
+            EgomotionConfig { estimator: simple, ..EgomotionConfig::default() },
+            camera,
+            Pose2::default(),
+            0,
+        );
+        for k in 0..5u32 {
+            let truth = Pose2::new(0.3 * f64::from(k), 0.0, 0.0);
+            let seen = if k == 0 { &three[..] } else { &three[..1] };
+            tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), frame(seen, truth, &camera)), &truth);
+        }
+        let s = tracker.state();
+        assert_eq!((s.steps, s.failures), (4, 0), "{s:?}");
+        assert!((s.pose.unwrap().x - 1.2).abs() < 0.01, "{s:?}");
     }
 
     #[test]
