@@ -1205,24 +1205,38 @@ mod tests {
         // is not exact: odometry's sideways motion, bent by the turn it
         // invents, is fused in, and a two-landmark fit couples its sideways
         // motion with its turn.)
-        let camera = StereoCamera::default();
         let two = [[8.0, 1.5, 0.8], [9.0, -1.5, 1.0]];
         for (fusion, failures, heading_deg, within_deg) in
             [(OdometryFusion::Sideways, 0, 0.0, 0.3), (OdometryFusion::Off, 8, 2.4, 1e-9)]
         {
-            let config = EgomotionConfig { odometry_fusion: fusion, ..EgomotionConfig::default() };
-            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
-            let mut odometry = Pose2::default();
-            for k in 0..9u32 {
-                let truth = Pose2::new(0.3 * f64::from(k), 0.0, 0.0);
-                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), frame(&two, truth, &camera)), &odometry);
-                odometry = odometry.compose(&Pose2::new(0.3, 0.0, 0.3f64.to_radians()));
-            }
-            let s = tracker.state();
-            assert_eq!((s.steps, s.failures), (8, failures), "{fusion:?}: {s:?}");
-            let heading = s.pose.unwrap().theta.to_degrees();
-            assert!((heading - heading_deg).abs() < within_deg, "{fusion:?}: {heading}° against {heading_deg}°");
+            driving_past(&two, 0.3, fusion, failures, heading_deg, within_deg);
         }
+    }
+
+    /// Drives 9 frames 0.3 m apart straight past `points` while odometry
+    /// counts `invented_deg` of turn a frame that never happened, and
+    /// checks the failed steps and the heading at the end.
+    fn driving_past(
+        points: &[[f64; 3]],
+        invented_deg: f64,
+        fusion: OdometryFusion,
+        failures: u32,
+        heading_deg: f64,
+        within_deg: f64,
+    ) {
+        let camera = StereoCamera::default();
+        let config = EgomotionConfig { odometry_fusion: fusion, ..EgomotionConfig::default() };
+        let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
+        let mut odometry = Pose2::default();
+        for k in 0..9u32 {
+            let truth = Pose2::new(0.3 * f64::from(k), 0.0, 0.0);
+            tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), frame(points, truth, &camera)), &odometry);
+            odometry = odometry.compose(&Pose2::new(0.3, 0.0, invented_deg.to_radians()));
+        }
+        let s = tracker.state();
+        assert_eq!((s.steps, s.failures), (8, failures), "{fusion:?}: {s:?}");
+        let heading = s.pose.unwrap().theta.to_degrees();
+        assert!((heading - heading_deg).abs() < within_deg, "{fusion:?}: {heading}° against {heading_deg}°");
     }
 
     #[test]
@@ -1233,25 +1247,13 @@ mod tests {
         // heading stays true; with no fusion, or with `Full` (which takes
         // odometry's turn whole), every frame is bridged, and the pose
         // turns with odometry.
-        let camera = StereoCamera::default();
         let one = [[8.0, 1.5, 0.8]];
         for (fusion, failures, heading_deg, within_deg) in [
             (OdometryFusion::Sideways, 0, 0.0, 0.05),
             (OdometryFusion::Off, 8, 0.8, 1e-9),
             (OdometryFusion::Full, 8, 0.8, 1e-9),
         ] {
-            let config = EgomotionConfig { odometry_fusion: fusion, ..EgomotionConfig::default() };
-            let mut tracker = Tracker::new(config, camera, Pose2::default(), 0);
-            let mut odometry = Pose2::default();
-            for k in 0..9u32 {
-                let truth = Pose2::new(0.3 * f64::from(k), 0.0, 0.0);
-                tracker.update(&at(u64::from(k) + 1, 0.5 * f64::from(k), frame(&one, truth, &camera)), &odometry);
-                odometry = odometry.compose(&Pose2::new(0.3, 0.0, 0.1f64.to_radians()));
-            }
-            let s = tracker.state();
-            assert_eq!((s.steps, s.failures), (8, failures), "{fusion:?}: {s:?}");
-            let heading = s.pose.unwrap().theta.to_degrees();
-            assert!((heading - heading_deg).abs() < within_deg, "{fusion:?}: {heading}° against {heading_deg}°");
+            driving_past(&one, 0.1, fusion, failures, heading_deg, within_deg);
         }
     }
 
