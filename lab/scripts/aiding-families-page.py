@@ -400,9 +400,10 @@ def main():
                         for f, w, b, n in rose)
             + '. The robot stops where the pose it steers by first comes within the tolerance, at its edge, so a '
             'few centimetres of that pose ahead of the truth turn a run out.')
-    straight_error = lambda run, f: run[f]['default']['exact']['none']['error_m']  # noqa: E731
+    error = lambda run, f, w, a: run[f]['default'][w][a]['error_m']  # noqa: E731
+    straight_error = lambda run, f: error(run, f, 'exact', 'none')  # noqa: E731
     vs_straight = lambda run, f, a: run[f]['default']['exact'][a]['error_vs_straight']['ratio']  # noqa: E731
-    aid_error = lambda run, f, a: run[f]['default']['exact'][a]['error_m']  # noqa: E731
+    aid_error = lambda run, f, a: error(run, f, 'exact', a)  # noqa: E731
     say('')
     say('`Sideways` fusion took no heading from odometry, but it took odometry\'s sideways position over each '
         'stretch as it was, and that carries odometry\'s heading drift: a drift growing over a straight stretch '
@@ -439,7 +440,6 @@ def main():
            'end, the pose steered by 1.7 m, the robot pinned by the wall beside the goal), the kind the tenth run '
            'left, which the compass\'s runs here avoid.' if on_time_limit(sixteenth, 'default') == 1 else '.'))
     failed = lambda run, f, w, a: run[f]['default'][w][a]['failed_frames']  # noqa: E731
-    error = lambda run, f, w, a: run[f]['default'][w][a]['error_m']  # noqa: E731
     say('')
     say('With a 20 m detection range the walls\' landmarks are seen only between where they enter the field of '
         'view and where they turn too oblique, so one or two are in view at a time: on a training run (layout '

@@ -1014,16 +1014,13 @@ impl Tracker {
         // Frames that share landmarks cannot have looked further apart than
         // the view is wide, nor can the robot have turned faster than it
         // turns (§4.4.6).
-        let max_turn = self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians();
+        let max_turn = self.max_turn(dt);
         let looked = motion.yaw + (mounts.after.pan_deg - mounts.before.pan_deg).to_radians();
         if motion.yaw.abs() > max_turn || looked.abs() > self.camera.horizontal_fov() {
             return None;
         }
         if let Some(gate) = &self.config.odometry_gate {
-            let stretch = Stretch {
-                motion: odometry.relative_to(&keyframe.odometry),
-                drift_lever: self.odometry_path.drift_lever_since(&keyframe.path),
-            };
+            let stretch = self.stretch_since(keyframe, odometry);
             let scale = self.wheel_scale();
             (motion, covariance, distance_gain) =
                 gate.pass(self.config.odometry_fusion, motion, covariance, &stretch, scale)?;
@@ -1042,6 +1039,21 @@ impl Tracker {
         })
     }
 
+    /// Odometry over the stretch from `keyframe` to now, when it read
+    /// `odometry`.
+    fn stretch_since(&self, keyframe: &Keyframe, odometry: &Pose2) -> Stretch {
+        Stretch {
+            motion: odometry.relative_to(&keyframe.odometry),
+            drift_lever: self.odometry_path.drift_lever_since(&keyframe.path),
+        }
+    }
+
+    /// The widest turn a step between frames `dt` s apart may make: the
+    /// robot's top turn rate, with a margin (§4.4.6).
+    fn max_turn(&self, dt: f64) -> f64 {
+        self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians()
+    }
+
     /// With `Sideways` fusion (on the rigid estimator), the step the one
     /// landmark matched to keyframe `index` (in `self.pairs`) makes with
     /// odometry's position (see `one_landmark.rs`), if it fits. Its motion
@@ -1056,23 +1068,11 @@ impl Tracker {
         else {
             return None;
         };
-        let keyframe = &self.keyframes[index];
-        let stretch = Stretch {
-            motion: odometry.relative_to(&keyframe.odometry),
-            drift_lever: self.odometry_path.drift_lever_since(&keyframe.path),
-        };
-        let (motion, covariance, distance_gain) = one_landmark::step(
-            &self.camera,
-            rigid.pixel_sigma,
-            pair,
-            &gate,
-            &gate.noise?,
-            &stretch,
-            self.wheel_scale(),
-        )?;
+        let stretch = self.stretch_since(&self.keyframes[index], odometry);
+        let (motion, covariance, distance_gain) =
+            one_landmark::step(&self.camera, rigid.pixel_sigma, pair, &gate, &stretch, self.wheel_scale())?;
         // The bound a step on more landmarks is held to (`estimate_from`).
-        let max_turn = self.config.max_turn_rate_deg.to_radians() * dt * 1.5 + 2f64.to_radians();
-        if motion.yaw.abs() > max_turn {
+        if motion.yaw.abs() > self.max_turn(dt) {
             return None;
         }
         Some(Estimate {
