@@ -107,6 +107,9 @@ def main():
             'time_s': round(mean(measure(r, 'time') for r in reports), 1),
             'failed_frames': round(mean(measure(r, 'failures') for r in reports), 2),
             'time_limit_runs': sum(r['end'] == 'time_limit' for r in reports),
+            # The progress check's ends: the robot held on one spot short of
+            # the goal (on by default since the eighteenth run).
+            'no_progress_runs': sum(r['end'] == 'no_progress' for r in reports),
             # Any other end than the goal or the time limit (no progress, a
             # behaviour's failure), by its name.
             'other_ends': sorted({r['end'] for r in reports} - {'goal_reached', 'time_limit'}),

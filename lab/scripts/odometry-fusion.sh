@@ -59,6 +59,7 @@ for (route, odometry, fusion, technique), reports in sorted(runs.items()):
         'ci95_m': [round(mean(errors) - half, 4), round(mean(errors) + half, 4)],
         'failures_per_run': round(mean(r['egomotion_failures'] for r in reports), 2),
         'time_limit_runs': sum(r['end'] == 'time_limit' for r in reports),
+        'no_progress_runs': sum(r['end'] == 'no_progress' for r in reports),
     }
 json.dump(out, sys.stdout, indent=1)
 print()

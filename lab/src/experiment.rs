@@ -228,6 +228,9 @@ pub struct EndpointCell {
     pub runs_outside_goal_tolerance: usize,
     /// Runs that ended on the time limit instead of at the goal.
     pub runs_time_limit: usize,
+    /// Runs the progress check ended, the robot held on one spot short of
+    /// the goal.
+    pub runs_no_progress: usize,
     /// The end-point σ the decision's model predicted, per run, m.
     pub predicted_sigma_m: FieldStats,
     /// The RMS of the actual end-point errors over the RMS of the predicted
@@ -282,6 +285,7 @@ fn cell(reports: &[RunReport]) -> EndpointCell {
         runs_with_failures: reports.iter().filter(|r| r.egomotion_failures.unwrap_or(0) > 0).count(),
         runs_outside_goal_tolerance: reports.iter().filter(|r| !r.reached_goal).count(),
         runs_time_limit: reports.iter().filter(|r| r.end == EndReason::TimeLimit).count(),
+        runs_no_progress: reports.iter().filter(|r| r.end == EndReason::NoProgress).count(),
         predicted_sigma_m: field(&|r| r.predicted_endpoint_sigma_m),
         actual_over_predicted: {
             let rms = |f: &dyn Fn(&RunReport) -> Option<f64>| {
@@ -623,7 +627,7 @@ impl std::fmt::Display for Endpoint {
                 writeln!(f, "\n{route}, {estimator} estimator")?;
                 writeln!(
                     f,
-                    "{:>9} {:>24} {:>7} {:>8} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7}",
+                    "{:>9} {:>24} {:>7} {:>8} {:>8} {:>8} {:>9} {:>7} {:>7} {:>7} {:>7}",
                     "technique",
                     "end-point error m",
                     "% dist",
@@ -632,6 +636,7 @@ impl std::fmt::Display for Endpoint {
                     "failures",
                     "outages",
                     "time lim",
+                    "gave up",
                     "path +%",
                     "time +%"
                 )?;
@@ -640,7 +645,7 @@ impl std::fmt::Display for Endpoint {
                     let e = &c.endpoint_error_m;
                     writeln!(
                         f,
-                        "{:>9} {:>7.2} {:>16} {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7.1} {:>7.1}",
+                        "{:>9} {:>7.2} {:>16} {:>7.2} {:>8.2} {:>8.2} {:>8.1} {:>9.1} {:>7} {:>7} {:>7.1} {:>7.1}",
                         aid.name(),
                         e.mean,
                         e.ci95.map_or("(n too small)".to_owned(), |[l, h]| format!("[{l:>6.2}, {h:>6.2}]")),
@@ -650,6 +655,7 @@ impl std::fmt::Display for Endpoint {
                         c.egomotion_failures.mean,
                         c.outages.mean,
                         c.runs_time_limit,
+                        c.runs_no_progress,
                         c.path_overhead_pct.mean,
                         c.time_overhead_pct.mean
                     )?;

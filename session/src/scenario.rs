@@ -52,9 +52,11 @@ pub struct Scenario {
     #[serde(default)]
     pub goal: Option<Goal>,
     /// End the run (`end: no_progress`) once the robot, by the pose it
-    /// believes, has stayed within `radius_m` of one spot for `window_s`;
-    /// unset, only the goal or the time limit ends it.
-    #[serde(default)]
+    /// believes, has stayed within `radius_m` of one spot for `window_s`
+    /// short of the goal: [`ProgressCheck::STANDARD`] unless set;
+    /// `progress: None`, only the goal or the time limit ends it. A run
+    /// without a goal is never ended by it.
+    #[serde(default = "ProgressCheck::standard")]
     pub progress: Option<ProgressCheck>,
     /// What a panicking behaviour does: `Stop` (the default) ends the run
     /// with its report; `SkipBehavior` carries on without it.

@@ -229,9 +229,11 @@ pub struct DriveConfig {
     pub live: Option<std::net::SocketAddr>,
     /// Give up (robot stopped, session closed, exit code 1) once the robot,
     /// by its own pose, has stayed within `radius_m` of one spot for
-    /// `window_s`: pressed against a wall its goal lies behind, say.
-    /// Unset, only the goal, the time limit or the operator ends a drive.
-    #[serde(default)]
+    /// `window_s` short of the goal: pressed against a wall its goal lies
+    /// behind, say. [`ProgressCheck::STANDARD`] unless set; `progress:
+    /// None`, only the goal, the time limit or the operator ends a drive.
+    /// A drive without a goal is never ended by it.
+    #[serde(default = "ProgressCheck::standard")]
     pub progress: Option<ProgressCheck>,
     /// A ROS 2 robot's topics, namespace, domain and QoS, with
     /// `connection: "ros2"` (unset: ROS 2's conventions).
