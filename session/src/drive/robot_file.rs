@@ -445,3 +445,24 @@ impl RobotFileError {
         move |source| RobotFileError::Parse { path: path.into(), source }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The progress check of a robot file holding `extra`.
+    fn progress_of(extra: &str) -> Option<ProgressCheck> {
+        let text = format!(
+            r#"RobotConfig(name: "r", connection: "tcp://127.0.0.1:1", model: Powerbot, {extra} root: Stop())"#
+        );
+        crate::registry().from_ron::<DriveConfig>(&text).unwrap().progress
+    }
+
+    #[test]
+    fn a_drive_gives_up_short_of_its_goal_by_default_unless_told_not_to() {
+        assert_eq!(progress_of(""), Some(ProgressCheck::STANDARD));
+        assert_eq!(progress_of("progress: None,"), None);
+        let own = ProgressCheck { radius_m: 0.3, window_s: 10.0 };
+        assert_eq!(progress_of("progress: (radius_m: 0.3, window_s: 10.0),"), Some(own));
+    }
+}
