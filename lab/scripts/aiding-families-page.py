@@ -9,7 +9,7 @@ hand.
 RUNS-DIR (lab/runs by default) holds the summaries of the protocol's
 earlier runs, on earlier code, as aiding-families-{first,second,third,
 fourth,fifth,sixth,seventh,eighth,ninth,tenth,eleventh,twelfth,
-thirteenth,fourteenth,fifteenth,sixteenth}.json.
+thirteenth,fourteenth,fifteenth,sixteenth,seventeenth}.json.
 """
 import json
 import os
@@ -83,10 +83,10 @@ def main():
         return json.load(open(path))
 
     (first, second, third, fourth, fifth, sixth, seventh, eighth, ninth, tenth, eleventh, twelfth, thirteenth,
-     fourteenth, fifteenth, sixteenth) = (earlier(n) for n in ['first', 'second', 'third', 'fourth', 'fifth', 'sixth',
-                                                               'seventh', 'eighth', 'ninth', 'tenth', 'eleventh',
-                                                               'twelfth', 'thirteenth', 'fourteenth', 'fifteenth',
-                                                               'sixteenth'])
+     fourteenth, fifteenth, sixteenth, seventeenth) = (
+        earlier(n) for n in ['first', 'second', 'third', 'fourth', 'fifth', 'sixth', 'seventh', 'eighth', 'ninth',
+                             'tenth', 'eleventh', 'twelfth', 'thirteenth', 'fourteenth', 'fifteenth', 'sixteenth',
+                             'seventeenth'])
     families = [f for f in FAMILIES if f in data]
     cell = lambda f, e, w, a: data[f][e][w][a]  # noqa: E731
     some = cell(families[0], 'default', 'exact', 'none')
@@ -455,27 +455,52 @@ def main():
         'steps on one landmark, which that commit had cut off, and the rigid estimator\'s training runs stayed '
         'byte-identical. The change was not looked for on this page, but these layouts '
         'have now been seen seventeen times. The command was run a seventeenth time on the same layouts and '
-        'seeds: this page is that seventeenth run. Default ÷ visual, straight, exact wheels, sixteenth run → '
-        'this run: '
-        + ', '.join(f'{f} {ratio(sixteenth, f):.2f} → {ratio(data, f):.2f}' for f in families)
+        'seeds (its summary: `lab/runs/aiding-families-seventeenth.json`; its page: '
+        '`git show a76de95:docs/aiding-families.md`). Default ÷ visual, straight, exact wheels, sixteenth run → '
+        'seventeenth: '
+        + ', '.join(f'{f} {ratio(sixteenth, f):.2f} → {ratio(seventeenth, f):.2f}' for f in families)
         + '. In range-20, the default\'s end point, straight, by wheels: '
-        + ', '.join(f'{w} {error(sixteenth, "range-20", w, "none"):.3f} → {error(data, "range-20", w, "none"):.3f} m'
+        + ', '.join(f'{w} {error(sixteenth, "range-20", w, "none"):.3f} → {error(seventeenth, "range-20", w, "none"):.3f} m'
                     for w in ('exact', 'scale', 'veer'))
         + '; with the aids, exact wheels: '
-        + ', '.join(f'{a} {error(sixteenth, "range-20", "exact", a):.3f} → {error(data, "range-20", "exact", a):.3f} m'
+        + ', '.join(f'{a} {error(sixteenth, "range-20", "exact", a):.3f} → {error(seventeenth, "range-20", "exact", a):.3f} m'
                     for a in AIDS)
         + '; failed frames a straight run (exact wheels) '
-        f'{failed(sixteenth, "range-20", "exact", "none"):.1f} → {failed(data, "range-20", "exact", "none"):.1f}. '
+        f'{failed(sixteenth, "range-20", "exact", "none"):.1f} → {failed(seventeenth, "range-20", "exact", "none"):.1f}. '
         'Runs outside the goal\'s tolerance, straight, range-20: '
         + ', '.join(f'{w} wheels {sixteenth["range-20"]["default"][w]["none"]["missed_goal_runs"]} → '
-                    f'{data["range-20"]["default"][w]["none"]["missed_goal_runs"]}' for w in ('exact', 'scale', 'veer'))
+                    f'{seventeenth["range-20"]["default"][w]["none"]["missed_goal_runs"]}' for w in ('exact', 'scale', 'veer'))
         + f' of 360. The default\'s runs on the time limit: {on_time_limit(sixteenth, "default")} → '
-        f'{on_time_limit(data, "default")}.')
+        f'{on_time_limit(seventeenth, "default")}.')
+    # Every run the progress check or the time limit ended in `run`, all cells.
+    ended = lambda run, key: sum(c.get(key, 0) for f in families for e in run[f].values()  # noqa: E731
+                                 for w in e.values() for c in w.values())
+    pinned = lambda run, key: ', '.join(str(run[f]['visual']['veer']['none'].get(key, 0)) for f in families)  # noqa: E731
+    visual_veer = lambda run, what: [run[f]['visual']['veer']['none'][what] for f in families]  # noqa: E731
+    say('')
+    say('A robot pinned beside a wall its goal lies behind bumped the wall until the time limit: the visual '
+        'estimate\'s straight runs with the veer, which steer by odometry as the thesis did, did so in seven '
+        'families (12 runs of 360 in each, in the seventeenth run). A scenario\'s progress check, which ends the run with the robot stopped '
+        'once it has stayed within 0.5 m of one spot for 30 s short of the goal (`end: no_progress`), is now on '
+        'by default wherever there is a goal (`progress: None` turns it off; '
+        '[scenario-format.md](scenario-format.md#scenario)). No estimate changed. On the training layouts '
+        '(2121–2828, seeds 110–129, every estimate, aid and kind of wheels, 23 040 runs) it ended none; on the '
+        'visual estimate\'s straight runs with the veer, seeds 100–129, it ended the 16 pinned ones after '
+        '115–131 s, their error unchanged. The run is on the code of commit 5ff626c. The command was run an '
+        'eighteenth time on the same layouts and seeds: '
+        'this page is that eighteenth run. Runs on the time limit, every cell, seventeenth run → this: '
+        f'{ended(seventeenth, "time_limit_runs")} → {ended(data, "time_limit_runs")}; runs the progress check '
+        f'ended: {ended(data, "no_progress_runs")}. The visual estimate\'s straight runs with the veer, by family '
+        f'({", ".join(families)}): on the time limit ({pinned(seventeenth, "time_limit_runs")}) → '
+        f'({pinned(data, "time_limit_runs")}), ended by the progress check ({pinned(data, "no_progress_runs")}); '
+        f'their end point {", ".join(f"{a:.3f} → {b:.3f}" for a, b in zip(visual_veer(seventeenth, "error_m"), visual_veer(data, "error_m")))} m; '
+        f'their time {", ".join(f"{a:.0f} → {b:.0f}" for a, b in zip(visual_veer(seventeenth, "time_s"), visual_veer(data, "time_s")))} s a run.')
     if second:
         earlier_runs = [('second', second), ('third', third), ('fourth', fourth), ('fifth', fifth),
                         ('sixth', sixth), ('seventh', seventh), ('eighth', eighth), ('ninth', ninth),
                         ('tenth', tenth), ('eleventh', eleventh), ('twelfth', twelfth), ('thirteenth', thirteenth),
-                        ('fourteenth', fourteenth), ('fifteenth', fifteenth), ('sixteenth', sixteenth)]
+                        ('fourteenth', fourteenth), ('fifteenth', fifteenth), ('sixteenth', sixteenth),
+                        ('seventeenth', seventeenth)]
         say('')
         say('Driving straight with the default estimate, by run: the ratio to the visual estimate on the same '
             'wheels, then the runs (of 360) whose true position missed the goal\'s tolerance.')
@@ -723,7 +748,9 @@ def main():
     limits = [f'{f}, {e}, {a}, {w}: {c["time_limit_runs"]}' for f in families for e, ws in data[f].items()
               for w, aids in ws.items() for a, c in aids.items() if c['time_limit_runs']]
     say(f"- **Runs that ended on the time limit:** {'; '.join(limits) if limits else 'none'}.")
-    others = [f'{f}, {e}, {a}, {w}: {", ".join(c["other_ends"])}' for f in families for e, ws in data[f].items()
+    others = [f'{f}, {e}, {a}, {w}: {", ".join(c["other_ends"])}'
+              + (f' ({c["no_progress_runs"]} by the progress check)' if c.get('no_progress_runs') else '')
+              for f in families for e, ws in data[f].items()
               for w, aids in ws.items() for a, c in aids.items() if c.get('other_ends')]
     say(f"- **Runs that ended otherwise** (neither at the goal nor on the time limit): "
         f"{'; '.join(others) if others else 'none'}.")
