@@ -475,8 +475,9 @@ def main():
     # Every run the progress check or the time limit ended in `run`, all cells.
     ended = lambda run, key: sum(c.get(key, 0) for f in families for e in run[f].values()  # noqa: E731
                                  for w in e.values() for c in w.values())
-    pinned = lambda run, key: ', '.join(str(run[f]['visual']['veer']['none'].get(key, 0)) for f in families)  # noqa: E731
-    visual_veer = lambda run, what: [run[f]['visual']['veer']['none'][what] for f in families]  # noqa: E731
+    # The visual estimate's straight runs with the veer, by family: `what` of each.
+    visual_veer = lambda run, what: [run[f]['visual']['veer']['none'].get(what, 0) for f in families]  # noqa: E731
+    pinned = lambda run, key: ', '.join(str(n) for n in visual_veer(run, key))  # noqa: E731
     say('')
     say('A robot pinned beside a wall its goal lies behind bumped the wall until the time limit: the visual '
         'estimate\'s straight runs with the veer, which steer by odometry as the thesis did, did so in seven '
