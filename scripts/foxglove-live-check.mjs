@@ -7,7 +7,8 @@
 //
 // Subscribes to every channel. Stops after SECONDS, or once the server
 // closes. With --stall it stops reading after the first message, as a
-// viewer on a slow link would: the server must not wait for it.
+// viewer on a slow link would (the server must not wait for it), and says
+// "stalled" on stderr when it does.
 import { createRequire } from "node:module";
 
 // The packages live where foxglove-live-check.sh installed them.
@@ -51,8 +52,9 @@ client.on("message", ({ subscriptionId, data }) => {
       seen.errors.push(`${topic}: ${e.message}`);
     }
   }
-  if (stall) {
+  if (stall && !ws._socket.isPaused()) {
     ws._socket.pause();
+    process.stderr.write("stalled\n");
   }
 });
 client.on("error", (e) => seen.errors.push(String(e?.message ?? e)));
