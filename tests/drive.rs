@@ -491,14 +491,13 @@ fn a_released_contact_is_not_driven_into_again() {
 #[test]
 fn a_robot_that_gets_nowhere_is_stopped_and_the_drive_gives_up() {
     // Pressed against the wall of a 4 m room, its goal beyond: without a
-    // progress check the drive would hold it there until the time limit.
+    // progress check the drive would hold it there until the time limit
+    // (which it would say instead of "no progress").
     let extra = "goal: (x: 5.0, y: 0.0), max_time_s: 60.0, progress: (radius_m: 0.3, window_s: 2.0),";
-    let started = std::time::Instant::now();
     let (drive, line, _dir) = drive_on(&["--listen", "127.0.0.1:0", "--room", "4x4"], extra, GO_ONLY);
     let stderr = String::from_utf8_lossy(&drive.stderr);
     assert_eq!(drive.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("no progress"), "{stderr}");
-    assert!(started.elapsed() < Duration::from_secs(30), "gave up after {:?}", started.elapsed());
     assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out: {line}");
 }
 
