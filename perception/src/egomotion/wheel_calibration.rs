@@ -131,21 +131,33 @@ impl ProportionalFit {
     /// 0.058 m (training layout 2525, seed 104, route 1→2 diagonally
     /// down, with the progress check off).
     fn keyframes_slope(&self) -> f64 {
+        // Each keyframe's slope is Σw·x·y / Σw·x², its information Σw·x²
+        // over the dispersion; a keyframe whose readings all have x = 0
+        // (a turn on the spot, for the veer) says nothing of the slope.
         let keyframes = || self.by_keyframe.values().filter(|sums| sums.xx > 0.0);
-        let count = keyframes().count();
-        let within_dof = self.all.readings.saturating_sub(count);
-        let within: f64 = keyframes().map(Sums::residual).sum();
+        let (mut count, mut within, mut within_dof) = (0usize, 0.0, 0usize);
+        let (mut xx, mut xx2, mut xy, mut xy_slope) = (0.0, 0.0, 0.0, 0.0);
+        for sums in keyframes() {
+            count += 1;
+            within += sums.residual();
+            within_dof += sums.readings - 1;
+            xx += sums.xx;
+            xx2 += sums.xx * sums.xx;
+            xy += sums.xy;
+            xy_slope += sums.xy * sums.slope();
+        }
         let dispersion = if within_dof > 0 { (within / within_dof as f64).max(1.0) } else { 1.0 };
-        let information = |sums: &Sums| sums.xx / dispersion;
-        let pooled = self.all.slope();
-        let q: f64 = keyframes().map(|sums| information(sums) * (sums.slope() - pooled).powi(2)).sum();
-        let s1: f64 = keyframes().map(information).sum();
-        let s2: f64 = keyframes().map(|sums| information(sums).powi(2)).sum();
-        let c = s1 - s2 / s1;
+        // Q = Σ I·(slope − pooled)², and c = Σ I − Σ I² / Σ I.
+        let q = (xy_slope - xy * xy / xx).max(0.0) / dispersion;
+        let c = (xx - xx2 / xx) / dispersion;
         let tau2 = if c > 0.0 { ((q - (count as f64 - 1.0)) / c).max(0.0) } else { 0.0 };
-        let weight = |sums: &Sums| 1.0 / (1.0 / information(sums) + tau2);
-        let weights: f64 = keyframes().map(weight).sum();
-        keyframes().map(|sums| weight(sums) * sums.slope()).sum::<f64>() / weights
+        let (mut weighed, mut weights) = (0.0, 0.0);
+        for sums in keyframes() {
+            let weight = 1.0 / (dispersion / sums.xx + tau2);
+            weighed += weight * sums.slope();
+            weights += weight;
+        }
+        weighed / weights
     }
 
     /// `k` and its standard error (at least `floor`), once the readings
@@ -465,6 +477,17 @@ mod tests {
         // same readings, each from a keyframe of its own), they agree, and
         // the thousand set it.
         assert!(readings.scale().unwrap().factor < 0.97, "{:?}", readings.scale());
+        // Keyframes that differ no more than their variances say (Q = 0.91
+        // on 1 degree of freedom: τ² = 0) are weighed as their readings
+        // are, ten readings against one: the fit over all the readings,
+        // not the keyframes' plain mean (1.005).
+        let mut agreeing = ProportionalFit::default();
+        for _ in 0..10 {
+            agreeing.add(0, 1.0, 1.0, 1e-4);
+        }
+        agreeing.add(1, 1.0, 1.01, 1e-4);
+        assert!((agreeing.k - agreeing.all.slope()).abs() < 1e-12, "{} against {}", agreeing.k, agreeing.all.slope());
+        assert!((agreeing.k - 1.01 / 11.0 - 10.0 / 11.0).abs() < 1e-12, "{}", agreeing.k);
     }
 
     #[test]
