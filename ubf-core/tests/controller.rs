@@ -220,8 +220,11 @@ fn a_failed_background_writer_ends_the_session_named() {
         let sink = BackgroundSink::spawn("log /tmp/x.csv", Failing { panics }, 8).unwrap();
         let mut controller = Controller::new(NullRobot::default(), Box::new(tree()), Box::new(SimClock::new(0.1)));
         controller.add_sink(Box::new(sink));
-        let error = (0..200)
-            .find_map(|_| {
+        // The writer fails on its own thread, whenever it is scheduled: a
+        // busy machine can take a while (the bound only stops a hang).
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        let error = std::iter::from_fn(|| (std::time::Instant::now() < deadline).then_some(()))
+            .find_map(|()| {
                 std::thread::sleep(std::time::Duration::from_millis(2));
                 controller.tick().err()
             })
