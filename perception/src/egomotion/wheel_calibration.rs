@@ -119,9 +119,11 @@ impl ProportionalFit {
     /// its variance plus τ², the spread between keyframes beyond what
     /// their variances explain (DerSimonian and Laird's estimate of it;
     /// the variances first widened by how much more the readings scatter
-    /// within their keyframes than they say). Where the keyframes agree,
-    /// τ² is 0 and this is the fit over all the readings; where they do
-    /// not, a keyframe read a thousand times weighs at most 1/τ².
+    /// within their keyframes than they say). Where the keyframes differ
+    /// no more than their variances say (Q at most its degrees of
+    /// freedom), τ² is 0 and this is the fit over all the readings; where
+    /// they differ more, a keyframe read a thousand times weighs at most
+    /// 1/τ².
     ///
     /// Weighing the readings alike let one keyframe set the scale: a
     /// robot pinned against a wall beside its goal, turning on the spot
