@@ -508,8 +508,6 @@ def main():
     visual_same = all(data[f]['visual'][w][a] == eighteenth[f]['visual'][w][a]
                       for f in families for w in data[f]['visual'] for a in data[f]['visual'][w])
     geometric = math.exp(sum(math.log(r) for r, *_ in moved) / len(moved))
-    missed = lambda run: sum(c['missed_goal_runs'] for f in families for e in run[f].values()  # noqa: E731
-                             for w in e.values() for c in w.values())
     say('')
     say('The wheels\' scale and veer, which `Sideways` fusion measures from the visual steps, were fitted over '
         'the readings alike, and the readings from one keyframe share its landmarks\' errors: a robot turning on '
@@ -531,7 +529,8 @@ def main():
         + '. The aids against straight driving in feature-poor layouts, default estimate: '
         + ', '.join(f'{a} {vs_straight(eighteenth, "feature-poor", a):.2f} → {vs_straight(data, "feature-poor", a):.2f}'
                     for a in AIDS)
-        + f'. Runs outside the goal\'s tolerance, every cell: {missed(eighteenth)} → {missed(data)}; on the time '
+        + f'. Runs outside the goal\'s tolerance, every cell: {ended(eighteenth, "missed_goal_runs")} → '
+        f'{ended(data, "missed_goal_runs")}; on the time '
         f'limit: {ended(eighteenth, "time_limit_runs")} → {ended(data, "time_limit_runs")}; ended by the progress '
         f'check: {ended(eighteenth, "no_progress_runs")} → {ended(data, "no_progress_runs")}.')
     if second:

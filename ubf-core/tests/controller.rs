@@ -223,12 +223,13 @@ fn a_failed_background_writer_ends_the_session_named() {
         // The writer fails on its own thread, whenever it is scheduled: a
         // busy machine can take a while (the bound only stops a hang).
         let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
-        let error = std::iter::from_fn(|| (std::time::Instant::now() < deadline).then_some(()))
-            .find_map(|()| {
-                std::thread::sleep(std::time::Duration::from_millis(2));
-                controller.tick().err()
-            })
-            .expect("a tick reports the writer's failure");
+        let error = loop {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            if let Err(error) = controller.tick() {
+                break error;
+            }
+            assert!(std::time::Instant::now() < deadline, "no tick reported the writer's failure");
+        };
         let text = error.to_string();
         assert!(text.contains("log /tmp/x.csv"), "{text}");
         assert!(text.contains(if panics { "panicked" } else { "no space left" }), "{text}");
