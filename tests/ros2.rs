@@ -50,10 +50,20 @@ fn install_cyclone() {
 
 /// Runs `script` in a private network namespace with the environment
 /// `vars`; `None` (said on stderr) where namespaces are not available.
+///
+/// The script may call `await_line FILE PID TEXT`: it waits (a minute at
+/// most) until FILE holds TEXT, and fails early if process PID has ended.
+/// A busy machine can take seconds to start a Python process, so whatever
+/// must be heard or driven waits for its "ready" line rather than a guess.
 fn in_namespace(script: &str, vars: &[(&str, &std::ffi::OsStr)]) -> Option<Output> {
+    const AWAIT_LINE: &str = r#"await_line() {
+    for _ in $(seq 600); do grep -q "$3" "$1" && return 0; kill -0 "$2" 2>/dev/null || break; sleep 0.1; done
+    grep -q "$3" "$1"
+}
+"#;
     let root = env!("CARGO_MANIFEST_DIR");
     let out = Command::new(Path::new(root).join("scripts/ros2/netns.sh"))
-        .args(["bash", "-c", script])
+        .args(["bash", "-c", &format!("{AWAIT_LINE}{script}")])
         .env("ROOT", root)
         .env("UBF", env!("CARGO_BIN_EXE_ubf"))
         .envs(vars.iter().copied())
@@ -75,6 +85,16 @@ fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt_after
     drive_and_listen(dir, robot_args, file, interrupt_after, None)
 }
 
+/// The shell that starts a Cyclone listener (`listen.py` with the arguments
+/// `topics`) writing to `$HEARD`, as `$listener`, and waits until it has
+/// subscribed (exit 4 if it never does).
+fn listener_script(topics: &str) -> String {
+    format!(
+        r#"python3 "$ROOT/scripts/ros2/listen.py" {topics} >"$HEARD" 2>"$LISTEN_ERR" & listener=$!
+await_line "$LISTEN_ERR" $listener "listen ready" || {{ cat "$LISTEN_ERR" >&2; exit 4; }}"#
+    )
+}
+
 /// [`drive_beside_robot`] with a Cyclone listener (`listen.py` with the
 /// arguments `listen`) hearing the drive.
 fn drive_and_listen(
@@ -94,16 +114,15 @@ fn drive_and_listen(
             "\"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\" & ubf=$!; sleep {s}; kill -TERM $ubf; wait $ubf; code=$?"
         ),
     };
-    let heard_path = dir.join("heard.json");
+    let (heard_path, listen_err) = (dir.join("heard.json"), dir.join("listen.err"));
     let listener = match listen {
-        Some(topics) => format!(r#"python3 "$ROOT/scripts/ros2/listen.py" {topics} >"$HEARD" & listener=$!"#),
+        Some(topics) => listener_script(topics),
         None => "listener=".to_owned(),
     };
     let script = format!(
         r#"{listener}
 python3 "$ROOT/scripts/ros2/robot.py" --record "$RECORD" --duration 90 {robot_args} >"$ROBOT_OUT" 2>&1 & robot=$!
-for i in $(seq 600); do grep -q "robot ready" "$ROBOT_OUT" && break; kill -0 $robot 2>/dev/null || break; sleep 0.1; done
-grep -q "robot ready" "$ROBOT_OUT" || {{ cat "$ROBOT_OUT" >&2; exit 3; }}
+await_line "$ROBOT_OUT" $robot "robot ready" || {{ cat "$ROBOT_OUT" >&2; exit 3; }}
 cd "$DIR"
 {drive}
 kill -TERM $robot; wait $robot
@@ -117,6 +136,7 @@ exit $code"#
         ("ROBOT_OUT", robot_out.as_os_str()),
         ("UBF_ERR", ubf_err.as_os_str()),
         ("HEARD", heard_path.as_os_str()),
+        ("LISTEN_ERR", listen_err.as_os_str()),
     ];
     let out = in_namespace(&script, &vars)?;
     assert_ne!(out.status.code(), Some(3), "the Cyclone robot did not start: {}", String::from_utf8_lossy(&out.stderr));
@@ -175,13 +195,24 @@ fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
 #[test]
 fn a_run_published_on_ros2_is_heard_by_cyclone() {
     install_cyclone();
-    let script = r#""$UBF" run "$ROOT/scenarios/goto-open-floor.ron" --ros2 --speed 4 >/dev/null & run=$!
-python3 "$ROOT/scripts/ros2/listen.py" /odom=nav_msgs/msg/Odometry /tf=tf2_msgs/msg/TFMessage \
+    let dir = tempfile::tempdir().unwrap();
+    // The run lasts a few seconds: the listener subscribes first.
+    let script = format!(
+        r#"{}
+"$UBF" run "$ROOT/scenarios/goto-open-floor.ron" --ros2 --speed 4 >/dev/null & run=$!
+wait $listener; code=$?; wait $run
+[ $code = 0 ] || cat "$LISTEN_ERR" >&2
+cat "$HEARD"; exit $code"#,
+        listener_script(
+            "/odom=nav_msgs/msg/Odometry /tf=tf2_msgs/msg/TFMessage \
     /scan=sensor_msgs/msg/LaserScan:best_effort /ubf/tick=ubf_msgs/msg/Tick \
     /ubf/goal=geometry_msgs/msg/PoseStamped /ubf/pose/true=geometry_msgs/msg/PoseStamped \
-    /ubf/pose/steered=geometry_msgs/msg/PoseStamped --min 5 --duration 30
-code=$?; wait $run; exit $code"#;
-    let Some(out) = in_namespace(script, &[]) else { return };
+    /ubf/pose/steered=geometry_msgs/msg/PoseStamped --min 5 --duration 30"
+        )
+    );
+    let (heard, listen_err) = (dir.path().join("heard.json"), dir.path().join("listen.err"));
+    let vars = [("HEARD", heard.as_os_str()), ("LISTEN_ERR", listen_err.as_os_str())];
+    let Some(out) = in_namespace(&script, &vars) else { return };
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let heard: Value = serde_json::from_slice(&out.stdout).unwrap();
     let odom = &heard["/odom"]["last"];
