@@ -100,8 +100,9 @@ impl<R: Robot> CameraRobot<R> {
 
     /// The camera rides on `unit`, holding its mount's tilt: the unit is
     /// aimed by [`Robot::aim_camera`], its encoders are read every tick
-    /// into [`State::camera_aim`], and each new frame's calibration carries
-    /// the mount at the angles read as it arrived.
+    /// into [`State::camera_aim`] (until the first frame, many times over:
+    /// [`PanTilt::anchor_reading`]), and each new frame's calibration
+    /// carries the mount at the angles read as it arrived.
     pub fn with_pan_tilt(mut self, unit: Box<dyn PanTilt>) -> Self {
         let tilt = self.camera.as_ref().map_or(0.0, |(camera, _)| camera.mount.tilt_deg.to_radians());
         self.pan_tilt = Some((unit, tilt));
@@ -171,7 +172,8 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some((unit, _)) = &mut self.pan_tilt {
-            state.camera_aim = Some(unit.measured()?);
+            let aim = if self.frames == 0 { unit.anchor_reading()? } else { unit.measured()? };
+            state.camera_aim = Some(aim);
         }
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {

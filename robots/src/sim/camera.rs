@@ -172,6 +172,11 @@ impl SimCamera {
         &self.config
     }
 
+    /// How many frames it has taken.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
     /// If a frame is due at `time`, takes it from the true `pose` into `out`
     /// and returns its number. `aim` is where a pan-tilt unit truly points
     /// the pair (`None` for a fixed camera).

@@ -263,7 +263,10 @@ impl Robot for SimRobot {
         // A frame looks where the unit truly points; its calibration says
         // where the encoders read it pointing.
         let aim = self.pan_tilt.as_ref().map(SimPanTilt::true_aim);
+        // The first frame anchors egomotion's map: its reading is averaged.
+        let first_frame = self.camera.as_ref().is_some_and(|camera| camera.frames() == 0);
         state.camera_aim = match &mut self.pan_tilt {
+            Some(unit) if first_frame => Some(unit.anchor_reading()?),
             Some(unit) => Some(unit.measured()?),
             None => None,
         };
