@@ -57,8 +57,8 @@ fn install_cyclone() {
 /// must be heard or driven waits for its "ready" line rather than a guess.
 fn in_namespace(script: &str, vars: &[(&str, &std::ffi::OsStr)]) -> Option<Output> {
     const AWAIT_LINE: &str = r#"await_line() {
-    for _ in $(seq 600); do grep -q "$3" "$1" && return 0; kill -0 "$2" 2>/dev/null || break; sleep 0.1; done
-    grep -q "$3" "$1"
+    for _ in $(seq 600); do grep -qsF "$3" "$1" && return 0; kill -0 "$2" 2>/dev/null || break; sleep 0.1; done
+    grep -qsF "$3" "$1"
 }
 "#;
     let root = env!("CARGO_MANIFEST_DIR");
@@ -122,7 +122,7 @@ fn drive_and_listen(
     let script = format!(
         r#"{listener}
 python3 "$ROOT/scripts/ros2/robot.py" --record "$RECORD" --duration 90 {robot_args} >"$ROBOT_OUT" 2>&1 & robot=$!
-await_line "$ROBOT_OUT" $robot "robot ready" || {{ cat "$ROBOT_OUT" >&2; exit 3; }}
+await_line "$ROBOT_OUT" $robot "robot ready" || {{ cat "$ROBOT_OUT" >&2; [ -z "$listener" ] || kill $listener; exit 3; }}
 cd "$DIR"
 {drive}
 kill -TERM $robot; wait $robot
@@ -139,7 +139,9 @@ exit $code"#
         ("LISTEN_ERR", listen_err.as_os_str()),
     ];
     let out = in_namespace(&script, &vars)?;
-    assert_ne!(out.status.code(), Some(3), "the Cyclone robot did not start: {}", String::from_utf8_lossy(&out.stderr));
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(3), "the Cyclone robot did not start: {said}");
+    assert_ne!(out.status.code(), Some(4), "the Cyclone listener did not start: {said}");
     let lines: Vec<Value> =
         std::fs::read_to_string(&record).unwrap().lines().map(|line| serde_json::from_str(line).unwrap()).collect();
     let (summary, twists) = lines.split_last().expect("the robot wrote its summary");

@@ -100,7 +100,7 @@ impl<R: Robot> CameraRobot<R> {
 
     /// The camera rides on `unit`, holding its mount's tilt: the unit is
     /// aimed by [`Robot::aim_camera`], its encoders are read every tick
-    /// into [`State::camera_aim`] (until the first frame, many times over:
+    /// into [`State::camera_aim`] (for the first frame, many times over:
     /// [`PanTilt::anchor_reading`]), and each new frame's calibration
     /// carries the mount at the angles read as it arrived.
     pub fn with_pan_tilt(mut self, unit: Box<dyn PanTilt>) -> Self {
@@ -172,13 +172,17 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some((unit, _)) = &mut self.pan_tilt {
-            let aim = if self.frames == 0 { unit.anchor_reading()? } else { unit.measured()? };
-            state.camera_aim = Some(aim);
+            state.camera_aim = Some(unit.measured()?);
         }
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
                 Ok(Ok((taken, landmarks, images))) => {
+                    // The first frame anchors egomotion's map: its reading
+                    // is averaged.
+                    if let (0, Some((unit, _))) = (self.frames, &mut self.pan_tilt) {
+                        state.camera_aim = Some(unit.anchor_reading()?);
+                    }
                     self.frames += 1;
                     state.stereo.number = self.frames;
                     // On the controller's clock: the tick's time less how

@@ -222,3 +222,46 @@ fn a_camera_on_the_head_is_aimed_by_the_tree_and_its_frames_carry_the_angles_rea
     let report = emulator.finish();
     assert!((report.pan.to_degrees() - 25.0).abs() <= step.to_degrees(), "{report:?}");
 }
+
+/// A head at 10° whose readings scatter by ±1°, one way then the other,
+/// counting how often it is read.
+struct ScatteringHead {
+    reads: Arc<std::sync::atomic::AtomicUsize>,
+}
+
+impl PanTilt for ScatteringHead {
+    fn command(&mut self, _: Aim) -> Result<(), RobotError> {
+        Ok(())
+    }
+
+    fn measured(&mut self) -> Result<Aim, RobotError> {
+        let n = self.reads.fetch_add(1, Ordering::Relaxed);
+        let scatter = if n % 2 == 0 { 1.0 } else { -1.0 };
+        Ok(Aim { pan: (10.0 + scatter as f64).to_radians(), tilt: 0.0 })
+    }
+}
+
+#[test]
+fn the_first_frame_carries_the_mean_of_many_readings_and_later_frames_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (source, camera) = blank_pairs(dir.path());
+    let reads = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let robot = CameraRobot::new(NullRobot::default(), source, camera, FeatureConfig::default(), true).unwrap();
+    let mut robot = robot.with_pan_tilt(Box::new(ScatteringHead { reads: reads.clone() }));
+    let (mut state, mut ticks, mut pans) = (State::default(), 0, Vec::new());
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while pans.len() < 2 && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(20));
+        robot.sense(&mut state).unwrap();
+        ticks += 1;
+        if state.stereo.number > pans.len() as u64 {
+            pans.push(state.stereo.calibration.unwrap().mount.pan_deg);
+        }
+    }
+    assert_eq!(pans.len(), 2, "two frames");
+    assert!((pans[0] - 10.0).abs() < 1e-9, "the first frame: {}°", pans[0]);
+    assert!((pans[1] - 10.0).abs() > 0.99, "the second frame: {}°", pans[1]);
+    // One reading a tick, and the anchor's once.
+    assert_eq!(reads.load(Ordering::Relaxed), ticks + ubf_core::ANCHOR_READINGS, "{ticks} ticks");
+    robot.shutdown().unwrap();
+}

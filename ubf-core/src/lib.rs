@@ -89,7 +89,7 @@ pub use controller::{Controller, ControllerError, OnBehaviorPanic};
 pub use describe::{markdown_table, Describe, Field};
 pub use geometry::{angle_difference, wrap_angle, Pose2};
 pub use landmark::{Descriptor, LandmarkObservation, StereoFrame, StereoImages, StereoPixels};
-pub use pan_tilt::{Aim, PanTilt, ANCHOR_READINGS};
+pub use pan_tilt::{anchor_mean, Aim, PanTilt, ANCHOR_READINGS};
 pub use progress::{ProgressCheck, ProgressWatch};
 pub use record::{NodeInfo, NodeOutcome, TickRecord, TreeLayout};
 pub use registry::{BehaviorSpec, BuildContext, Registry};

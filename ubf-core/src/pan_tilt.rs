@@ -39,28 +39,37 @@ pub trait PanTilt: Send {
     /// The angles for the first frame, which anchors egomotion's map: the
     /// mean of [`ANCHOR_READINGS`] readings taken at once.
     ///
-    /// Egomotion places the first frame's view by the robot's known start
-    /// heading and this reading, and chains every later heading to that
-    /// view, so an error in this one reading turns the whole map: the end
-    /// point moves aside by the error times the distance driven. Later
-    /// readings only say how the robot stands under its view, and their
-    /// errors do not add up. (Measured in the simulator, a steered camera
-    /// in feature-poor layouts with 0.02° of noise a reading: 1.10×
-    /// straight driving's end-point error with one reading, 1.03× with the
-    /// mean of 64, the same as with the first reading exact.) A unit whose
-    /// readings do not scatter, such as a stepper head reporting its step
-    /// count, gives its one reading.
+    /// Egomotion places its first keyframe's view by the robot's known
+    /// start heading and the reading then, and chains later headings to
+    /// that view, so an error in this one reading turns the whole map: the
+    /// end point moves aside by the error times the distance driven. Over
+    /// visual steps later readings' errors cancel (a keyframe keeps the
+    /// reading it was placed with); a keyframe laid after an odometry bridge
+    /// is placed by its own single reading. (Measured in the simulator, a
+    /// steered camera in feature-poor layouts with 0.02° of noise a
+    /// reading: 1.10× straight driving's end-point error with one reading,
+    /// 1.01× with the mean of 64, 1.00× with the first reading exact.) A unit
+    /// whose readings do not scatter, such as a stepper head reporting its
+    /// step count, gives its one reading.
     fn anchor_reading(&mut self) -> Result<Aim, RobotError> {
-        let mut sum = Aim::default();
-        for _ in 0..ANCHOR_READINGS {
-            let aim = self.measured()?;
-            (sum.pan, sum.tilt) = (sum.pan + aim.pan, sum.tilt + aim.tilt);
-        }
-        let n = ANCHOR_READINGS as f64;
-        Ok(Aim { pan: sum.pan / n, tilt: sum.tilt / n })
+        let first = self.measured()?;
+        anchor_mean(first, || self.measured())
     }
 }
 
-/// How many readings [`PanTilt::anchor_reading`] averages: the scatter of
-/// one, divided by eight.
+/// The mean of `first` and [`ANCHOR_READINGS`] − 1 more readings from
+/// `more`, summed as offsets from `first` so that equal readings give
+/// `first` exactly.
+pub fn anchor_mean(first: Aim, mut more: impl FnMut() -> Result<Aim, RobotError>) -> Result<Aim, RobotError> {
+    let mut offset = Aim::default();
+    for _ in 1..ANCHOR_READINGS {
+        let aim = more()?;
+        (offset.pan, offset.tilt) = (offset.pan + (aim.pan - first.pan), offset.tilt + (aim.tilt - first.tilt));
+    }
+    let n = ANCHOR_READINGS as f64;
+    Ok(Aim { pan: first.pan + offset.pan / n, tilt: first.tilt + offset.tilt / n })
+}
+
+/// How many readings [`PanTilt::anchor_reading`] averages: noise that is
+/// independent from reading to reading shrinks eightfold.
 pub const ANCHOR_READINGS: usize = 64;

@@ -24,6 +24,10 @@ pub enum Stream<'a> {
     Camera,
     /// The simulated pan-tilt unit's encoder noise.
     PanTilt,
+    /// The same noise in the extra readings that anchor egomotion's map at
+    /// the start ([`crate::PanTilt::anchor_reading`]), so that taking them
+    /// leaves every later reading as a single first reading would.
+    PanTiltAnchor,
     /// A behaviour, by its path in the tree (`root/aid/scan`), so that
     /// adding a behaviour elsewhere in the tree does not change this one's
     /// draws.
@@ -41,6 +45,7 @@ impl Stream<'_> {
             Stream::Sonar => 3,
             Stream::Camera => 4,
             Stream::PanTilt => 5,
+            Stream::PanTiltAnchor => 6,
             Stream::Behavior(path) => fnv1a(path.as_bytes()),
         }
     }
@@ -66,7 +71,15 @@ mod tests {
     #[test]
     fn streams_of_one_seed_differ_and_the_egomotion_stream_is_the_plain_seed() {
         let draw = |stream| rng(7, stream).random::<u64>();
-        let all = [Stream::Egomotion, Stream::World, Stream::Motion, Stream::Sonar, Stream::Camera];
+        let all = [
+            Stream::Egomotion,
+            Stream::World,
+            Stream::Motion,
+            Stream::Sonar,
+            Stream::Camera,
+            Stream::PanTilt,
+            Stream::PanTiltAnchor,
+        ];
         for (i, a) in all.iter().enumerate() {
             for b in &all[i + 1..] {
                 assert_ne!(draw(*a), draw(*b), "{a:?} and {b:?}");

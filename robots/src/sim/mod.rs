@@ -175,7 +175,7 @@ impl SimRobot {
                 .camera
                 .as_ref()
                 .and_then(|c| c.pan_tilt)
-                .map(|unit| SimPanTilt::new(unit, rng(seed, Stream::PanTilt))),
+                .map(|unit| SimPanTilt::new(unit, rng(seed, Stream::PanTilt), rng(seed, Stream::PanTiltAnchor))),
             period,
             time: 0.0,
             reach: footprint.radius(),

@@ -6,7 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use ubf_core::config::{finite, non_negative, positive, Check};
-use ubf_core::{Aim, PanTilt, RobotError};
+use ubf_core::{anchor_mean, Aim, PanTilt, RobotError};
 
 /// A pan-tilt unit's settings, as written under the camera in a scenario
 /// file. The defaults are those of a small serial head (FLIR's PTU-D46
@@ -77,12 +77,16 @@ pub struct SimPanTilt {
     rate: f64,
     target: f64,
     rng: ChaCha8Rng,
+    /// The noise of [`PanTilt::anchor_reading`]'s readings after the first.
+    anchor_rng: ChaCha8Rng,
 }
 
 impl SimPanTilt {
-    /// A unit with these settings, its encoder noise drawn from `rng`.
-    pub fn new(config: PanTiltConfig, rng: ChaCha8Rng) -> Self {
-        SimPanTilt { config, pan: 0.0, rate: 0.0, target: 0.0, rng }
+    /// A unit with these settings, its encoder noise drawn from `rng`, and
+    /// from `anchor_rng` in the extra readings that anchor egomotion's map
+    /// (so that taking them leaves every later reading's noise as it was).
+    pub fn new(config: PanTiltConfig, rng: ChaCha8Rng, anchor_rng: ChaCha8Rng) -> Self {
+        SimPanTilt { config, pan: 0.0, rate: 0.0, target: 0.0, rng, anchor_rng }
     }
 
     /// Where the unit truly points.
@@ -116,6 +120,14 @@ impl PanTilt for SimPanTilt {
         Ok(())
     }
 
+    fn anchor_reading(&mut self) -> Result<Aim, RobotError> {
+        let first = self.measured()?;
+        std::mem::swap(&mut self.rng, &mut self.anchor_rng);
+        let mean = anchor_mean(first, || self.measured());
+        std::mem::swap(&mut self.rng, &mut self.anchor_rng);
+        mean
+    }
+
     fn measured(&mut self) -> Result<Aim, RobotError> {
         let c = &self.config;
         let noise: f64 = StandardNormal.sample(&mut self.rng);
@@ -133,7 +145,7 @@ mod tests {
     use rand::SeedableRng;
 
     fn unit(config: PanTiltConfig) -> SimPanTilt {
-        SimPanTilt::new(config, ChaCha8Rng::seed_from_u64(1))
+        SimPanTilt::new(config, ChaCha8Rng::seed_from_u64(1), ChaCha8Rng::seed_from_u64(2))
     }
 
     #[test]
