@@ -3,6 +3,7 @@
 //! puts the newest frame's landmarks in the state, so the control loop
 //! never waits for an image.
 
+use crate::head_readings::HeadReadings;
 use crossbeam_channel::{Receiver, TryRecvError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -53,12 +54,14 @@ pub struct CameraRobot<R> {
     frames: u64,
     /// The unit the camera rides on, and the tilt it holds, rad.
     pan_tilt: Option<(Box<dyn PanTilt>, f64)>,
+    /// The unit's recent readings, for the angles when a pair was taken.
+    head: HeadReadings,
 }
 
 impl<R: Robot> CameraRobot<R> {
     /// `inner` without a camera.
     pub fn without_camera(inner: R) -> Self {
-        CameraRobot { inner, camera: None, frames: 0, pan_tilt: None }
+        CameraRobot { inner, camera: None, frames: 0, pan_tilt: None, head: HeadReadings::default() }
     }
 
     /// `inner` with pairs from `source`, calibrated as `camera`. With
@@ -95,14 +98,17 @@ impl<R: Robot> CameraRobot<R> {
             camera: Some((camera, CameraThread { frames, stop, thread: Some(thread) })),
             frames: 0,
             pan_tilt: None,
+            head: HeadReadings::default(),
         })
     }
 
     /// The camera rides on `unit`, holding its mount's tilt: the unit is
     /// aimed by [`Robot::aim_camera`], its encoders are read every tick
-    /// into [`State::camera_aim`] (for the first frame, many times over:
-    /// [`PanTilt::anchor_reading`]), and each new frame's calibration
-    /// carries the mount at the angles read as it arrived.
+    /// into [`State::camera_aim`], and each new frame's calibration
+    /// carries the mount at the angles of when its pair was taken,
+    /// interpolated between the readings either side (the first frame's,
+    /// on a head still at its start, many readings' mean:
+    /// [`PanTilt::anchor_reading`]).
     pub fn with_pan_tilt(mut self, unit: Box<dyn PanTilt>) -> Self {
         let tilt = self.camera.as_ref().map_or(0.0, |(camera, _)| camera.mount.tilt_deg.to_radians());
         self.pan_tilt = Some((unit, tilt));
@@ -172,24 +178,29 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some((unit, _)) = &mut self.pan_tilt {
-            state.camera_aim = Some(unit.measured()?);
+            let aim = unit.measured()?;
+            self.head.push(Instant::now(), aim);
+            state.camera_aim = Some(aim);
         }
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
                 Ok(Ok((taken, landmarks, images))) => {
-                    // The first frame anchors egomotion's map: its reading
-                    // is averaged.
-                    if let (0, Some((unit, _))) = (self.frames, &mut self.pan_tilt) {
-                        state.camera_aim = Some(unit.anchor_reading()?);
-                    }
+                    // The angles when the pair was taken; the first frame
+                    // anchors egomotion's map, on a head still at its start,
+                    // and its reading is averaged.
+                    let aim = match &mut self.pan_tilt {
+                        Some((unit, _)) if self.frames == 0 => Some(unit.anchor_reading()?),
+                        Some(_) => self.head.at(taken),
+                        None => None,
+                    };
                     self.frames += 1;
                     state.stereo.number = self.frames;
                     // On the controller's clock: the tick's time less how
                     // long ago the pair was taken.
                     state.stereo.time = state.time - taken.elapsed().as_secs_f64();
                     state.stereo.landmarks = landmarks;
-                    let mount = state.camera_aim.map_or(camera.mount, |aim| camera.mount.aimed(aim.pan, aim.tilt));
+                    let mount = aim.map_or(camera.mount, |aim| camera.mount.aimed(aim.pan, aim.tilt));
                     state.stereo.calibration = Some(StereoCamera { mount, ..*camera });
                     state.stereo.images = Some(images);
                 }

@@ -16,6 +16,7 @@
 pub mod arcos;
 pub mod camera;
 pub mod egomotion;
+mod head_readings;
 pub mod model;
 pub mod ptu;
 pub mod ros2;
