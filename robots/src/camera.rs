@@ -56,12 +56,22 @@ pub struct CameraRobot<R> {
     pan_tilt: Option<(Box<dyn PanTilt>, f64)>,
     /// The unit's recent readings, for the angles when a pair was taken.
     head: HeadReadings,
+    /// When the unit was first sent anywhere: until then it stands where
+    /// it started, and a frame takes the mean of many readings.
+    first_command: Option<Instant>,
 }
 
 impl<R: Robot> CameraRobot<R> {
     /// `inner` without a camera.
     pub fn without_camera(inner: R) -> Self {
-        CameraRobot { inner, camera: None, frames: 0, pan_tilt: None, head: HeadReadings::default() }
+        CameraRobot {
+            inner,
+            camera: None,
+            frames: 0,
+            pan_tilt: None,
+            head: HeadReadings::default(),
+            first_command: None,
+        }
     }
 
     /// `inner` with pairs from `source`, calibrated as `camera`. With
@@ -99,6 +109,7 @@ impl<R: Robot> CameraRobot<R> {
             frames: 0,
             pan_tilt: None,
             head: HeadReadings::default(),
+            first_command: None,
         })
     }
 
@@ -106,9 +117,10 @@ impl<R: Robot> CameraRobot<R> {
     /// aimed by [`Robot::aim_camera`], its encoders are read every tick
     /// into [`State::camera_aim`], and each new frame's calibration
     /// carries the mount at the angles of when its pair was taken,
-    /// interpolated between the readings either side (the first frame's,
-    /// on a head still at its start, many readings' mean:
-    /// [`PanTilt::anchor_reading`]).
+    /// interpolated between the readings either side. Until the head is
+    /// first sent anywhere, a frame takes the first tick's reading, many
+    /// readings' mean ([`PanTilt::anchor_reading`]), since egomotion's
+    /// map is anchored on the first frame.
     pub fn with_pan_tilt(mut self, unit: Box<dyn PanTilt>) -> Self {
         let tilt = self.camera.as_ref().map_or(0.0, |(camera, _)| camera.mount.tilt_deg.to_radians());
         self.pan_tilt = Some((unit, tilt));
@@ -178,21 +190,25 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         self.inner.sense(state)?;
         if let Some((unit, _)) = &mut self.pan_tilt {
-            let aim = unit.measured()?;
-            self.head.push(Instant::now(), aim);
+            // The first tick's reading, before the tree has sent the head
+            // anywhere, anchors egomotion's map: it is many readings' mean.
+            let (at, aim) = match self.head.first() {
+                None => (Instant::now(), unit.anchor_reading()?),
+                Some(_) => unit.measured_at()?,
+            };
+            self.head.push(at, aim);
             state.camera_aim = Some(aim);
         }
         let Some((camera, thread)) = &mut self.camera else { return Ok(()) };
         loop {
             match thread.frames.try_recv() {
                 Ok(Ok((taken, landmarks, images))) => {
-                    // The angles when the pair was taken; the first frame
-                    // anchors egomotion's map, on a head still at its start,
-                    // and its reading is averaged.
-                    let aim = match &mut self.pan_tilt {
-                        Some((unit, _)) if self.frames == 0 => Some(unit.anchor_reading()?),
-                        Some(_) => self.head.at(taken),
-                        None => None,
+                    // The angles when the pair was taken: the anchor's while
+                    // the head stood where it started.
+                    let aim = match (&self.pan_tilt, self.first_command) {
+                        (None, _) => None,
+                        (Some(_), Some(sent)) if taken >= sent => self.head.at(taken),
+                        (Some(_), _) => self.head.first(),
                     };
                     self.frames += 1;
                     state.stereo.number = self.frames;
@@ -225,7 +241,10 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
 
     fn aim_camera(&mut self, pan: f64) -> Result<(), RobotError> {
         match &mut self.pan_tilt {
-            Some((unit, tilt)) => unit.command(Aim { pan, tilt: *tilt }),
+            Some((unit, tilt)) => {
+                self.first_command.get_or_insert_with(Instant::now);
+                unit.command(Aim { pan, tilt: *tilt })
+            }
             None => self.inner.aim_camera(pan),
         }
     }

@@ -7,10 +7,12 @@ use std::collections::VecDeque;
 use std::time::Instant;
 use ubf_core::Aim;
 
-/// The last [`HeadReadings::KEPT`] readings, oldest first.
+/// The last [`HeadReadings::KEPT`] readings, oldest first, and the very
+/// first, which anchors egomotion's map.
 #[derive(Debug, Default)]
 pub(crate) struct HeadReadings {
     readings: VecDeque<(Instant, Aim)>,
+    first: Option<Aim>,
 }
 
 impl HeadReadings {
@@ -18,12 +20,22 @@ impl HeadReadings {
     /// frame takes to arrive.
     const KEPT: usize = 64;
 
-    /// Keeps `aim`, read at `at` (no earlier than the last reading).
+    /// Keeps `aim`, read at `at`; a reading no newer than the last (a
+    /// unit's poll read again) is the one already kept.
     pub(crate) fn push(&mut self, at: Instant, aim: Aim) {
+        if self.readings.back().is_some_and(|(last, _)| at <= *last) {
+            return;
+        }
         if self.readings.len() == Self::KEPT {
             self.readings.pop_front();
         }
+        self.first.get_or_insert(aim);
         self.readings.push_back((at, aim));
+    }
+
+    /// The first reading kept.
+    pub(crate) fn first(&self) -> Option<Aim> {
+        self.first
     }
 
     /// The angles at `when`: between two readings, on the line through
@@ -62,10 +74,14 @@ mod tests {
         assert!(close(head.at(s(0.1)).unwrap(), 0.5, 0.1), "on a reading, that reading");
         assert!(close(head.at(s(1.0)).unwrap(), 0.5, 0.3), "after the newest, the newest");
         assert!(close(head.at(start).unwrap(), 0.0, 0.1));
+        head.push(s(0.3), Aim { pan: 9.0, tilt: 9.0 });
+        assert!(close(head.at(s(1.0)).unwrap(), 0.5, 0.3), "a reading read again is kept once");
         for k in 0..100 {
-            head.push(s(1.0 + f64::from(k)), Aim::default());
+            head.push(s(1.0 + f64::from(k)), Aim { pan: f64::from(k), tilt: 0.0 });
         }
         assert_eq!(head.readings.len(), HeadReadings::KEPT);
-        assert!(close(head.at(s(0.0)).unwrap(), 0.0, 0.0), "before the oldest kept, the oldest");
+        let oldest = f64::from(100 - HeadReadings::KEPT as u32);
+        assert!(close(head.at(s(0.0)).unwrap(), oldest, 0.0), "before the oldest kept, the oldest");
+        assert!(close(head.first().unwrap(), 0.0, 0.1), "the first is kept");
     }
 }

@@ -302,7 +302,7 @@ impl Ptu {
         let mut talk = Conversation { link, pending: Vec::new() };
         let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
         let first = Self::read(&mut talk, &axes, &config).map_err(failed)?;
-        let shared = Arc::new(Mutex::new(Shared { reading: Some((Instant::now(), first)), ..Shared::default() }));
+        let shared = Arc::new(Mutex::new(Shared { reading: Some(first), ..Shared::default() }));
         let stop = Arc::new(AtomicBool::new(false));
         let (for_thread, flag, settings) = (Arc::clone(&shared), Arc::clone(&stop), config.clone());
         let thread = std::thread::Builder::new()
@@ -366,10 +366,14 @@ impl Ptu {
         }
     }
 
-    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<Aim, PtuError> {
+    /// The head's angles, and when the pan was read: halfway through its
+    /// query, the best guess at when the unit answered.
+    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<(Instant, Aim), PtuError> {
+        let asked = Instant::now();
         let pan = talk.number("PP")? * axes.pan_step * Self::pan_sign(config);
+        let read_at = asked + asked.elapsed() / 2;
         let tilt = talk.number("TP")? * axes.tilt_step;
-        Ok(Aim { pan, tilt })
+        Ok((read_at, Aim { pan, tilt }))
     }
 
     /// The unit's thread: sends the newest target, reads the encoders,
@@ -383,7 +387,7 @@ impl Ptu {
                 talk.command(&format!("PP{pan}"))
             });
             match sent.and_then(|()| Self::read(&mut talk, &axes, &config)) {
-                Ok(aim) => lock().reading = Some((Instant::now(), aim)),
+                Ok(reading) => lock().reading = Some(reading),
                 Err(e) => {
                     lock().failure = Some(Arc::new(e));
                     return;
@@ -421,12 +425,16 @@ impl PanTilt for Ptu {
     }
 
     fn measured(&mut self) -> Result<Aim, RobotError> {
+        self.measured_at().map(|(_, aim)| aim)
+    }
+
+    fn measured_at(&mut self) -> Result<(Instant, Aim), RobotError> {
         if let Some(failure) = self.failure() {
             return Err(failure);
         }
         let reading = self.shared().reading;
         match reading {
-            Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok(aim),
+            Some((at, aim)) if at.elapsed().as_secs_f64() <= self.config.stale_after_s => Ok((at, aim)),
             Some((at, _)) => {
                 let (for_s, after_s) = (at.elapsed().as_secs_f64(), self.config.stale_after_s);
                 Err(self.fault(PtuError::Stale { for_s, after_s }))

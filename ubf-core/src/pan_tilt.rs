@@ -9,6 +9,7 @@
 
 use crate::RobotError;
 use serde::{Deserialize, Serialize};
+use std::time::Instant;
 
 /// The angles of a pan-tilt unit, radians: pan counter-clockwise from the
 /// robot's heading, tilt above the horizontal.
@@ -35,6 +36,15 @@ pub trait PanTilt: Send {
 
     /// The angles the encoders read now.
     fn measured(&mut self) -> Result<Aim, RobotError>;
+
+    /// The angles the encoders read last, and when they were read: a unit
+    /// that polls its encoders on a thread of its own gives the poll's
+    /// instant, which can be tens of milliseconds before now. By default,
+    /// [`PanTilt::measured`] read now.
+    fn measured_at(&mut self) -> Result<(Instant, Aim), RobotError> {
+        let aim = self.measured()?;
+        Ok((Instant::now(), aim))
+    }
 
     /// The angles for the first frame, which anchors egomotion's map: the
     /// mean of [`ANCHOR_READINGS`] readings taken at once.

@@ -193,7 +193,8 @@ pub struct State {
     /// estimator.
     pub egomotion: EgomotionState,
     /// The camera's pan-tilt unit's measured angles this tick; `None` when
-    /// the camera is fixed.
+    /// the camera is fixed. A frame's own angles, those of when its pair
+    /// was taken, are in its calibration's mount.
     pub camera_aim: Option<crate::Aim>,
     /// Seconds since the robot last delivered fresh sensor data; zero when the
     /// data is from this tick. Lets a behaviour notice a lost sensor stream.
