@@ -508,7 +508,8 @@ def main():
     moved = fitted(nineteenth, eighteenth)
     visual_same = all(nineteenth[f]['visual'][w][a] == eighteenth[f]['visual'][w][a]
                       for f in families for w in nineteenth[f]['visual'] for a in nineteenth[f]['visual'][w])
-    geometric = math.exp(sum(math.log(r) for r, *_ in moved) / len(moved))
+    geo = lambda xs: math.exp(sum(math.log(x) for x in xs) / len(xs))  # noqa: E731
+    geometric = geo([r for r, *_ in moved])
     say('')
     say('The wheels\' scale and veer, which `Sideways` fusion measures from the visual steps, were fitted over '
         'the readings alike, and the readings from one keyframe share its landmarks\' errors: a robot turning on '
@@ -540,7 +541,6 @@ def main():
     others_same = all(data[f][e][w][a] == nineteenth[f][e][w][a] for f in families for e in data[f]
                       for w in data[f][e] for a in data[f][e][w] if a != 'camera')
     camera = lambda run, e: [run[f][e]['exact']['camera']['error_vs_straight']['ratio'] for f in families]  # noqa: E731
-    geo = lambda xs: math.exp(sum(math.log(x) for x in xs) / len(xs))  # noqa: E731
     say('')
     say('Egomotion places its first keyframe\'s view by the robot\'s start heading and the pan the head reads '
         'then, and chains later headings to that view, so an error in that one reading turns the whole map; over '

@@ -2,7 +2,7 @@
 //! pseudo-terminal pair and over TCP loopback.
 
 use std::net::TcpListener;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -226,7 +226,7 @@ fn a_camera_on_the_head_is_aimed_by_the_tree_and_its_frames_carry_the_angles_rea
 /// A head at 10° whose readings scatter by ±1°, one way then the other,
 /// counting how often it is read.
 struct ScatteringHead {
-    reads: Arc<std::sync::atomic::AtomicUsize>,
+    reads: Arc<AtomicUsize>,
 }
 
 impl PanTilt for ScatteringHead {
@@ -237,7 +237,7 @@ impl PanTilt for ScatteringHead {
     fn measured(&mut self) -> Result<Aim, RobotError> {
         let n = self.reads.fetch_add(1, Ordering::Relaxed);
         let scatter = if n % 2 == 0 { 1.0 } else { -1.0 };
-        Ok(Aim { pan: (10.0 + scatter as f64).to_radians(), tilt: 0.0 })
+        Ok(Aim { pan: (10.0_f64 + scatter).to_radians(), tilt: 0.0 })
     }
 }
 
@@ -245,7 +245,7 @@ impl PanTilt for ScatteringHead {
 fn frames_before_the_head_is_sent_anywhere_carry_the_mean_of_many_readings() {
     let dir = tempfile::tempdir().unwrap();
     let (source, camera) = blank_pairs(dir.path());
-    let reads = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let reads = Arc::new(AtomicUsize::new(0));
     let robot = CameraRobot::new(NullRobot::default(), source, camera, FeatureConfig::default(), true).unwrap();
     let mut robot = robot.with_pan_tilt(Box::new(ScatteringHead { reads: reads.clone() }));
     let (mut state, mut ticks, mut pans) = (State::default(), 0, Vec::new());
