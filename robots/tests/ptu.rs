@@ -236,7 +236,7 @@ impl PanTilt for ScatteringHead {
 
     fn measured(&mut self) -> Result<Aim, RobotError> {
         let n = self.reads.fetch_add(1, Ordering::Relaxed);
-        let scatter = if n % 2 == 0 { 1.0 } else { -1.0 };
+        let scatter = if n.is_multiple_of(2) { 1.0 } else { -1.0 };
         Ok(Aim { pan: (10.0_f64 + scatter).to_radians(), tilt: 0.0 })
     }
 }
