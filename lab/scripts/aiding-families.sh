@@ -16,12 +16,12 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 . lab/scripts/layouts-and-seeds.sh
 . lab/scripts/wheels.sh
+. lab/scripts/aids.sh
 families=${FAMILIES:-ordinary-far ordinary-near feature-poor featureless-20 featureless-30 range-20 noise-1px fov-32}
 aids=${AIDS:-none scan triggered-scan camera}
 estimates=${ESTIMATES:-default visual compass}
 # Wheels that err beyond odometry's noise model, driven straight only.
 wheels=${WHEELS:-scale veer}
-budget=${SCAN_BUDGET:-0.5}
 thesis=lab/scenarios/thesis
 # The family's route file, on stdout.
 family() {
@@ -39,22 +39,6 @@ family() {
         # 32° across 640 px: f = 320 / tan 16°.
         fov-32) sed -e "s/camera: (pixel_noise_px/camera: (stereo: (focal_px: 1116.0), pixel_noise_px/" $thesis/route-1-2.ron ;;
         *) echo "unknown family $1" >&2; exit 2 ;;
-    esac
-}
-estimate() {
-    case $1 in
-        default) sed -e "s/, odometry_fusion: Off, navigate: false//" ;;
-        visual) cat ;;
-        compass) sed -e "s/, odometry_fusion: Off, navigate: false),/),\n        wall_compass: (),/" ;;
-    esac
-}
-aid() {
-    case $1 in
-        none) cat ;;
-        scan) sed -e "s/technique: None/technique: Scan/" ;;
-        triggered-scan) sed -e "s/technique: None/technique: Scan, scan_budget: $budget/" ;;
-        camera) sed -e "s/technique: None/technique: Tracking, steer: Camera/" \
-            -e "s/camera: (/camera: (pan_tilt: (), /" ;;
     esac
 }
 odometry() {
@@ -81,7 +65,11 @@ for file in "$work"/*.ron; do
     grep -q "odometry_fusion: Off, navigate: false" "$file" && [ "$e" != visual ] \
         && { echo "$file: the estimate's edit did not match" >&2; exit 1; }
     [ "$e" = compass ] && ! grep -q "wall_compass: ()" "$file" && { echo "$file: the compass did not go in" >&2; exit 1; }
-    [ "$a" = none ] || ! grep -q "technique: None" "$file" || { echo "$file: the aid's edit did not match" >&2; exit 1; }
+    case $a in
+        none) ;;
+        head-ahead) grep -q "pan_tilt: ()" "$file" || { echo "$file: the head did not go in" >&2; exit 1; } ;;
+        *) ! grep -q "technique: None" "$file" || { echo "$file: the aid's edit did not match" >&2; exit 1; } ;;
+    esac
     [ "$w" = exact ] || grep -qF "$(wheel_errors "$w")" "$file" || { echo "$file: the wheels' edit did not match" >&2; exit 1; }
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2

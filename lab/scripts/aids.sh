@@ -1,0 +1,31 @@
+# Sourced by the scripts that drive the thesis routes with each estimate
+# and aid. Both are filters from a route file to its variant.
+#
+# `estimate NAME`: `default` (odometry's sideways motion fused, steering by
+# the fused pose), `visual` (purely visual egomotion, steering by odometry,
+# as the thesis did) or `compass` (the default with odometry's heading held
+# by the walls, `wall_compass: ()`).
+estimate() {
+    case $1 in
+        default) sed -e "s/, odometry_fusion: Off, navigate: false//" ;;
+        visual) cat ;;
+        compass) sed -e "s/, odometry_fusion: Off, navigate: false),/),\n        wall_compass: (),/" ;;
+        *) echo "unknown estimate $1" >&2; return 2 ;;
+    esac
+}
+# `aid NAME`: `none` (straight at the goal), `scan`, `triggered-scan` (the
+# scan within a budget of SCAN_BUDGET, default 0.5, of the time driven),
+# `camera` (straight, the camera steered on a pan-tilt head) or
+# `head-ahead` (straight, the camera on the same head, never turned: what
+# the head's readings alone cost the steered camera).
+aid() {
+    case $1 in
+        none) cat ;;
+        scan) sed -e "s/technique: None/technique: Scan/" ;;
+        triggered-scan) sed -e "s/technique: None/technique: Scan, scan_budget: ${SCAN_BUDGET:-0.5}/" ;;
+        camera) sed -e "s/technique: None/technique: Tracking, steer: Camera/" \
+            -e "s/camera: (/camera: (pan_tilt: (), /" ;;
+        head-ahead) sed -e "s/camera: (/camera: (pan_tilt: (), /" ;;
+        *) echo "unknown aid $1" >&2; return 2 ;;
+    esac
+}
