@@ -3,7 +3,7 @@
 //! puts the newest frame's landmarks in the state, so the control loop
 //! never waits for an image.
 
-use crate::head_readings::HeadReadings;
+use crate::timed_readings::TimedReadings;
 use crossbeam_channel::{Receiver, TryRecvError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -55,7 +55,7 @@ pub struct CameraRobot<R> {
     /// The unit the camera rides on, and the tilt it holds, rad.
     pan_tilt: Option<(Box<dyn PanTilt>, f64)>,
     /// The unit's recent readings, for the angles when a pair was taken.
-    head: HeadReadings,
+    head: TimedReadings<Instant, Aim>,
     /// When the unit was first sent anywhere: until then it stands where
     /// it started, and a frame takes the mean of many readings.
     first_command: Option<Instant>,
@@ -69,7 +69,7 @@ impl<R: Robot> CameraRobot<R> {
             camera: None,
             frames: 0,
             pan_tilt: None,
-            head: HeadReadings::default(),
+            head: TimedReadings::default(),
             first_command: None,
         }
     }
@@ -108,7 +108,7 @@ impl<R: Robot> CameraRobot<R> {
             camera: Some((camera, CameraThread { frames, stop, thread: Some(thread) })),
             frames: 0,
             pan_tilt: None,
-            head: HeadReadings::default(),
+            head: TimedReadings::default(),
             first_command: None,
         })
     }

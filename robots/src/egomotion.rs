@@ -1,7 +1,8 @@
 //! Egomotion on any robot: a wrapper that feeds the robot's stereo frames to
 //! an estimator and puts the result in the state.
 
-use ubf_core::{Command, Robot, RobotError, RobotWrapper, State, Wraps};
+use crate::timed_readings::TimedReadings;
+use ubf_core::{Command, Pose2, Robot, RobotError, RobotWrapper, State, Wraps};
 use ubf_perception::egomotion::Tracker;
 
 /// Wraps a robot and, when given a tracker, runs egomotion on its stereo
@@ -9,15 +10,25 @@ use ubf_perception::egomotion::Tracker;
 /// navigates, replacing the odometric [`State::pose`] with egomotion's). A
 /// [`State::heading_fix`] (the wall compass's) turns egomotion's heading.
 /// Without a tracker it passes everything straight through.
+///
+/// Each frame is matched to odometry as it read when the frame's pair was
+/// taken ([`StereoFrame::time`](ubf_core::StereoFrame::time)), on the line
+/// between the robot's reports either side (each read
+/// [`State::sensor_age`] before its tick): a real camera's frame reaches
+/// the control loop a tick or more after its pair was taken, and the robot
+/// has driven on since. (The simulator's frames are taken at the tick, and
+/// take that tick's odometry as it is.)
 pub struct EgomotionRobot<R> {
     inner: R,
     tracker: Option<Tracker>,
+    /// Odometry's recent readings, by the controller's clock.
+    odometry: TimedReadings<f64, Pose2>,
 }
 
 impl<R: Robot> EgomotionRobot<R> {
     /// `inner`, with egomotion from `tracker` if there is one.
     pub fn new(inner: R, tracker: Option<Tracker>) -> Self {
-        EgomotionRobot { inner, tracker }
+        EgomotionRobot { inner, tracker, odometry: TimedReadings::default() }
     }
 
     /// The estimator, if any.
@@ -43,7 +54,19 @@ impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
             if let Some(fix) = state.heading_fix {
                 tracker.fix_heading(fix, &state.pose);
             }
-            tracker.update(&state.stereo, &state.pose);
+            // Odometry as read when the robot last reported, not at the tick.
+            let read_at = state.time - state.sensor_age;
+            if read_at.is_finite() {
+                self.odometry.push(read_at, state.pose);
+            }
+            // A frame taken at this tick (the simulator's) takes this
+            // tick's odometry.
+            let when_taken = if state.stereo.time < state.time {
+                self.odometry.at(state.stereo.time).unwrap_or(state.pose)
+            } else {
+                state.pose
+            };
+            tracker.update(&state.stereo, &when_taken);
             state.egomotion = tracker.state();
             if let Some(pose) = tracker.navigation_pose(&state.pose) {
                 state.pose = pose;

@@ -16,9 +16,9 @@
 pub mod arcos;
 pub mod camera;
 pub mod egomotion;
-mod head_readings;
 pub mod model;
 pub mod ptu;
 pub mod ros2;
 pub mod sim;
+mod timed_readings;
 pub mod wall_compass;

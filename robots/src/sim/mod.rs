@@ -278,7 +278,7 @@ impl Robot for SimRobot {
                     calibration.mount = calibration.mount.aimed(measured.pan, measured.tilt);
                 }
                 state.stereo.number = number;
-                state.stereo.time = self.time;
+                state.stereo.time = state.time;
                 state.stereo.calibration = Some(calibration);
                 state.stereo.images = camera.last_images().cloned();
             }
