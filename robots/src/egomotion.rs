@@ -13,11 +13,12 @@ use ubf_perception::egomotion::Tracker;
 ///
 /// Each frame is matched to odometry as it read when the frame's pair was
 /// taken ([`StereoFrame::time`](ubf_core::StereoFrame::time)), on the line
-/// between the robot's reports either side (each read
-/// [`State::sensor_age`] before its tick): a real camera's frame reaches
-/// the control loop a tick or more after its pair was taken, and the robot
-/// has driven on since. (The simulator's frames are taken at the tick, and
-/// take that tick's odometry as it is.)
+/// between the robot's reports either side (each stamped
+/// [`State::sensor_age`] before its tick: for an ARCOS robot when its
+/// packet arrived, for a ROS 2 robot the tick that first saw it): a real
+/// camera's frame reaches the control loop a tick or more after its pair
+/// was taken, and the robot has driven on since. (The simulator's frames
+/// are taken at the tick, and take that tick's odometry as it is.)
 pub struct EgomotionRobot<R> {
     inner: R,
     tracker: Option<Tracker>,
@@ -53,6 +54,11 @@ impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
         if let Some(tracker) = &mut self.tracker {
             if let Some(fix) = state.heading_fix {
                 tracker.fix_heading(fix, &state.pose);
+                // The sensor turned odometry about this tick's pose: the
+                // poses kept from before are turned with it, so that a frame
+                // taken before the fix is placed in the frame after it.
+                let before = Pose2 { theta: state.pose.theta - fix.correction, ..state.pose };
+                self.odometry.remake(|pose| state.pose.compose(&pose.relative_to(&before)));
             }
             // Odometry as read when the robot last reported, not at the tick.
             let read_at = state.time - state.sensor_age;

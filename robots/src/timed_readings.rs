@@ -82,6 +82,15 @@ impl<S: Stamp, V: Between> TimedReadings<S, V> {
         self.readings.push_back((at, value));
     }
 
+    /// Every reading kept, and the first, made over by `remake`: readings
+    /// put in a frame that has since moved.
+    pub(crate) fn remake(&mut self, remake: impl Fn(V) -> V) {
+        for (_, value) in &mut self.readings {
+            *value = remake(*value);
+        }
+        self.first = self.first.map(&remake);
+    }
+
     /// The first reading kept.
     pub(crate) fn first(&self) -> Option<V> {
         self.first

@@ -575,8 +575,9 @@ impl Tracker {
     }
 
     /// Turns egomotion's pose towards the heading `fix` measured when
-    /// odometry read `at` (carried to `odometry`, now, by odometry's turn
-    /// since), by how much of the pose's heading is odometry's against how
+    /// odometry read `at` (carried to `odometry`, the frame's, by
+    /// odometry's turn between: backwards where the frame was taken before
+    /// the fix and reached the robot after it), by how much of the pose's heading is odometry's against how
     /// sure the fix is: a Kalman update of the heading error the bridges
     /// laid down. A keyframe shares the part of that error laid down
     /// before it, and is turned (about the pose, so that the next match to
