@@ -65,11 +65,7 @@ for file in "$work"/*.ron; do
     grep -q "odometry_fusion: Off, navigate: false" "$file" && [ "$e" != visual ] \
         && { echo "$file: the estimate's edit did not match" >&2; exit 1; }
     [ "$e" = compass ] && ! grep -q "wall_compass: ()" "$file" && { echo "$file: the compass did not go in" >&2; exit 1; }
-    case $a in
-        none) ;;
-        head-ahead) grep -q "pan_tilt: ()" "$file" || { echo "$file: the head did not go in" >&2; exit 1; } ;;
-        *) ! grep -q "technique: None" "$file" || { echo "$file: the aid's edit did not match" >&2; exit 1; } ;;
-    esac
+    check_aid "$a" "$file" || exit 1
     [ "$w" = exact ] || grep -qF "$(wheel_errors "$w")" "$file" || { echo "$file: the wheels' edit did not match" >&2; exit 1; }
 done
 "$ubf" sweep "$work"/*.ron --seeds "$seeds" --layout-seeds "${layouts// /,}" --out "$work/runs" >&2

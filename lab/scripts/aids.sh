@@ -29,3 +29,16 @@ aid() {
         *) echo "unknown aid $1" >&2; return 2 ;;
     esac
 }
+# `check_aid NAME FILE`: fails, naming FILE, unless `aid NAME` took: a sed
+# that matched nothing would run straight driving under the aid's name.
+check_aid() {
+    case $1 in
+        none) ;;
+        head-ahead) grep -q "pan_tilt: ()" "$2" || { echo "$2: the head did not go in" >&2; return 1; } ;;
+        camera) grep -q "steer: Camera" "$2" && grep -q "pan_tilt: ()" "$2" \
+            || { echo "$2: the camera's edit did not match" >&2; return 1; } ;;
+        scan) grep -q "technique: Scan" "$2" || { echo "$2: the scan's edit did not match" >&2; return 1; } ;;
+        triggered-scan) grep -q "technique: Scan, scan_budget:" "$2" \
+            || { echo "$2: the triggered scan's edit did not match" >&2; return 1; } ;;
+    esac
+}
