@@ -804,9 +804,11 @@ def main():
             r, t = c['error_vs_straight'], c['time_vs_straight']
             met = r['ratio'] <= PAYS and t['ratio'] <= 1.5
             added = '' if a == 'triggered-scan' else ' (an addition to the protocol, which names the triggered scan here)'
+            why = ' Where the error lies, and what a look would have to do: the section above.' if (
+                a == 'camera' and not met and os.path.exists(axes_path)) else ''
             say(f"- **The {name} in the feature-poor family** (default estimate){added}: {interval(r)} straight "
                 f"driving's error at {t['ratio']:.2f}× its time: the issue's figure (0.85× at 1.5× the time) is "
-                f"{'met' if met else 'not met'}.")
+                f"{'met' if met else 'not met'}.{why}")
     better = [f for f in families if cell(f, 'default', 'exact', 'none')['error_vs_visual']['ci95'][1] < 1]
     say(f"- **The default estimate is better than purely visual egomotion** driving straight in "
         f"{len(better)} of {len(families)} families"
@@ -872,7 +874,8 @@ def error_axes(split, say):
     say('## Where the error lies in feature-poor layouts (beyond the protocol)')
     say('')
     say('`ROUTES=feature-poor lab/scripts/error-axes.sh` on this page\'s layouts and seeds (the default estimate, '
-        'exact wheels; its summary: `lab/runs/error-axes-feature-poor.json`): each aid\'s end-point error split '
+        'exact wheels; its summary: `lab/runs/error-axes-feature-poor.json`, the same byte for byte on the code of '
+        'commits 0c480b3 and 1c0d799): each aid\'s end-point error split '
         'into its parts along the route and across it, with the route\'s noise, without stereo noise (pixel '
         'noise and outliers), without wheel slip and without either. `head-ahead` drives straight with the camera '
         'on the steered camera\'s pan-tilt head, never turned: what the head\'s readings alone cost. The wheel '
