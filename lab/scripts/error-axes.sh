@@ -5,9 +5,9 @@
 # and outliers), without wheel slip and without either, split by
 # `lab/scripts/error-axes.py`.
 # With the default estimate the distance is odometry's times the wheel
-# scale the camera measures and the heading is the camera's, so the error
-# along the route is mostly the scale's and the error across it mostly the
-# heading's. Prints JSON.
+# scale egomotion measures and the heading is the camera's, so the error
+# along the route goes with the scale's error and the error across it with
+# the heading's. Prints JSON.
 #
 #   lab/scripts/error-axes.sh "2121 2222 2323 2424" 100..130 > out/error-axes.json
 #
