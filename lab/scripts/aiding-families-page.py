@@ -894,7 +894,7 @@ def error_axes(split, say):
                 f"{mm(c['rms_across_m'])} | {c['rms_wheel_scale_error']:.5f} | {c['failed_frames']:.1f} | "
                 f"{c['time_s']:.1f} |")
     say('')
-    base, quiet, still, calm = (split[v] for v in variants)
+    base, no_stereo, no_slip, no_noise = (split[v] for v in variants)
     along, across = base['none']['rms_along_m'], base['none']['rms_across_m']
     scales = ', '.join(f"{a} {base[a]['rms_wheel_scale_error']:.5f}" for a in aids)
     improved = [a for a in aids[1:]
@@ -907,14 +907,14 @@ def error_axes(split, say):
     say(f"With the default estimate the distance driven is odometry's times the wheel scale egomotion measures "
         f"from the camera, the heading is the camera's, and odometry's sideways motion is taken as counted. "
         f"Driving straight, {mm(along)} mm RMS of the error lies along the route and {mm(across)} mm across it. "
-        f"Without stereo noise the along part falls to {mm(quiet['none']['rms_along_m'])} mm and the scale's "
-        f"error from {base['none']['rms_wheel_scale_error']:.5f} to {quiet['none']['rms_wheel_scale_error']:.5f}. "
+        f"Without stereo noise the along part falls to {mm(no_stereo['none']['rms_along_m'])} mm and the scale's "
+        f"error from {base['none']['rms_wheel_scale_error']:.5f} to {no_stereo['none']['rms_wheel_scale_error']:.5f}. "
         f"The scale's error by aid: {scales}; {', '.join(improved) if improved else 'no aid'} "
         f"improve{'s' if len(improved) <= 1 else ''} it by 5 % or more. Across the route straight driving ends "
         f"{mm(across)} mm off, with the head held ahead {mm(base['head-ahead']['rms_across_m'])} mm and with the "
         f"steered camera's looks {mm(base['camera']['rms_across_m'])} mm; without stereo noise "
-        f"{mm(quiet['none']['rms_across_m'])} mm stays across, without slip {mm(still['none']['rms_across_m'])} mm "
-        f"and without either {mm(calm['none']['rms_across_m'])} mm, so most of it comes from the two together. "
+        f"{mm(no_stereo['none']['rms_across_m'])} mm stays across, without slip {mm(no_slip['none']['rms_across_m'])} mm "
+        f"and without either {mm(no_noise['none']['rms_across_m'])} mm, so most of it comes from the two together. "
         f"For a look to end at 0.85× straight driving's RMS error with the along part as straight driving's, "
         f"{need}; the looks tried leave it about as it was. Other rules for the look were tried in scratch "
         f"builds on the training layouts (2121–2828, seeds 100–159, the steered camera against straight driving "

@@ -19,10 +19,10 @@ cd "$(dirname "$0")/../.."
 . lab/scripts/aids.sh
 routes=${ROUTES:-feature-poor route-1-2 route-2-1}
 aids=${AIDS:-none head-ahead camera scan triggered-scan}
+stereo=(-e "s/pixel_noise_px: 0.047, outlier_share: 0.08/pixel_noise_px: 0.0, outlier_share: 0.0/")
+slip=(-e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: 0.0/")
 for route in $routes; do
     for variant in base no-stereo-noise no-slip no-noise; do
-        stereo=(-e "s/pixel_noise_px: 0.047, outlier_share: 0.08/pixel_noise_px: 0.0, outlier_share: 0.0/")
-        slip=(-e "s/slip_deg_per_sqrt_m: 0.2/slip_deg_per_sqrt_m: 0.0/")
         case $variant in
             base) edit=(-e "") ;;
             no-stereo-noise) edit=("${stereo[@]}") ;;
