@@ -56,6 +56,10 @@ pub struct CameraRobot<R> {
     pan_tilt: Option<(Box<dyn PanTilt>, f64)>,
     /// The unit's recent readings, for the angles when a pair was taken.
     head: TimedReadings<Instant, Aim>,
+    /// The unit's first reading, the mean of many: frames take it until
+    /// the head is first sent anywhere, as egomotion's map is anchored on
+    /// the first frame.
+    anchor: Option<Aim>,
     /// When the unit was first sent anywhere: until then it stands where
     /// it started, and a frame takes the mean of many readings.
     first_command: Option<Instant>,
@@ -70,6 +74,7 @@ impl<R: Robot> CameraRobot<R> {
             frames: 0,
             pan_tilt: None,
             head: TimedReadings::default(),
+            anchor: None,
             first_command: None,
         }
     }
@@ -109,6 +114,7 @@ impl<R: Robot> CameraRobot<R> {
             frames: 0,
             pan_tilt: None,
             head: TimedReadings::default(),
+            anchor: None,
             first_command: None,
         })
     }
@@ -192,8 +198,8 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
         if let Some((unit, _)) = &mut self.pan_tilt {
             // The first tick's reading, before the tree has sent the head
             // anywhere, anchors egomotion's map: it is many readings' mean.
-            let (at, aim) = match self.head.first() {
-                None => (Instant::now(), unit.anchor_reading()?),
+            let (at, aim) = match self.anchor {
+                None => (Instant::now(), *self.anchor.insert(unit.anchor_reading()?)),
                 Some(_) => unit.measured_at()?,
             };
             self.head.push(at, aim);
@@ -208,7 +214,7 @@ impl<R: Robot> RobotWrapper for CameraRobot<R> {
                     let aim = match (&self.pan_tilt, self.first_command) {
                         (None, _) => None,
                         (Some(_), Some(sent)) if taken >= sent => self.head.at(taken),
-                        (Some(_), _) => self.head.first(),
+                        (Some(_), _) => self.anchor,
                     };
                     self.frames += 1;
                     state.stereo.number = self.frames;

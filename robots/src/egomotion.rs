@@ -66,12 +66,8 @@ impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
                 self.odometry.push(read_at, state.pose);
             }
             // A frame taken at this tick (the simulator's) takes this
-            // tick's odometry.
-            let when_taken = if state.stereo.time < state.time {
-                self.odometry.at(state.stereo.time).unwrap_or(state.pose)
-            } else {
-                state.pose
-            };
+            // tick's odometry, the newest reading.
+            let when_taken = self.odometry.at(state.stereo.time).unwrap_or(state.pose);
             tracker.update(&state.stereo, &when_taken);
             state.egomotion = tracker.state();
             if let Some(pose) = tracker.navigation_pose(&state.pose) {

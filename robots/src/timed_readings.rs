@@ -50,17 +50,15 @@ impl Between for Pose2 {
     }
 }
 
-/// The last [`TimedReadings::KEPT`] readings, oldest first, and the very
-/// first.
+/// The last [`TimedReadings::KEPT`] readings, oldest first.
 #[derive(Debug)]
 pub(crate) struct TimedReadings<S, V> {
     readings: VecDeque<(S, V)>,
-    first: Option<V>,
 }
 
 impl<S, V> Default for TimedReadings<S, V> {
     fn default() -> Self {
-        TimedReadings { readings: VecDeque::new(), first: None }
+        TimedReadings { readings: VecDeque::new() }
     }
 }
 
@@ -69,31 +67,31 @@ impl<S: Stamp, V: Between> TimedReadings<S, V> {
     /// frame takes to arrive.
     const KEPT: usize = 64;
 
-    /// Keeps `value`, read at `at`; a reading no newer than the last (a
-    /// unit's poll read again) is the one already kept.
+    /// Keeps `value`, read at `at`. A reading stamped as the last replaces
+    /// it: the same reading polled again, or a clock that has not moved
+    /// (a simulation's first ticks), whose latest word is the one to keep.
+    /// One older than the last is out of order and dropped.
     pub(crate) fn push(&mut self, at: S, value: V) {
-        if self.readings.back().is_some_and(|(last, _)| at <= *last) {
-            return;
+        match self.readings.back_mut() {
+            Some((last, _)) if at < *last => return,
+            Some((last, kept)) if at == *last => {
+                *kept = value;
+                return;
+            }
+            _ => {}
         }
         if self.readings.len() == Self::KEPT {
             self.readings.pop_front();
         }
-        self.first.get_or_insert(value);
         self.readings.push_back((at, value));
     }
 
-    /// Every reading kept, and the first, made over by `remake`: readings
-    /// put in a frame that has since moved.
+    /// Every reading kept, made over by `remake`: readings put in a frame
+    /// that has since moved.
     pub(crate) fn remake(&mut self, remake: impl Fn(V) -> V) {
         for (_, value) in &mut self.readings {
             *value = remake(*value);
         }
-        self.first = self.first.map(&remake);
-    }
-
-    /// The first reading kept.
-    pub(crate) fn first(&self) -> Option<V> {
-        self.first
     }
 
     /// The value at `when`: between two readings, on the line through
@@ -131,15 +129,17 @@ mod tests {
         assert!(close(head.at(s(0.1)).unwrap(), 0.5, 0.1), "on a reading, that reading");
         assert!(close(head.at(s(1.0)).unwrap(), 0.5, 0.3), "after the newest, the newest");
         assert!(close(head.at(start).unwrap(), 0.0, 0.1));
+        head.push(s(0.2), Aim { pan: 7.0, tilt: 7.0 });
+        assert!(close(head.at(s(0.2)).unwrap(), 0.5, 0.2), "a reading older than the last is dropped");
         head.push(s(0.3), Aim { pan: 9.0, tilt: 9.0 });
-        assert!(close(head.at(s(1.0)).unwrap(), 0.5, 0.3), "a reading read again is kept once");
+        assert!(close(head.at(s(1.0)).unwrap(), 9.0, 9.0), "a reading at the last's instant replaces it");
+        assert!(close(head.at(s(0.2)).unwrap(), 4.75, 4.55), "and is interpolated to as the one kept");
         for k in 0..100 {
             head.push(s(1.0 + f64::from(k)), Aim { pan: f64::from(k), tilt: 0.0 });
         }
         assert_eq!(head.readings.len(), TimedReadings::<Instant, Aim>::KEPT);
         let oldest = f64::from(100 - TimedReadings::<Instant, Aim>::KEPT as u32);
         assert!(close(head.at(s(0.0)).unwrap(), oldest, 0.0), "before the oldest kept, the oldest");
-        assert!(close(head.first().unwrap(), 0.0, 0.1), "the first is kept");
     }
 
     #[test]
