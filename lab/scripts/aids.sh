@@ -15,9 +15,11 @@ estimate() {
 }
 # `aid NAME`: `none` (straight at the goal), `scan`, `triggered-scan` (the
 # scan within a budget of SCAN_BUDGET, default 0.5, of the time driven),
-# `camera` (straight, the camera steered on a pan-tilt head) or
+# `camera` (straight, the camera steered on a pan-tilt head),
 # `head-ahead` (straight, the camera on the same head, never turned: what
-# the head's readings alone cost the steered camera).
+# the head's readings alone cost the steered camera) or `sweep` (straight,
+# the head swept blind from side to side by `SweepCamera`, SWEEP_AMPLITUDE
+# degrees either way, default 45, every SWEEP_PERIOD seconds, default 8).
 aid() {
     case $1 in
         none) cat ;;
@@ -26,6 +28,8 @@ aid() {
         camera) sed -e "s/technique: None/technique: Tracking, steer: Camera/" \
             -e "s/camera: (/camera: (pan_tilt: (), /" ;;
         head-ahead) sed -e "s/camera: (/camera: (pan_tilt: (), /" ;;
+        sweep) sed -e "s/camera: (/camera: (pan_tilt: (), /" \
+            -e "s/\(ActionAiding(technique: None[^)]*)),\)/\1\n            (behavior: SweepCamera(amplitude_deg: ${SWEEP_AMPLITUDE:-45.0}, period_s: ${SWEEP_PERIOD:-8.0})),/" ;;
         *) echo "unknown aid $1" >&2; return 2 ;;
     esac
 }
@@ -35,6 +39,8 @@ check_aid() {
     case $1 in
         none) ;;
         head-ahead) grep -q "pan_tilt: ()" "$2" || { echo "$2: the head did not go in" >&2; return 1; } ;;
+        sweep) grep -q "SweepCamera(" "$2" && grep -q "pan_tilt: ()" "$2" \
+            || { echo "$2: the sweep's edit did not match" >&2; return 1; } ;;
         camera) grep -q "steer: Camera" "$2" && grep -q "pan_tilt: ()" "$2" \
             || { echo "$2: the camera's edit did not match" >&2; return 1; } ;;
         scan) grep -q "technique: Scan" "$2" || { echo "$2: the scan's edit did not match" >&2; return 1; } ;;
