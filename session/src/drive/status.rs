@@ -47,7 +47,7 @@ impl StatusLine {
             None => "-",
         };
         format!(
-            "t {:.1} s | SIP {:.2} s old | pose ({:.2}, {:.2}) m {:.0}° | {:.2} m/s {:.0}°/s | winner {winner} | hold \
+            "t {:.1} s | data {:.2} s old | pose ({:.2}, {:.2}) m {:.0}° | {:.2} m/s {:.0}°/s | winner {winner} | hold \
              {hold}",
             state.time,
             state.sensor_age,
