@@ -68,9 +68,10 @@ impl<S: Stamp, V: Between> TimedReadings<S, V> {
     const KEPT: usize = 64;
 
     /// Keeps `value`, read at `at`. A reading stamped as the last replaces
-    /// it: the same reading polled again, or a clock that has not moved
-    /// (a simulation's first ticks), whose latest word is the one to keep.
-    /// One older than the last is out of order and dropped.
+    /// it, the latest word on that instant: a head's poll read again, or
+    /// the robot sensed again at the last tick's time (the controller's
+    /// settled pose after a stop). One older than the last is out of order
+    /// and dropped.
     pub(crate) fn push(&mut self, at: S, value: V) {
         match self.readings.back_mut() {
             Some((last, _)) if at < *last => return,
