@@ -938,8 +938,9 @@ def error_axes(split, say):
         f"a scan's turns take instead of turning, 1.14× (0.80× without stereo noise, 1.03× without slip, "
         f"by `lab/scripts/error-axes.sh` on the same build: standing costs only where the two noises meet, "
         f"as the error across the route does; in the ordinary families, with more landmarks, it cost nothing "
-        f"measurable, 0.97× and 0.91× on seeds 100–129; why it costs here is not known, and it matters to a "
-        f"robot that waits often). "
+        f"measurable, 0.97× and 0.91× on seeds 100–129; why it costs here is not known: neither leaving the "
+        f"frames taken standing out of the wheels' fits (1.17×) nor holding egomotion's anchor keyframe through "
+        f"the stand (1.17×) took it away, and it matters to a robot that waits often). "
         f"So what helps is the views taken as the robot turns on "
         f"the spot, not the heading it picks nor the stop; scanning only every few metres, within the triggered "
         f"scan's budget, ended 1.14×.")
