@@ -916,7 +916,9 @@ def error_axes(split, say):
         f"{mm(no_stereo['none']['rms_across_m'])} mm stays across, without slip {mm(no_slip['none']['rms_across_m'])} mm "
         f"and without either {mm(no_noise['none']['rms_across_m'])} mm, so most of it comes from the two together. "
         f"For a look to end at 0.85× straight driving's RMS error with the along part as straight driving's, "
-        f"{need}; the looks tried leave it about as it was. Other rules for the look were tried in scratch "
+        f"{need}; the looks tried leave it about as it was.")
+    say('')
+    say(f"**Other looks.** Other rules for the look were tried in scratch "
         f"builds on the training layouts (2121–2828, seeds 100–159, the steered camera against straight driving "
         f"in this family; the figures are typed in here, the builds are not in the repository): the shipped view "
         f"of least step CV 1.11×, the view with the most landmarks 1.04×, the head held ahead by the same "
@@ -929,21 +931,25 @@ def error_axes(split, say):
         f"SWEEP_PERIOD=12 lab/scripts/aiding-families.sh \"2121 … 2828\" 130..160`): of twelve settings (±30°, "
         f"45°, 60° or 90°, every 8, 12 or 16 s; ±90° every 8 s asks more than the head's 60°/s) the best on "
         f"seeds 100–129, ±60° every 12 s, ended 0.82× there, where it was picked, and 1.17× on seeds 130–159 "
-        f"(0.97× over both). What reaches further is measuring the scale and the heading better than driving "
-        f"straight does: the scan, which turns on the spot, does both, at "
-        f"{base['scan']['time_s'] / base['none']['time_s']:.1f}× the time. What of the scan helps was tested "
+        f"(0.97× over both).")
+    say('')
+    say(f"**What of the scan helps.** What reaches further is measuring the scale and the heading better than "
+        f"driving straight does: the scan, which turns on the spot, does both, at "
+        f"{base['scan']['time_s'] / base['none']['time_s']:.1f}× the time. What of it helps was tested "
         f"in scratch builds on the same training layouts and seeds, where the scan ends 0.93× straight driving's "
         f"error in this family (0.77× on this page's layouts, above): turning back to the goal's bearing after "
         f"every scan instead of to the heading it picks, it ended 0.93× too, and standing still for as long as "
-        f"a scan's turns take instead of turning, 1.14× (0.80× without stereo noise, 1.03× without slip, "
-        f"by `lab/scripts/error-axes.sh` on the same build: standing costs only where the two noises meet, "
-        f"as the error across the route does; in the ordinary families, with more landmarks, it cost nothing "
-        f"measurable, 0.97× and 0.91× on seeds 100–129; why it costs here is not known: neither leaving the "
-        f"frames taken standing out of the wheels' fits (1.17×) nor holding egomotion's anchor keyframe through "
-        f"the stand (1.17×) took it away, and it matters to a robot that waits often). "
-        f"So what helps is the views taken as the robot turns on "
+        f"a scan's turns take instead of turning, 1.14×. So what helps is the views taken as the robot turns on "
         f"the spot, not the heading it picks nor the stop; scanning only every few metres, within the triggered "
         f"scan's budget, ended 1.14×.")
+    say('')
+    say(f"**Standing still costs here.** Standing still instead of scanning ended 0.80× without stereo noise "
+        f"and 1.03× without slip (`lab/scripts/error-axes.sh` on the same build): it costs only where the two "
+        f"noises meet, as the error across the route does. In the ordinary families, with more landmarks, it "
+        f"cost nothing measurable, 0.97× and 0.91× on seeds 100–129. Why it costs here is not known: neither "
+        f"leaving the frames taken standing out of the wheels' fits (1.17×) nor holding egomotion's anchor "
+        f"keyframe through the stand (1.17×) took it away. It matters to a robot that waits often where few "
+        f"landmarks are in view.")
     say('')
 
 
