@@ -13,6 +13,20 @@ estimate() {
         *) echo "unknown estimate $1" >&2; return 2 ;;
     esac
 }
+# `check_estimate NAME FILE`: fails, naming FILE, unless `estimate NAME`
+# took.
+check_estimate() {
+    if [ "$1" != visual ] && grep -q "odometry_fusion: Off, navigate: false" "$2"; then
+        echo "$2: the estimate's edit did not match" >&2
+        return 1
+    fi
+    if [ "$1" = compass ] && ! grep -q "wall_compass: ()" "$2"; then
+        echo "$2: the compass did not go in" >&2
+        return 1
+    fi
+}
+# The camera put on a pan-tilt head, as the aids that turn it need.
+on_head='s/camera: (/camera: (pan_tilt: (), /'
 # `aid NAME`: `none` (straight at the goal), `scan`, `triggered-scan` (the
 # scan within a budget of SCAN_BUDGET, default 0.5, of the time driven),
 # `camera` (straight, the camera steered on a pan-tilt head),
@@ -25,10 +39,9 @@ aid() {
         none) cat ;;
         scan) sed -e "s/technique: None/technique: Scan/" ;;
         triggered-scan) sed -e "s/technique: None/technique: Scan, scan_budget: ${SCAN_BUDGET:-0.5}/" ;;
-        camera) sed -e "s/technique: None/technique: Tracking, steer: Camera/" \
-            -e "s/camera: (/camera: (pan_tilt: (), /" ;;
-        head-ahead) sed -e "s/camera: (/camera: (pan_tilt: (), /" ;;
-        sweep) sed -e "s/camera: (/camera: (pan_tilt: (), /" \
+        camera) sed -e "s/technique: None/technique: Tracking, steer: Camera/" -e "$on_head" ;;
+        head-ahead) sed -e "$on_head" ;;
+        sweep) sed -e "$on_head" \
             -e "s/\(ActionAiding(technique: None[^)]*)),\)/\1\n            (behavior: SweepCamera(amplitude_deg: ${SWEEP_AMPLITUDE:-45.0}, period_s: ${SWEEP_PERIOD:-8.0})),/" ;;
         *) echo "unknown aid $1" >&2; return 2 ;;
     esac

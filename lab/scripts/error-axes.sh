@@ -33,7 +33,7 @@ for route in $routes; do
             file="$work/$route~$variant~$a.ron"
             sed "${edit[@]}" "lab/scenarios/thesis/$route.ron" | estimate default | aid "$a" > "$file"
             # A sed that matched nothing would run another file under this name.
-            ! grep -q "odometry_fusion: Off" "$file" || { echo "$file: the estimate's edit did not match" >&2; exit 1; }
+            check_estimate default "$file" || exit 1
             check_aid "$a" "$file" || exit 1
             case $variant in no-stereo-noise | no-noise)
                 grep -q "pixel_noise_px: 0.0, outlier_share: 0.0" "$file" \

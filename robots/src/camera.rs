@@ -61,7 +61,7 @@ pub struct CameraRobot<R> {
     /// the first frame.
     anchor: Option<Aim>,
     /// When the unit was first sent anywhere: until then it stands where
-    /// it started, and a frame takes the mean of many readings.
+    /// it started, and a frame takes the `anchor`.
     first_command: Option<Instant>,
 }
 

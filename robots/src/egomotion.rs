@@ -65,10 +65,12 @@ impl<R: Robot> RobotWrapper for EgomotionRobot<R> {
             if read_at.is_finite() {
                 self.odometry.push(read_at, state.pose);
             }
-            // A frame taken at this tick (the simulator's) takes this
-            // tick's odometry, the newest reading.
-            let when_taken = self.odometry.at(state.stereo.time).unwrap_or(state.pose);
-            tracker.update(&state.stereo, &when_taken);
+            if tracker.is_new(&state.stereo) {
+                // A frame taken at this tick (the simulator's) takes this
+                // tick's odometry, the newest reading.
+                let when_taken = self.odometry.at(state.stereo.time).unwrap_or(state.pose);
+                tracker.update(&state.stereo, &when_taken);
+            }
             state.egomotion = tracker.state();
             if let Some(pose) = tracker.navigation_pose(&state.pose) {
                 state.pose = pose;

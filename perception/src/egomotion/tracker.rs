@@ -542,6 +542,13 @@ impl Tracker {
         self.keyframes.len()
     }
 
+    /// Whether [`Tracker::update`] would take `frame` in: numbered (0 is
+    /// no frame yet) and not the newest taken. A caller need not work out
+    /// the odometry of when a frame was taken until there is a new one.
+    pub fn is_new(&self, frame: &StereoFrame) -> bool {
+        frame.number != 0 && frame.number != self.newest.0
+    }
+
     /// Takes in `frame` if it is new: matches it against the keyframes,
     /// best anchored first, and sets the pose from the best match. A
     /// frame no keyframe matches is a failure: the pose is carried on by
@@ -555,7 +562,7 @@ impl Tracker {
     /// A heading given by [`Tracker::fix_heading`] since the last frame is
     /// taken in after this one.
     pub fn update(&mut self, frame: &StereoFrame, odometry: &Pose2) {
-        if frame.number == 0 || frame.number == self.newest.0 {
+        if !self.is_new(frame) {
             return;
         }
         self.take_frame(frame, odometry);
@@ -577,8 +584,8 @@ impl Tracker {
     /// Turns egomotion's pose towards the heading `fix` measured when
     /// odometry read `at` (carried to `odometry`, the frame's, by
     /// odometry's turn between: backwards where the frame was taken before
-    /// the fix and reached the robot after it), by how much of the pose's heading is odometry's against how
-    /// sure the fix is: a Kalman update of the heading error the bridges
+    /// the fix and reached the robot after it), by how much of the pose's
+    /// heading is odometry's against how sure the fix is: a Kalman update of the heading error the bridges
     /// laid down. A keyframe shares the part of that error laid down
     /// before it, and is turned (about the pose, so that the next match to
     /// it lands where the pose now is) by that share: one laid on vision
