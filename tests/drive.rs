@@ -418,45 +418,64 @@ fn fastest_odometry_speed(log: &str) -> f64 {
 
 #[test]
 fn sigterm_at_speed_brakes_before_the_motors_go_off() {
-    // At 1 m/s the emulated Powerbot needs 2 s to brake at its 0.5 m/s²:
-    // the motors go off only once it has.
+    let (status, stderr, line) = interrupt_at_speed("kill -TERM $PID");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
+    assert!(speed.abs() <= 20.0, "motors switched off at {speed} mm/s: {line}");
+}
+
+/// `ubf drive` on the emulator at 1 m/s, where the emulated Powerbot needs
+/// 2 s to brake at its 0.5 m/s²: interrupted after 4 s by `signal` (a shell
+/// given `$PID`); its exit status, its stderr and the emulator's report
+/// line.
+fn interrupt_at_speed(signal: &str) -> (std::process::ExitStatus, String, String) {
     let (mut emulator, address, mut out) = emulator();
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");
     let fast = "Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: 1.0))])";
     std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 40.0, y: 0.0),", fast)).unwrap();
-    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     std::thread::sleep(Duration::from_secs(4));
-    Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap();
-    wait_for(&mut drive, 10.0).expect("ubf drive exits on SIGTERM");
+    Command::new("sh").args(["-c", signal]).env("PID", drive.id().to_string()).status().unwrap();
+    let status = wait_for(&mut drive, 10.0).expect("ubf drive exits");
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut drive.stderr.take().unwrap(), &mut stderr).unwrap();
     let line = report_line(&mut out);
     emulator.kill().unwrap();
     let fastest = fastest_odometry_speed(&std::fs::read_to_string(dir.path().join("log.csv")).unwrap());
     assert!(fastest > 0.9, "the robot was at speed when told to stop: {fastest} m/s");
-    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
-    assert!(speed.abs() <= 20.0, "motors switched off at {speed} mm/s: {line}");
+    // Even exiting at once leaves the MCAP log readable up to its last
+    // second.
+    let said = mcap_check(&["--cut-short".as_ref(), dir.path().join("log.mcap").as_os_str()]);
+    assert!(said.contains("| /pose/odometry |"), "{said}");
+    (status, stderr, line)
 }
 
 #[test]
 fn a_second_interrupt_forces_the_exit_after_stop() {
-    let (mut emulator, address, mut out) = emulator();
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", GO_ONLY))
-        .unwrap();
-    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).spawn().unwrap();
-    std::thread::sleep(Duration::from_secs(2));
-    let pid = drive.id().to_string();
-    Command::new("kill").args(["-INT", &pid]).status().unwrap();
-    Command::new("kill").args(["-INT", &pid]).status().unwrap();
-    let status = wait_for(&mut drive, 5.0).expect("ubf drive exits");
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
-    assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out either way: {line}");
-    assert_eq!(status.code(), Some(130), "{status:?}");
-    // Exiting at once leaves the MCAP log readable up to its last second.
-    let said = mcap_check(&["--cut-short".as_ref(), dir.path().join("log.mcap").as_os_str()]);
-    assert!(said.contains("| /pose/odometry |"), "{said}");
+    // Half a second into the 2 s of braking the first one started.
+    let (status, stderr, line) = interrupt_at_speed("kill -INT $PID; sleep 0.5; kill -INT $PID");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted twice: robot sent STOP, ENABLE 0 and CLOSE; exiting now"), "{stderr}");
+    assert!(line.contains("closed true"), "STOP, ENABLE 0 and CLOSE went out: {line}");
+    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
+    assert!(speed.abs() > 100.0, "the motors went off without waiting to brake, not at {speed} mm/s: {line}");
+}
+
+#[test]
+fn a_signal_sent_twice_at_once_is_one_interrupt() {
+    // As GNU `timeout` sends it, to the process and to its process group:
+    // the orderly stop, braking before the motors go off. (50 ms apart, as
+    // two signals closer than the handler takes them may merge into one.)
+    let (status, stderr, line) = interrupt_at_speed("kill -TERM $PID; sleep 0.05; kill -TERM $PID");
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("interrupted twice"), "{stderr}");
+    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
+    assert!(speed.abs() <= 20.0, "motors switched off at {speed} mm/s: {line}");
 }
 
 #[test]

@@ -80,9 +80,10 @@ fn in_namespace(script: &str, vars: &[(&str, &std::ffi::OsStr)]) -> Option<Outpu
 /// Runs the Cyclone robot with `robot_args` and `ubf drive FILE --until-goal`
 /// beside it, in a private network namespace; `None` where namespaces are
 /// not available (the test is then skipped, said on stderr). With
-/// `interrupt_after`, ubf gets SIGTERM after that many seconds.
-fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt_after: Option<f64>) -> Option<Session> {
-    drive_and_listen(dir, robot_args, file, interrupt_after, None)
+/// `interrupt`, ubf is interrupted by that shell (`sleep 3; kill -TERM
+/// $ubf`) instead.
+fn drive_beside_robot(dir: &Path, robot_args: &str, file: &Path, interrupt: Option<&str>) -> Option<Session> {
+    drive_and_listen(dir, robot_args, file, interrupt, None)
 }
 
 /// The shell that starts a Cyclone listener (`listen.py` with the arguments
@@ -101,18 +102,18 @@ fn drive_and_listen(
     dir: &Path,
     robot_args: &str,
     file: &Path,
-    interrupt_after: Option<f64>,
+    interrupt: Option<&str>,
     listen: Option<&str>,
 ) -> Option<Session> {
     install_cyclone();
     let record = dir.join("robot.jsonl");
     let robot_out = dir.join("robot.out");
     let ubf_err = dir.join("ubf.err");
-    let drive = match interrupt_after {
+    let drive = match interrupt {
         None => "timeout 60 \"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\"; code=$?".to_owned(),
-        Some(s) => format!(
-            "\"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\" & ubf=$!; sleep {s}; kill -TERM $ubf; wait $ubf; code=$?"
-        ),
+        Some(interrupt) => {
+            format!("\"$UBF\" drive \"$FILE\" --until-goal 2>\"$UBF_ERR\" & ubf=$!; {interrupt}; wait $ubf; code=$?")
+        }
     };
     let (heard_path, listen_err) = (dir.join("heard.json"), dir.join("listen.err"));
     let listener = match listen {
@@ -268,10 +269,60 @@ fn odometry_that_stops_coming_stops_the_robot_at_once() {
 fn sigterm_leaves_the_robot_with_a_zero_twist() {
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 20.0, "");
-    let Some(session) = drive_beside_robot(dir.path(), "", &file, Some(3.0)) else { return };
+    let Some(session) = drive_beside_robot(dir.path(), "", &file, Some("sleep 3; kill -TERM $ubf")) else { return };
     assert_eq!(session.ubf.status.code(), Some(130), "{}", stderr(&session));
     assert!(session.twists.iter().any(|t| !is_zero(&t["twist"])), "it drove before the signal");
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
+fn sigterm_stops_the_robot_while_the_control_loop_hangs() {
+    // The loop hangs 2 s into the drive, the robot still driving on its
+    // last twist: the first SIGTERM stops it from outside the loop, the
+    // second one ends the process with the robot still stopped.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let hanging = "root: Composite(arbiter: CommandFusion, children: [(behavior: InjectFault(after_s: 2.0, hang_s: \
+                   30.0)), (behavior: GoTo(cruise_speed: 0.3))]),";
+    let text = std::fs::read_to_string(&file).unwrap();
+    let root = text.lines().find(|line| line.trim_start().starts_with("root:")).unwrap();
+    std::fs::write(&file, text.replace(root, hanging)).unwrap();
+    let interrupt = "sleep 3.5; kill -TERM $ubf; sleep 1; kill -TERM $ubf";
+    let Some(session) = drive_beside_robot(dir.path(), "", &file, Some(interrupt)) else { return };
+    let said = stderr(&session);
+    assert_eq!(session.ubf.status.code(), Some(130), "{said}");
+    assert!(said.contains("interrupted twice: robot sent a zero twist on /cmd_vel; exiting now"), "{said}");
+    // Driving until the first SIGTERM, a zero twist from then on.
+    let first_zero = session.twists.iter().rposition(|t| !is_zero(&t["twist"])).expect("it drove") + 1;
+    let stopped = &session.twists[first_zero..];
+    assert!(!stopped.is_empty() && stopped.iter().all(|t| is_zero(&t["twist"])), "{:?}", session.twists);
+    let (hung, stop) = (session.twists[first_zero - 1]["t"].as_f64().unwrap(), stopped[0]["t"].as_f64().unwrap());
+    assert!(stop - hung > 1.0, "the loop hung {:.2} s before the zero twist, not 1.5 s", stop - hung);
+}
+
+#[test]
+fn a_sandbox_without_netlink_is_named() {
+    // As under a systemd unit whose address families leave netlink out:
+    // DDS would find no network interface and every topic would be silent,
+    // which would look like a missing robot driver.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/ros2/no-netlink.py");
+    let out = Command::new("python3")
+        .arg(script)
+        .args([env!("CARGO_BIN_EXE_ubf"), "drive"])
+        .arg(&file)
+        .current_dir(dir.path())
+        .env_remove("ROS_DOMAIN_ID")
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stderr);
+    if out.status.code() == Some(77) {
+        eprintln!("skipped: {said}");
+        return;
+    }
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(said.contains("AF_NETLINK in RestrictAddressFamilies"), "{said}");
 }
 
 #[test]

@@ -8,6 +8,8 @@
 //! - [`camera`]: a wrapper giving any robot a stereo camera: pairs from a
 //!   source through the feature pipeline on a thread of their own.
 //! - [`arcos`]: the Pioneer/Powerbot controller protocol.
+//! - [`ros2`]: any ROS 2 robot, through `/cmd_vel`, `/odom` and `/scan`.
+//! - [`emergency`]: stopping a real robot from a signal handler.
 //! - [`ptu`]: a real pan-tilt head for the cameras (a FLIR PTU's serial
 //!   protocol), and an emulator of it.
 
@@ -16,6 +18,7 @@
 pub mod arcos;
 pub mod camera;
 pub mod egomotion;
+pub mod emergency;
 pub mod model;
 pub mod ptu;
 pub mod ros2;

@@ -11,6 +11,7 @@ use ubf_core::{Command, Robot, State, Turn};
 use ubf_robots::arcos::client::{Accelerations, ArcosRobot, ConnectOptions};
 use ubf_robots::arcos::emulator::{serve, EmulatorConfig, EmulatorReport};
 use ubf_robots::arcos::link::{self, Link};
+use ubf_robots::emergency::EmergencyStop;
 use ubf_robots::model::RobotModel;
 
 mod common;

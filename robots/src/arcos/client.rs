@@ -3,6 +3,7 @@
 
 use super::codec::{baud_code, ClientCommand, ConfigPacket, Identity, Sip, StreamDecoder, Unwrapper, CONFIG_TYPE};
 use super::link::{is_timeout, Link};
+use crate::emergency::EmergencyStop;
 use crate::model::RobotModel;
 use std::io::{self, Read};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -124,9 +125,9 @@ impl From<Ended> for LinkLoss {
     }
 }
 
-/// What a signal handler needs to stop the robot while the control loop is
-/// busy or stuck: its own handle on the link, and the session's halt.
-pub struct EmergencyStop {
+/// What a signal handler stops an ARCOS robot with while the control loop
+/// is busy or stuck: its own handle on the link, and the session's halt.
+pub struct ArcosEmergencyStop {
     link: Mutex<Box<dyn Link>>,
     halt: Arc<Halt>,
 }
@@ -141,11 +142,10 @@ struct Halt {
     halted: AtomicBool,
 }
 
-impl EmergencyStop {
-    /// Sends STOP now, from whatever thread, and holds the robot still:
-    /// the control loop's motion commands go out as STOP from here on,
-    /// while it runs its orderly stop. The first Ctrl-C or SIGTERM.
-    pub fn halt(&self) -> Result<(), RobotError> {
+impl EmergencyStop for ArcosEmergencyStop {
+    /// Sends STOP now and holds the robot still: the control loop's motion
+    /// commands go out as STOP from here on.
+    fn halt(&self) -> Result<(), RobotError> {
         let _order = self.halt.lock.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.halt.halted.store(true, Ordering::SeqCst);
         let mut link = self.link.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -153,14 +153,18 @@ impl EmergencyStop {
     }
 
     /// Sends STOP, ENABLE 0 and CLOSE at once, without waiting for
-    /// standstill: for when the orderly stop has not happened in time.
-    pub fn stop_now(&self) -> Result<(), RobotError> {
+    /// standstill.
+    fn stop_now(&self) -> Result<(), RobotError> {
         self.halt.halted.store(true, Ordering::SeqCst);
         let mut link = self.link.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         for command in [ClientCommand::Stop, ClientCommand::Enable(false), ClientCommand::Close] {
             send(link.as_mut(), command)?;
         }
         Ok(())
+    }
+
+    fn stop_now_sends(&self) -> String {
+        "STOP, ENABLE 0 and CLOSE".to_owned()
     }
 }
 
@@ -188,7 +192,7 @@ pub struct ArcosRobot {
     /// The rotational speed limit last sent (SETRV), °/s.
     rot_limit_sent: u16,
     standstill_wait: Duration,
-    /// Set from outside the control loop ([`EmergencyStop::halt`]).
+    /// Set from outside the control loop ([`ArcosEmergencyStop`]).
     halt: Arc<Halt>,
     /// The decelerations this session set, if any: mm/s² and °/s².
     decelerations_set: Option<(f64, f64)>,
@@ -412,8 +416,8 @@ impl ArcosRobot {
 
     /// A handle that can stop the robot from another thread (a second
     /// Ctrl-C) even while this one is busy.
-    pub fn emergency_stop(&self) -> Result<EmergencyStop, RobotError> {
-        Ok(EmergencyStop { link: Mutex::new(self.link.try_clone_link()?), halt: Arc::clone(&self.halt) })
+    pub fn emergency_stop(&self) -> Result<ArcosEmergencyStop, RobotError> {
+        Ok(ArcosEmergencyStop { link: Mutex::new(self.link.try_clone_link()?), halt: Arc::clone(&self.halt) })
     }
 
     fn send(&mut self, command: ClientCommand) -> Result<(), RobotError> {

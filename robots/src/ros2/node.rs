@@ -137,10 +137,27 @@ pub fn domain_from_env() -> Result<u16, RobotError> {
     }
 }
 
+/// What a process refused netlink sockets is told.
+#[cfg(target_os = "linux")]
+const NETLINK_REFUSED: &str = "finding the network interfaces, which DDS reads through netlink sockets (a sandbox must \
+                               allow them: under systemd, AF_NETLINK in RestrictAddressFamilies)";
+
+/// Whether this process may open a netlink socket. DDS finds the network
+/// interfaces through one on Linux; refused (a sandbox's address families),
+/// it finds none and joins with nowhere to send or listen, so that every
+/// topic is then silent and the robot's driver looks missing.
+#[cfg(target_os = "linux")]
+fn netlink_allowed() -> std::io::Result<()> {
+    let netlink = socket2::Domain::from(libc::AF_NETLINK);
+    socket2::Socket::new(netlink, socket2::Type::DGRAM, None).map(drop)
+}
+
 impl Node {
     /// Joins `domain` with topics under `namespace` (`""` or `/robot1`).
     pub fn join(domain: u16, namespace: &str) -> Result<Node, RobotError> {
         let in_domain = |what: &str| format!("ROS 2 domain {domain}: {what}");
+        #[cfg(target_os = "linux")]
+        netlink_allowed().map_err(|e| setup(in_domain(NETLINK_REFUSED), e))?;
         let participant = DomainParticipant::new(domain).map_err(|e| setup(in_domain("joining"), e))?;
         let qos = QosPolicyBuilder::new().build();
         let publisher = participant.create_publisher(&qos).map_err(|e| setup(in_domain("creating a publisher"), e))?;

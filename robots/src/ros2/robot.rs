@@ -3,7 +3,10 @@
 
 use super::msg::{LaserScan, Odometry, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
+use crate::emergency::EmergencyStop;
 use serde::Deserialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading, Robot, RobotError, State, Turn};
 
@@ -69,7 +72,9 @@ const HEADING_GAIN: f64 = 2.0;
 /// drive's goal is where the robot stood when the drive began.
 pub struct Ros2Robot {
     config: Ros2Config,
-    cmd_vel: Publisher<Twist>,
+    /// Shared with the robot's [`Ros2EmergencyStop`]s: one writer, so that
+    /// the base hears their zero twists in order with the loop's.
+    cmd_vel: Arc<CmdVel>,
     odom: Subscription<Odometry>,
     scan: Subscription<LaserScan>,
     limits: Limits,
@@ -127,7 +132,7 @@ impl Ros2Robot {
         Ok(Ros2Robot {
             node,
             config: config.clone(),
-            cmd_vel,
+            cmd_vel: Arc::new(CmdVel { publisher: Mutex::new(cmd_vel), halted: AtomicBool::new(false) }),
             odom,
             scan,
             limits,
@@ -150,9 +155,18 @@ impl Ros2Robot {
         self.origin.compose(&odometry.pose.pose.to_pose2().relative_to(&self.first_odom))
     }
 
+    /// A handle that stops the robot from another thread (Ctrl-C) even
+    /// while this one is busy.
+    pub fn emergency_stop(&self) -> Ros2EmergencyStop {
+        Ros2EmergencyStop { cmd_vel: Arc::clone(&self.cmd_vel) }
+    }
+
+    /// Publishes `twist`, or a zero twist once the robot has been halted.
     fn publish(&mut self, twist: Twist) -> Result<(), RobotError> {
+        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
+        let twist = if self.cmd_vel.halted.load(Ordering::SeqCst) { Twist::default() } else { twist };
         self.stopped = twist == Twist::default();
-        self.cmd_vel.publish(twist)
+        publisher.publish(twist)
     }
 
     /// Sends a zero twist and says why the link is lost: `topic`, which
@@ -160,6 +174,57 @@ impl Ros2Robot {
     fn lost(&mut self, what: &'static str, topic: &str, silent: Duration) -> RobotError {
         let _ = self.publish(Twist::default());
         LinkLoss::TopicSilent { what, topic: self.node.resolve(topic), for_s: silent.as_secs_f64() }.into()
+    }
+}
+
+/// The robot's velocity commands: the writer, and whether the robot has
+/// been halted from outside the control loop.
+struct CmdVel {
+    publisher: Mutex<Publisher<Twist>>,
+    halted: AtomicBool,
+}
+
+impl CmdVel {
+    /// Waits (briefly) for the robot's driver to acknowledge what was
+    /// published, and says on the log if it did not.
+    fn await_acknowledgement(&self) {
+        let publisher = self.publisher.lock().unwrap_or_else(PoisonError::into_inner);
+        if !publisher.acknowledged_within(STOP_ACK_WAIT) {
+            tracing::warn!(
+                "the zero twist on {} was not acknowledged within {:.1} s",
+                publisher.name(),
+                STOP_ACK_WAIT.as_secs_f64()
+            );
+        }
+    }
+}
+
+/// What a signal handler stops a ROS 2 robot with while the control loop
+/// is busy or stuck: a zero twist on the robot's own writer.
+pub struct Ros2EmergencyStop {
+    cmd_vel: Arc<CmdVel>,
+}
+
+impl EmergencyStop for Ros2EmergencyStop {
+    /// Publishes a zero twist now, and every twist the control loop
+    /// publishes after it is a zero twist too.
+    fn halt(&self) -> Result<(), RobotError> {
+        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
+        self.cmd_vel.halted.store(true, Ordering::SeqCst);
+        publisher.publish(Twist::default())
+    }
+
+    /// Halts, and waits (briefly) for the driver to acknowledge the zero
+    /// twist: a writer that leaves first may take it along.
+    fn stop_now(&self) -> Result<(), RobotError> {
+        self.halt()?;
+        self.cmd_vel.await_acknowledgement();
+        Ok(())
+    }
+
+    fn stop_now_sends(&self) -> String {
+        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
+        format!("a zero twist on {}", publisher.name())
     }
 }
 
@@ -227,13 +292,7 @@ impl Robot for Ros2Robot {
     /// acknowledge it: a writer that leaves first may take it along.
     fn shutdown(&mut self) -> Result<(), RobotError> {
         self.publish(Twist::default())?;
-        if !self.cmd_vel.acknowledged_within(STOP_ACK_WAIT) {
-            tracing::warn!(
-                "the zero twist on {} was not acknowledged within {:.1} s",
-                self.cmd_vel.name(),
-                STOP_ACK_WAIT.as_secs_f64()
-            );
-        }
+        self.cmd_vel.await_acknowledgement();
         Ok(())
     }
 

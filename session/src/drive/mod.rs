@@ -38,8 +38,9 @@ use ubf_core::{
     BuildContext, Controller, ControllerError, Ends, Pose2, Robot, RobotError, SafetyGuard, Session, SessionEnd,
     TracingSink, WallClock,
 };
-use ubf_robots::arcos::client::{ArcosRobot, EmergencyStop};
+use ubf_robots::arcos::client::ArcosRobot;
 use ubf_robots::arcos::link;
+use ubf_robots::emergency::EmergencyStop;
 use ubf_robots::model::RobotModel;
 use ubf_robots::ros2::Ros2Robot;
 
@@ -104,36 +105,49 @@ pub enum DriveError {
 
 /// What Ctrl-C or SIGTERM reaches the robot with, while a session is open:
 /// its emergency stop.
-static ON_INTERRUPT: Mutex<Option<EmergencyStop>> = Mutex::new(None);
+static ON_INTERRUPT: Mutex<Option<Box<dyn EmergencyStop>>> = Mutex::new(None);
 
-/// Set by Ctrl-C or SIGTERM, which also sends STOP at once on the open
-/// session, if any (the control loop may be in the middle of a tick), and
-/// holds it still while the loop runs the orderly stop. A second one does
-/// not wait for that: it sends STOP, ENABLE 0 and CLOSE and exits with
-/// status 130.
+/// A second interrupt sooner than this after the first is the same one sent
+/// twice: GNU `timeout` sends its SIGTERM to the process and to its process
+/// group, which the process is in.
+const SAME_INTERRUPT: Duration = Duration::from_millis(250);
+
+/// Set by Ctrl-C or SIGTERM, which also stops the open session's robot at
+/// once, if any (the control loop may be in the middle of a tick), and
+/// holds it still while the loop runs the orderly stop. A second one, at
+/// least [`SAME_INTERRUPT`] later, does not wait for that: it stops the
+/// robot for good (an ARCOS robot: STOP, ENABLE 0 and CLOSE; a ROS 2 robot:
+/// a zero twist) and exits with status 130.
 pub fn install_stop_flag() -> Arc<AtomicBool> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
+    let mut first: Option<Instant> = None;
     // A second handler cannot be installed; then only the time limit stops.
     let _ = ctrlc::set_handler(move || {
-        if !flag.swap(true, Ordering::SeqCst) {
-            if let Ok(guard) = ON_INTERRUPT.try_lock() {
-                if let Some(emergency) = guard.as_ref() {
-                    let _ = emergency.halt();
+        match first {
+            None => {
+                first = Some(Instant::now());
+                flag.store(true, Ordering::SeqCst);
+                if let Ok(guard) = ON_INTERRUPT.try_lock() {
+                    if let Some(emergency) = guard.as_ref() {
+                        let _ = emergency.halt();
+                    }
                 }
+                return;
             }
-            return;
+            Some(at) if at.elapsed() < SAME_INTERRUPT => return,
+            Some(_) => {}
         }
-        let mut robot = false;
+        let mut sent = None;
         if let Ok(guard) = ON_INTERRUPT.try_lock() {
             if let Some(emergency) = guard.as_ref() {
                 let _ = emergency.stop_now();
-                robot = true;
+                sent = Some(emergency.stop_now_sends());
             }
         }
-        match robot {
-            true => eprintln!("interrupted twice: robot sent STOP, ENABLE 0, CLOSE; exiting now"),
-            false => eprintln!("interrupted twice: exiting now"),
+        match sent {
+            Some(sent) => eprintln!("interrupted twice: robot sent {sent}; exiting now"),
+            None => eprintln!("interrupted twice: exiting now"),
         }
         std::process::exit(130);
     });
@@ -141,7 +155,7 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
 }
 
 /// Registers (or clears) what an interrupt stops.
-fn arm_interrupt(emergency: Option<EmergencyStop>) {
+fn arm_interrupt(emergency: Option<Box<dyn EmergencyStop>>) {
     *ON_INTERRUPT.lock().unwrap_or_else(std::sync::PoisonError::into_inner) = emergency;
 }
 
@@ -372,8 +386,8 @@ struct Connected {
     robot: Box<dyn Robot>,
     /// Who answered, for the operator.
     name: String,
-    /// What a second interrupt runs, where the robot has one.
-    emergency: Option<EmergencyStop>,
+    /// What an interrupt stops the robot with, where it has one.
+    emergency: Option<Box<dyn EmergencyStop>>,
 }
 
 /// Reaches the robot the configuration names, ready to drive, with its
@@ -386,12 +400,13 @@ fn connect_driving(config: &DriveConfig, model: &RobotModel, pose: Pose2) -> Res
         let robot = Ros2Robot::connect(&ros2, limits, config.period_s, pose)
             .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })?;
         let name = format!("a ROS 2 robot in domain {} ({})", robot.domain(), model.name);
-        return Ok(Connected { robot: Box::new(robot), name, emergency: None });
+        let emergency: Box<dyn EmergencyStop> = Box::new(robot.emergency_stop());
+        return Ok(Connected { robot: Box::new(robot), name, emergency: Some(emergency) });
     }
     let robot = connect(config, model, true, pose)?;
     let id = robot.identity();
     let name = format!("{} ({} {})", id.name, id.class, id.subclass);
-    let emergency = robot.emergency_stop().ok();
+    let emergency = robot.emergency_stop().ok().map(|e| Box::new(e) as Box<dyn EmergencyStop>);
     Ok(Connected { robot: Box::new(robot), name, emergency })
 }
 
