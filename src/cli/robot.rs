@@ -29,9 +29,9 @@ pub(super) struct DriveOptions {
     #[arg(long)]
     pub until_goal: bool,
     /// Publish the drive on ROS 2 (in `ROS_DOMAIN_ID`): `/tf`, `/odom`,
-    /// `/scan`, `/ubf/tick`, `/ubf/goal`. A ROS 2 robot
-    /// (`connection: "ros2"`) always publishes `/ubf/tick` and
-    /// `/ubf/goal`; its own driver publishes the rest.
+    /// `/scan`, `/ubf/tick`, `/ubf/goal`, `/ubf/pose/...`. A ROS 2 robot
+    /// (`connection: "ros2"`) always publishes `/ubf/tick`, `/ubf/goal`
+    /// and the poses; its own driver publishes the rest.
     #[arg(long)]
     pub ros2: bool,
     /// Serve the drive live to Foxglove on this address (e.g.
@@ -75,20 +75,19 @@ pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> 
     });
     let outcome = crate::drive::drive(&config, &model, &stop, status, trees);
     if let Some(pose) = outcome.pose {
-        eprintln!(
-            "the robot came to rest at ({:.3}, {:.3}) m, {:.1}° by its odometry, in the frame where it stood when the \
-             drive began",
-            pose.x,
-            pose.y,
-            pose.theta.to_degrees()
-        );
+        let frame = match &config.pose_file {
+            Some(file) => format!("the world frame kept in {}", file.display()),
+            None => "the frame where it stood when the drive began".to_owned(),
+        };
+        let (x, y, heading) = (pose.x, pose.y, pose.theta.to_degrees());
+        eprintln!("the robot came to rest at ({x:.3}, {y:.3}) m, {heading:.1}° by its odometry, in {frame}");
     }
     match outcome.logs.as_slice() {
         [] => eprintln!("no session opened; no log written"),
         [one] => eprintln!("log in {}", one.display()),
         many => {
             let names: Vec<String> = many.iter().map(|p| p.display().to_string()).collect();
-            eprintln!("logs (CSV and MCAP), per session: {}", names.join(", "));
+            eprintln!("logs: {}", names.join(", "));
         }
     }
     match outcome.end.map_err(CliError::failed)? {

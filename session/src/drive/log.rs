@@ -191,7 +191,8 @@ pub(super) fn attach_logs<R: Robot>(
         create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
     eprintln!("logging to {}", path.display());
     logs.push(path.clone());
-    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan: false });
+    let camera_pan = config.camera.as_ref().is_some_and(|camera| camera.pan_tilt.is_some());
+    let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan });
     let sink =
         BackgroundSink::spawn(format!("CSV log {}", path.display()), csv, LOG_QUEUE).map_err(DriveError::LogWriter)?;
     controller.add_sink(Box::new(sink));

@@ -218,7 +218,7 @@ pub struct DriveConfig {
     #[serde(default)]
     pub until_goal: bool,
     /// Publish the drive on ROS 2 (`/tf`, `/odom`, `/scan`, `/ubf/tick`,
-    /// `/ubf/goal`); `ubf drive --ros2` sets it. A ROS 2 robot always
+    /// `/ubf/goal`, `/ubf/pose/...`); `ubf drive --ros2` sets it. A ROS 2 robot always
     /// publishes the tree's topics, and leaves the robot's to its driver.
     #[serde(default)]
     pub publish_ros2: bool,
