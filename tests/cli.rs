@@ -72,6 +72,20 @@ fn malformed_file_gives_file_line_column_and_exit_2() {
 }
 
 #[test]
+fn a_missing_file_says_where_it_was_looked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["run", "scenarios/goto-open-floor.ron"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let cwd = dir.path().canonicalize().unwrap();
+    let expected = format!("scenarios/goto-open-floor.ron: not found in the working directory {}", cwd.display());
+    assert!(text(&out.stderr).contains(&expected), "{}", text(&out.stderr));
+}
+
+#[test]
 fn unknown_field_is_named_with_its_position() {
     let (code, err) = check(&GOOD.replace("cruise_speed: 0.5", "cruise_sped: 0.5"));
     assert_eq!(code, 2);

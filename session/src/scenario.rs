@@ -217,7 +217,7 @@ impl Work {
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The file could not be read.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {}", path.display(), ubf_core::config::why_unread(path, source))]
     Io {
         /// The file.
         path: PathBuf,

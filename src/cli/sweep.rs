@@ -208,7 +208,11 @@ fn clear_shard_output(out: &Path, shard: Shard, overwrite: bool) -> Result<(), C
 
 /// Parses `A..B`, `A..=B` or `N` into a range of seeds.
 pub(super) fn parse_seeds(text: &str) -> Result<std::ops::Range<u64>, String> {
-    let number = |s: &str| s.trim().parse::<u64>().map_err(|_| format!("`{s}` is not a seed (a whole number ≥ 0)"));
+    let number = |s: &str| {
+        s.trim().parse::<u64>().map_err(|_| {
+            format!("`{s}` is not a seed (a whole number ≥ 0): write one seed, A..B (B left out) or A..=B")
+        })
+    };
     let range = if let Some((a, b)) = text.split_once("..=") {
         let end = number(b)?.checked_add(1).ok_or("the last seed is too large")?;
         number(a)?..end
@@ -263,5 +267,22 @@ pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
         Ok(n) if n > MOST_JOBS => Err(format!("{n} jobs is more than the {MOST_JOBS} a machine can use")),
         Ok(n) => Ok(n),
         Err(_) => Err(format!("`{text}` is not a number of jobs")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_seeds;
+
+    #[test]
+    fn seeds_are_one_or_a_range_and_a_mistake_says_how_to_write_them() {
+        assert_eq!(parse_seeds("7"), Ok(7..8));
+        assert_eq!(parse_seeds("3..6"), Ok(3..6));
+        assert_eq!(parse_seeds("3..=6"), Ok(3..7));
+        for wrong in ["1,2,3", "1-5", "x..3"] {
+            let said = parse_seeds(wrong).unwrap_err();
+            assert!(said.ends_with("write one seed, A..B (B left out) or A..=B"), "{wrong}: {said}");
+        }
+        assert_eq!(parse_seeds("5..5").unwrap_err(), "`5..5` holds no seed");
     }
 }

@@ -53,6 +53,20 @@ impl From<ron::error::SpannedError> for RonError {
     }
 }
 
+/// Why the file at `path` could not be read, for a person: a relative
+/// path that is not there says where it was looked for, since the working
+/// directory is not always the one the reader has in mind (an installed
+/// `ubf` run outside the checkout, a service).
+pub fn why_unread(path: &std::path::Path, error: &std::io::Error) -> String {
+    let cwd = std::env::current_dir();
+    match cwd {
+        Ok(dir) if error.kind() == std::io::ErrorKind::NotFound && path.is_relative() => {
+            format!("not found in the working directory {}", dir.display())
+        }
+        _ => error.to_string(),
+    }
+}
+
 /// A file's bytes as text, or where the first byte that is not UTF-8 sits.
 pub fn utf8_text(bytes: Vec<u8>) -> Result<String, RonError> {
     String::from_utf8(bytes).map_err(|e| {

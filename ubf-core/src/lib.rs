@@ -100,3 +100,7 @@ pub use session::{Ends, Session, SessionEnd, TreeSource};
 pub use sink::{BackgroundSink, TickSink, TracingSink};
 pub use state::{Bumpers, EgomotionState, Goal, HeadingFix, RangeReading, State, WheelScale};
 pub use stereo::{CameraMount, PrincipalPoint, StereoCamera};
+/// The random-number crates [`BuildContext::rng`] is made of: a behaviour
+/// in another crate draws from it with `ubf_core::rand::Rng`, at the very
+/// version ubf was built with.
+pub use {rand, rand_chacha};

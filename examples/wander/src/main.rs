@@ -5,10 +5,10 @@
 //! cargo run -p ubf-example-wander -- run examples/wander/wander.ron
 //! ```
 
-use rand::Rng;
-use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use ubf_core::config::positive;
+use ubf_core::rand::Rng;
+use ubf_core::rand_chacha::ChaCha8Rng;
 use ubf_core::{Action, Behavior, BuildContext, Describe, Field, State};
 
 /// Settings of `Wander(..)` in a scenario file.

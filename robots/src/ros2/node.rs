@@ -139,7 +139,8 @@ pub fn domain_from_env() -> Result<u16, RobotError> {
 
 /// What a process refused netlink sockets is told.
 #[cfg(target_os = "linux")]
-const NETLINK_REFUSED: &str = "finding the network interfaces, which DDS reads through netlink sockets (a sandbox must \
+const NETLINK_REFUSED: &str =
+    "finding the network interfaces, which DDS reads through netlink sockets (a sandbox must \
                                allow them: under systemd, AF_NETLINK in RestrictAddressFamilies)";
 
 /// Whether this process may open a netlink socket. DDS finds the network

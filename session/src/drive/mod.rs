@@ -115,7 +115,7 @@ const SAME_INTERRUPT: Duration = Duration::from_millis(250);
 /// Set by Ctrl-C or SIGTERM, which also stops the open session's robot at
 /// once, if any (the control loop may be in the middle of a tick), and
 /// holds it still while the loop runs the orderly stop. A second one, at
-/// least [`SAME_INTERRUPT`] later, does not wait for that: it stops the
+/// least 0.25 s later, does not wait for that: it stops the
 /// robot for good (an ARCOS robot: STOP, ENABLE 0 and CLOSE; a ROS 2 robot:
 /// a zero twist) and exits with status 130.
 pub fn install_stop_flag() -> Arc<AtomicBool> {

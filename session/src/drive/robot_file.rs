@@ -401,7 +401,7 @@ impl DriveConfig {
 #[derive(Debug, thiserror::Error)]
 pub enum RobotFileError {
     /// The file, or the model file it names, could not be read.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {}", path.display(), ubf_core::config::why_unread(path, source))]
     Read {
         /// The file.
         path: PathBuf,
