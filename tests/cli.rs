@@ -227,6 +227,15 @@ fn every_command_that_writes_a_folder_refuses_a_full_one_unless_told_to_overwrit
     let said = text(&again.stderr);
     assert!(said.contains("is not empty") && said.contains("--overwrite"), "{said}");
     assert_eq!(std::fs::read(out.join("report.json")).unwrap(), report);
+    // Nor with --overwrite while the folder holds anything a run does not
+    // write: here, the scenario the run reads.
+    let scenario = out.join("mine.ron");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/goto-open-floor.ron"), &scenario).unwrap();
+    let mine = ubf(&["run", scenario.to_str().unwrap(), "--out", out_arg, "--overwrite"]);
+    assert_eq!(mine.status.code(), Some(2));
+    assert!(text(&mine.stderr).contains("mine.ron, which `ubf run` does not write"), "{}", text(&mine.stderr));
+    assert!(scenario.is_file() && out.join("report.json").is_file());
+    std::fs::remove_file(&scenario).unwrap();
     // With --overwrite the earlier run is replaced.
     assert!(run(&["--seed", "9", "--overwrite"]).status.success());
     assert_ne!(std::fs::read(out.join("report.json")).unwrap(), report);

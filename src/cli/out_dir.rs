@@ -1,29 +1,89 @@
 //! One policy for every command that writes a folder (`run`, `sweep`,
 //! `frames`): an absent or empty `--out` is used; a non-empty one is refused
 //! unless `--overwrite` is given, and even then only an earlier output of the
-//! same command is removed, never a folder that merely happens to be there.
+//! same command is removed, and only if everything in the folder is what
+//! that command writes: never a file the user keeps there, such as the very
+//! scenario the command reads.
 
 use super::CliError;
 use std::path::{Path, PathBuf};
 
 /// What a command's earlier output looks like: the files any of its
-/// outputs holds, so `--overwrite` never deletes anything else.
+/// outputs holds, and every name it writes, so `--overwrite` never deletes
+/// anything else.
 pub(super) struct OutputKind {
     /// The command, as the user typed it (`ubf run`).
     pub command: &'static str,
     /// Files of which at least one is in every earlier output.
     pub markers: &'static [&'static str],
+    /// Whether an entry of the folder is one the command writes.
+    pub writes: fn(&Path) -> bool,
 }
 
 /// A run's output: `report.json` is written last, `run.mcap` first.
-pub(super) const RUN: OutputKind = OutputKind { command: "ubf run", markers: &["report.json", "run.mcap"] };
+pub(super) const RUN: OutputKind =
+    OutputKind { command: "ubf run", markers: &["report.json", "run.mcap"], writes: run_writes };
 
 /// A sweep's output, finished or interrupted.
 pub(super) const SWEEP: OutputKind =
-    OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"] };
+    OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"], writes: sweep_writes };
 
 /// A recording of stereo pairs.
-pub(super) const FRAMES: OutputKind = OutputKind { command: "ubf frames", markers: &["frames.csv", "camera.ron"] };
+pub(super) const FRAMES: OutputKind =
+    OutputKind { command: "ubf frames", markers: &["frames.csv", "camera.ron"], writes: frames_writes };
+
+/// The entry's file name, if it has one that is text.
+fn name_of(entry: &Path) -> &str {
+    entry.file_name().and_then(|name| name.to_str()).unwrap_or("")
+}
+
+/// A file written atomically leaves `.NAME.partial` if killed mid-write.
+fn is_partial(name: &str) -> bool {
+    name.starts_with('.') && name.ends_with(".partial")
+}
+
+/// Every entry of folder `dir` passes `ours`.
+fn holds_only(dir: &Path, ours: fn(&Path) -> bool) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|entries| entries.flatten().all(|entry| ours(&entry.path())))
+}
+
+fn run_writes(entry: &Path) -> bool {
+    match name_of(entry) {
+        "report.json" | "trajectory.csv" | "plot.png" | "run.mcap" => entry.is_file(),
+        name if name == crate::run::ROSBAG_DIR => entry.is_dir(),
+        name => is_partial(name),
+    }
+}
+
+/// A seed's folder in a sweep: `seed-N`, or `.seed-N.partial` (and the
+/// like) while it is written.
+fn is_seed_folder(entry: &Path) -> bool {
+    let name = name_of(entry);
+    let seed = name.strip_prefix('.').unwrap_or(name).split('.').next().unwrap_or("");
+    let numbered = seed.strip_prefix("seed-").is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+    numbered && entry.is_dir() && holds_only(entry, run_writes)
+}
+
+fn sweep_writes(entry: &Path) -> bool {
+    let name = name_of(entry);
+    let is_shard = name.starts_with("shard-") && name.ends_with(".json");
+    match name {
+        "summary.json" | "summary.csv" | ".sweep-plan.json" => entry.is_file(),
+        _ if is_shard => entry.is_file(),
+        _ if is_partial(name) => true,
+        // A scenario's folder: its seeds' folders, each a run's output.
+        _ if entry.is_dir() => holds_only(entry, is_seed_folder),
+        _ => false,
+    }
+}
+
+fn frames_writes(entry: &Path) -> bool {
+    match name_of(entry) {
+        "frames.csv" | "camera.ron" => entry.is_file(),
+        "left" | "right" => entry.is_dir() && holds_only(entry, |image| name_of(image).ends_with(".png")),
+        name => is_partial(name),
+    }
+}
 
 /// Why a folder cannot take a command's output.
 #[derive(Debug, thiserror::Error)]
@@ -44,6 +104,12 @@ pub(super) enum OutputError {
         markers = .markers.join(", ")
     )]
     NotOurs { dir: PathBuf, command: &'static str, markers: &'static [&'static str] },
+    #[error(
+        "--out holds {}, which `{command}` does not write: not deleting it, nor the rest. Move it out, or choose \
+         another directory",
+        path.display()
+    )]
+    Stranger { path: PathBuf, command: &'static str },
     #[error("cannot clear {}: {source}", path.display())]
     Clearing { path: PathBuf, source: std::io::Error },
 }
@@ -63,20 +129,24 @@ impl From<OutputError> for CliError {
     fn from(error: OutputError) -> Self {
         match error {
             OutputError::Unreadable { .. } | OutputError::Clearing { .. } => CliError::failed(error),
-            OutputError::NotEmpty { .. } | OutputError::NotOurs { .. } => CliError::bad_input(error),
+            OutputError::NotEmpty { .. } | OutputError::NotOurs { .. } | OutputError::Stranger { .. } => {
+                CliError::bad_input(error)
+            }
         }
     }
 }
 
 /// Makes `out` ready for `kind`'s output: absent or empty, or, with
-/// `overwrite`, an earlier output of the same command, which is removed.
+/// `overwrite`, an earlier output of the same command and nothing else,
+/// whose entries are removed (the folder stays).
 pub(super) fn prepare(out: &Path, kind: &OutputKind, overwrite: bool) -> Result<(), OutputError> {
-    let mut entries = match std::fs::read_dir(out) {
-        Ok(entries) => entries,
+    let unreadable = |source| OutputError::Unreadable { dir: out.to_owned(), source };
+    let entries: Vec<PathBuf> = match std::fs::read_dir(out) {
+        Ok(entries) => entries.map(|entry| entry.map(|e| e.path())).collect::<Result<_, _>>().map_err(unreadable)?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(source) => return Err(OutputError::Unreadable { dir: out.to_owned(), source }),
+        Err(source) => return Err(unreadable(source)),
     };
-    if entries.next().is_none() {
+    if entries.is_empty() {
         return Ok(());
     }
     if !overwrite {
@@ -85,7 +155,14 @@ pub(super) fn prepare(out: &Path, kind: &OutputKind, overwrite: bool) -> Result<
     if !kind.markers.iter().any(|marker| out.join(marker).is_file()) {
         return Err(OutputError::NotOurs { dir: out.to_owned(), command: kind.command, markers: kind.markers });
     }
-    std::fs::remove_dir_all(out).map_err(|source| OutputError::Clearing { path: out.to_owned(), source })
+    if let Some(stranger) = entries.iter().find(|entry| !(kind.writes)(entry)) {
+        return Err(OutputError::Stranger { path: stranger.clone(), command: kind.command });
+    }
+    for entry in &entries {
+        let removed = if entry.is_dir() { std::fs::remove_dir_all(entry) } else { std::fs::remove_file(entry) };
+        removed.map_err(|source| OutputError::Clearing { path: entry.clone(), source })?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -108,7 +185,7 @@ mod tests {
         assert!(refused.contains("is not empty") && refused.contains("--overwrite"), "{refused}");
         assert!(dir.path().join("report.json").exists());
         prepare(dir.path(), &RUN, true).unwrap();
-        assert!(!dir.path().exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
     #[test]
@@ -123,5 +200,33 @@ mod tests {
         std::fs::write(dir.path().join("summary.json"), "{}").unwrap();
         assert!(prepare(dir.path(), &RUN, true).is_err());
         assert_eq!(std::fs::read_to_string(dir.path().join("thesis.tex")).unwrap(), "precious");
+    }
+
+    #[test]
+    fn overwrite_keeps_what_the_command_does_not_write_and_then_deletes_nothing() {
+        // The scenario beside its run's output, a user's notes in a sweep's.
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path().join("run");
+        std::fs::create_dir(&run).unwrap();
+        for file in ["report.json", "run.mcap", "my.ron"] {
+            std::fs::write(run.join(file), "kept").unwrap();
+        }
+        let refused = prepare(&run, &RUN, true).unwrap_err().to_string();
+        assert!(refused.contains("my.ron") && refused.contains("not deleting it"), "{refused}");
+        assert!(run.join("report.json").exists() && run.join("my.ron").exists());
+        let sweep = dir.path().join("sweep");
+        std::fs::create_dir_all(sweep.join("corridor/seed-0")).unwrap();
+        std::fs::write(sweep.join("summary.json"), "{}").unwrap();
+        std::fs::write(sweep.join("corridor/seed-0/report.json"), "{}").unwrap();
+        std::fs::write(sweep.join("corridor/notes.txt"), "kept").unwrap();
+        let refused = prepare(&sweep, &SWEEP, true).unwrap_err().to_string();
+        assert!(refused.contains("corridor"), "{refused}");
+        assert!(sweep.join("corridor/notes.txt").exists() && sweep.join("summary.json").exists());
+        // Without the stranger, the sweep's output goes and the folder stays.
+        std::fs::remove_file(sweep.join("corridor/notes.txt")).unwrap();
+        std::fs::create_dir_all(sweep.join("corridor/.seed-1.partial")).unwrap();
+        std::fs::write(sweep.join("shard-0-of-2.json"), "{}").unwrap();
+        prepare(&sweep, &SWEEP, true).unwrap();
+        assert_eq!(std::fs::read_dir(&sweep).unwrap().count(), 0);
     }
 }
