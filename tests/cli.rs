@@ -86,6 +86,22 @@ fn a_missing_file_says_where_it_was_looked_for() {
 }
 
 #[test]
+fn a_file_that_is_no_regular_file_is_refused_not_read() {
+    // A FIFO would block the reader until a writer came; /dev/zero would
+    // never end.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("scenario.ron");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    for file in [fifo.to_str().unwrap(), "/dev/zero"] {
+        for command in ["check", "run"] {
+            let out = ubf(&[command, file]);
+            assert_eq!(out.status.code(), Some(2), "{command} {file}");
+            assert!(text(&out.stderr).contains(&format!("{file}: not a regular file")), "{}", text(&out.stderr));
+        }
+    }
+}
+
+#[test]
 fn unknown_field_is_named_with_its_position() {
     let (code, err) = check(&GOOD.replace("cruise_speed: 0.5", "cruise_sped: 0.5"));
     assert_eq!(code, 2);

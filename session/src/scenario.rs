@@ -93,7 +93,8 @@ impl Scenario {
     /// [`Scenario::load`] without the bound on the work a run may do: for a
     /// deliberately huge run (`--huge`).
     pub fn load_unbounded(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
-        let bytes = std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
+        let bytes = ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES)
+            .map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
         let text =
             ubf_core::config::utf8_text(bytes).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
         let scenario =

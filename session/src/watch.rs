@@ -30,7 +30,9 @@ pub type LoadTree = Box<dyn FnMut(&Path) -> Result<BehaviorSpec, String>>;
 /// A file watched for a new tree.
 pub struct TreeWatch {
     path: PathBuf,
-    /// The file's bytes as last looked at.
+    /// The file's size and time of change as last looked at.
+    stamp: Option<Stamp>,
+    /// The file's bytes as last read.
     bytes: Vec<u8>,
     /// What the file says besides its tree, as when the session began.
     settings: Option<Settings>,
@@ -46,10 +48,11 @@ impl TreeWatch {
     /// Watches `path`, whose tree `current` runs now, built in `context`,
     /// reading new trees with `load`.
     pub fn new(path: &Path, current: BehaviorSpec, context: BuildContext, load: LoadTree) -> TreeWatch {
-        let bytes = std::fs::read(path).unwrap_or_default();
+        let stamp = stamp_of(path).and_then(settled);
+        let bytes = read(path).unwrap_or_default();
         let settings = settings_of(&bytes);
         let next_look = Instant::now() + LOOK_EVERY;
-        TreeWatch { path: path.to_owned(), bytes, settings, current, context, next_look, load }
+        TreeWatch { path: path.to_owned(), stamp, bytes, settings, current, context, next_look, load }
     }
 
     /// The tree running now: what a new session (a drive that reconnected)
@@ -61,7 +64,15 @@ impl TreeWatch {
     /// The new tree in the file, if it changed and holds a valid one and
     /// nothing else changed; says on stderr what it did with the edit.
     fn look(&mut self) -> Option<Box<dyn Behavior>> {
-        let bytes = std::fs::read(&self.path).ok()?;
+        // Read only once the file has changed, and only a regular file of a
+        // settings file's size: this runs in the tick loop, which a FIFO put
+        // in the file's place would block, or /dev/zero fill memory.
+        let stamp = stamp_of(&self.path)?;
+        if self.stamp == Some(stamp) {
+            return None;
+        }
+        self.stamp = settled(stamp);
+        let bytes = read(&self.path)?;
         if bytes == self.bytes {
             return None;
         }
@@ -123,6 +134,29 @@ impl TreeSource for SharedTreeWatch {
     fn next_tree(&mut self) -> Option<Box<dyn Behavior>> {
         self.0.borrow_mut().next_tree()
     }
+}
+
+/// What tells a file's edit without reading it: its size and the time it
+/// last changed.
+type Stamp = (u64, std::time::SystemTime);
+
+/// `path`'s stamp, if it is a regular file.
+fn stamp_of(path: &Path) -> Option<Stamp> {
+    let metadata = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
+    Some((metadata.len(), metadata.modified().ok()?))
+}
+
+/// `stamp`, if it tells the file's next edit: a file changed within the
+/// last second may change again within the clock tick that stamped it,
+/// keeping its size and time, so until then it is read at every look.
+fn settled(stamp: Stamp) -> Option<Stamp> {
+    let age = std::time::SystemTime::now().duration_since(stamp.1).unwrap_or_default();
+    (age > Duration::from_secs(1)).then_some(stamp)
+}
+
+/// `path`'s bytes, if it is a regular file of a settings file's size.
+fn read(path: &Path) -> Option<Vec<u8>> {
+    ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES).ok()
 }
 
 /// A file's fields other than its tree, each as its RON text (comments and
@@ -225,5 +259,14 @@ mod tests {
         std::fs::write(&path, "(model: P3dx, root: Stop())").unwrap();
         assert!(watch.look().is_none(), "an edit beyond the tree is refused");
         assert_eq!(watch.current().kind(), "GoTo", "the last edit taken runs");
+        // A FIFO in the file's place is not opened (which would block until
+        // a writer came), nor is a device read.
+        std::fs::remove_file(&path).unwrap();
+        let made = std::process::Command::new("mkfifo").arg(&path).status().unwrap();
+        assert!(made.success());
+        assert!(watch.look().is_none());
+        std::fs::remove_file(&path).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", &path).unwrap();
+        assert!(watch.look().is_none());
     }
 }

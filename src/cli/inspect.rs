@@ -44,7 +44,8 @@ pub(super) fn check(registry: &Registry, files: &[PathBuf]) -> Outcome {
 /// Whether `file` is a robot file for `ubf drive` rather than a scenario:
 /// it names itself `RobotConfig(…)`, or has a `connection`.
 fn is_robot_file(file: &Path) -> bool {
-    let Ok(text) = std::fs::read_to_string(file) else { return false };
+    let bytes = ubf_core::config::read_bounded(file, ubf_core::config::MOST_SETTINGS_BYTES);
+    let Some(text) = bytes.ok().and_then(|bytes| String::from_utf8(bytes).ok()) else { return false };
     let body: String = text.lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n");
     let body = body.trim_start();
     body.starts_with("RobotConfig") || (body.starts_with('(') && body.contains("connection:"))

@@ -53,6 +53,29 @@ impl From<ron::error::SpannedError> for RonError {
     }
 }
 
+/// The most bytes a settings file (a scenario, a robot or model file, a
+/// pose file) may hold: thousands of times what any needs.
+pub const MOST_SETTINGS_BYTES: u64 = 16 << 20;
+
+/// Reads the file at `path` whole, if it is a regular file of at most
+/// `most` bytes: a FIFO would block the reader, a device (`/dev/zero`)
+/// never end, and a huge file fill memory, so each is an error that says
+/// so instead.
+pub fn read_bounded(path: &std::path::Path, most: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    // Looked at before it is opened: opening a FIFO blocks until a writer
+    // comes.
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(Error::new(ErrorKind::InvalidInput, "not a regular file"));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?.take(most + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > most {
+        return Err(Error::new(ErrorKind::InvalidData, format!("larger than {most} bytes")));
+    }
+    Ok(bytes)
+}
+
 /// Why the file at `path` could not be read, for a person: a relative
 /// path that is not there says where it was looked for, since the working
 /// directory is not always the one the reader has in mind (an installed

@@ -21,7 +21,7 @@ pub struct PoseFileError {
 /// The pose `path` holds, if it exists.
 pub(super) fn read(path: &Path) -> Result<Option<Pose2>, PoseFileError> {
     let fail = |why: String| PoseFileError { path: path.to_owned(), why };
-    let text = match std::fs::read(path) {
+    let text = match ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES) {
         Ok(bytes) => ubf_core::config::utf8_text(bytes).map_err(|e| fail(e.to_string()))?,
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(fail(e.to_string())),

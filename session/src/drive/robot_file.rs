@@ -359,8 +359,10 @@ impl DriveConfig {
     /// Reads a configuration file. Paths in it (a model file, a camera's
     /// image directory) become relative to the file's directory.
     pub fn load(registry: &Registry, path: &Path) -> Result<(DriveConfig, RobotModel), RobotFileError> {
-        let read =
-            |path: &Path| std::fs::read(path).map_err(|source| RobotFileError::Read { path: path.into(), source });
+        let read = |path: &Path| {
+            ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES)
+                .map_err(|source| RobotFileError::Read { path: path.into(), source })
+        };
         let parse = RobotFileError::parse;
         let text = ubf_core::config::utf8_text(read(path)?).map_err(parse(path))?;
         let mut config: DriveConfig = registry.from_ron(&text).map_err(parse(path))?;

@@ -34,27 +34,16 @@ pub enum MergeError {
 /// runs, a few hundred bytes each.
 const MOST_RECORD_BYTES: u64 = 256 << 20;
 
-/// The largest run report [`merge`] reads.
-const MOST_REPORT_BYTES: u64 = 1 << 20;
-
 /// The most missing shards an error lists one by one.
 const MOST_MISSING_LISTED: usize = 20;
 
 /// Reads `path` as text, refusing a file larger than `most` bytes before
 /// reading it.
 fn read_bounded(path: &Path, most: u64) -> Result<String, MergeError> {
-    use std::io::Read;
-    let read = |source| MergeError::Read { path: path.to_owned(), source };
-    let file = std::fs::File::open(path).map_err(read)?;
-    let mut text = String::new();
-    file.take(most + 1).read_to_string(&mut text).map_err(read)?;
-    if text.len() as u64 > most {
-        return Err(MergeError::Malformed {
-            path: path.to_owned(),
-            message: format!("larger than the {most} bytes a sweep writes there"),
-        });
-    }
-    Ok(text)
+    let bytes = ubf_core::config::read_bounded(path, most)
+        .map_err(|source| MergeError::Read { path: path.to_owned(), source })?;
+    String::from_utf8(bytes)
+        .map_err(|_| MergeError::Malformed { path: path.to_owned(), message: "not UTF-8 text".into() })
 }
 
 impl ShardRecord {
@@ -174,7 +163,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<SweepSummary, MergeError> {
             continue;
         }
         let path = dir.join(label).join(seed_folder(seed)).join("report.json");
-        let text = read_bounded(&path, MOST_REPORT_BYTES)?;
+        let text = read_bounded(&path, super::MOST_REPORT_BYTES)?;
         let report: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| MergeError::Malformed { path: path.clone(), message: e.to_string() })?;
         outcomes.push(Ok(numeric_leaves(&report)));

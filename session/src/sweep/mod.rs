@@ -489,10 +489,15 @@ fn run_tasks(
 /// scenario's), if it has finished: its `seed-N/report.json` is there and
 /// reads.
 fn finished_run(folder: &Path, seed: u64) -> Option<Fields> {
-    let text = std::fs::read_to_string(folder.join(seed_folder(seed)).join("report.json")).ok()?;
-    let report: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let path = folder.join(seed_folder(seed)).join("report.json");
+    let bytes = ubf_core::config::read_bounded(&path, MOST_REPORT_BYTES).ok()?;
+    let report: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
     Some(numeric_leaves(&report))
 }
+
+/// The largest run report a sweep reads back (resuming, merging): a
+/// report is a few kilobytes.
+const MOST_REPORT_BYTES: u64 = 1 << 20;
 
 fn seed_folder(seed: u64) -> String {
     format!("seed-{seed}")
