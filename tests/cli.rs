@@ -560,7 +560,25 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
         (
             r#"Scenario(name: "t", max_time_s: 10.0, world: (corridor: (width: 4.0, length: 9.0),
                 random_landmarks: (count: 4000000000)), root: Stop())"#,
-            "at most 1000000 landmarks",
+            "at most 10000 landmarks",
+        ),
+        // A frame's matching is pair by pair: people's features count too.
+        (
+            r#"Scenario(name: "t", max_time_s: 10.0, world: (people: [
+                (start: (x: 1.0, y: 0.0), velocity: (x: 0.0, y: 0.0), features: 9000),
+                (start: (x: 2.0, y: 0.0), velocity: (x: 0.0, y: 0.0), features: 9000)]), root: Stop())"#,
+            "18000 landmarks and people's features in all: at most 10000",
+        ),
+        // The plot's axes spun forever on a landmark 1e308 m away.
+        (r#"Scenario(name: "t", max_time_s: 5.0, world: (landmarks: [(x: 5.0, y: 1e308)]), root: Stop())"#, "1e308"),
+        // Headings every 1e-9° (2^31 of them), an error-model table 1e15 m
+        // deep, a model of NaN.
+        (r#"Scenario(name: "t", max_time_s: 5.0, root: ActionAiding(angle_step_deg: 1e-9))"#, "from 0.1 to 180°"),
+        (r#"Scenario(name: "t", max_time_s: 5.0, root: ActionAiding(max_range_m: 1e15))"#, "at most 1000 m"),
+        (
+            r#"Scenario(name: "t", max_time_s: 5.0, root: ActionAiding(model: Exponential(alpha: NaN, beta: 1.0,
+                gamma: 1.0)))"#,
+            "NaN is out of range",
         ),
         (
             r#"Scenario(name: "t", max_time_s: 10.0, robot: (camera: (stereo: (focal_px: 1e-300))), root: Stop())"#,

@@ -339,6 +339,10 @@ pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
 pub(crate) fn least_squares<const N: usize>(rows: &[([f64; N], f64)], active: [bool; N]) -> [f64; N] {
     let index: Vec<usize> = (0..N).filter(|&k| active[k] && rows.iter().any(|(x, _)| x[k] != 0.0)).collect();
     let n = index.len();
+    if n == 0 {
+        // Nothing to fit (nalgebra's LU of a 0 × 0 matrix panics).
+        return [0.0; N];
+    }
     let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
     let mut b = nalgebra::DVector::<f64>::zeros(n);
     for (x, y) in rows {
@@ -684,6 +688,11 @@ mod tests {
         let c = non_negative_least_squares(&negative, [true; 3]);
         assert!(c.iter().all(|v| *v >= 0.0), "{c:?}");
         assert_eq!(c[1], 0.0, "{c:?}");
+        // Rows whose every term is zero (runs with no egomotion step) fit
+        // nothing, and say so with zeros.
+        let nothing: Vec<([f64; 3], f64)> = vec![([0.0; 3], 1.0); 4];
+        assert_eq!(non_negative_least_squares(&nothing, [true; 3]), [0.0; 3]);
+        assert_eq!(non_negative_least_squares(&exact, [false; 3]), [0.0; 3]);
     }
 
     #[test]

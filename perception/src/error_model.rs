@@ -93,13 +93,16 @@ impl GeometricModel {
 #[serde(deny_unknown_fields)]
 pub struct ExponentialModel {
     /// The CV of a landmark straight ahead at zero depth.
+    #[serde(deserialize_with = "ubf_core::config::positive")]
     pub alpha: f64,
     /// Growth of the CV with depth, 1/m.
+    #[serde(deserialize_with = "ubf_core::config::finite")]
     pub beta: f64,
     /// Decay of the CV with lateral offset, 1/m.
+    #[serde(deserialize_with = "ubf_core::config::finite")]
     pub gamma: f64,
     /// Decay of the CV with height above or below the cameras, 1/m.
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(default, skip_serializing_if = "is_zero", deserialize_with = "ubf_core::config::finite")]
     pub delta: f64,
 }
 

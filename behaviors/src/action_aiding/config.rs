@@ -4,7 +4,7 @@
 use crate::decision::DecisionCosts;
 use crate::tracking::TrackingConfig;
 use serde::{Deserialize, Serialize};
-use ubf_core::config::{non_negative, optional_non_negative, positive};
+use ubf_core::config::{non_negative, number_in, optional_non_negative, positive};
 use ubf_perception::error_model::{ErrorModelKind, MODEL_STEP_M};
 
 /// How the heading of each step is chosen (thesis §3.4).
@@ -86,14 +86,14 @@ pub struct ActionAidingConfig {
     pub technique: Technique,
     /// Length of each translation step between decisions, m. The default is
     /// the error model's step.
-    #[serde(default = "ActionAidingConfig::default_step", deserialize_with = "positive")]
+    #[serde(default = "ActionAidingConfig::default_step", deserialize_with = "step_m")]
     pub step_m: f64,
     /// Permitted headings: up to this far either side of the bearing to the
     /// goal, °.
-    #[serde(default = "ActionAidingConfig::default_max_angle", deserialize_with = "positive")]
+    #[serde(default = "ActionAidingConfig::default_max_angle", deserialize_with = "half_turn_deg")]
     pub max_angle_deg: f64,
     /// Spacing of the candidate headings, °.
-    #[serde(default = "ActionAidingConfig::default_angle_step", deserialize_with = "positive")]
+    #[serde(default = "ActionAidingConfig::default_angle_step", deserialize_with = "angle_step_deg")]
     pub angle_step_deg: f64,
     /// Zig-zag: angle off the centre line, ° (the thesis: 20°).
     #[serde(default = "ActionAidingConfig::default_zigzag_angle", deserialize_with = "positive")]
@@ -107,7 +107,7 @@ pub struct ActionAidingConfig {
     #[serde(default = "ActionAidingConfig::default_min_slant", deserialize_with = "non_negative")]
     pub min_slant_m: f64,
     /// Landmarks farther than this are not counted, m.
-    #[serde(default = "ActionAidingConfig::default_max_range", deserialize_with = "positive")]
+    #[serde(default = "ActionAidingConfig::default_max_range", deserialize_with = "max_range_m")]
     pub max_range_m: f64,
     /// Forward speed during a step, m/s.
     #[serde(default = "ActionAidingConfig::default_speed", deserialize_with = "positive")]
@@ -176,8 +176,31 @@ pub struct ActionAidingConfig {
     pub steer: Steer,
     /// Camera steering: the farthest the camera looks either side of the
     /// robot's heading, °.
-    #[serde(default = "ActionAidingConfig::default_max_pan", deserialize_with = "positive")]
+    #[serde(default = "ActionAidingConfig::default_max_pan", deserialize_with = "half_turn_deg")]
     pub max_pan_deg: f64,
+}
+
+// Bounds that keep the work a decision does finite: the candidates it
+// weighs (headings, views) and the error model's table it reads.
+
+/// A step between decisions, m: 1 cm to 100 m.
+fn step_m<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_in(d, 0.01..=100.0, "from 0.01 to 100 m")
+}
+
+/// An angle either side of a direction, °: > 0 and at most 180.
+fn half_turn_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_in(d, f64::MIN_POSITIVE..=180.0, "> 0 and at most 180°")
+}
+
+/// The spacing of candidate headings, °: 0.1 to 180.
+fn angle_step_deg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_in(d, 0.1..=180.0, "from 0.1 to 180°")
+}
+
+/// The farthest landmark counted, m: > 0 and at most 1 km.
+fn max_range_m<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    number_in(d, f64::MIN_POSITIVE..=1000.0, "> 0 and at most 1000 m")
 }
 
 impl ActionAidingConfig {
@@ -292,16 +315,16 @@ impl ubf_core::Describe for ActionAidingConfig {
                  `scan_budget`), `Tracking` (evaluation over the landmark tracking list; with the shipped costs it \
                  drives straight unless the view ahead would keep fewer than `min_landmarks`, so it rarely turns)",
             ),
-            Field::new("step_m", "number", "m", "1.0", "> 0", "step between decisions (the error model's step)"),
+            Field::new("step_m", "number", "m", "1.0", "0.01 to 100", "step between decisions (the error model's step)"),
             Field::new(
                 "max_angle_deg",
                 "number",
                 "°",
                 "45",
-                "> 0",
+                "> 0, ≤ 180",
                 "permitted headings either side of the goal's bearing",
             ),
-            Field::new("angle_step_deg", "number", "°", "2.5", "> 0", "spacing of the candidate headings"),
+            Field::new("angle_step_deg", "number", "°", "2.5", "0.1 to 180", "spacing of the candidate headings"),
             Field::new(
                 "zigzag_angle_deg",
                 "number",
@@ -326,7 +349,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "≥ 0",
                 "a landmark nearer than this to the projected position rejects the heading (§3.5.2.2)",
             ),
-            Field::new("max_range_m", "number", "m", "80", "> 0", "landmarks farther than this are not counted"),
+            Field::new("max_range_m", "number", "m", "80", "> 0, ≤ 1000", "landmarks farther than this are not counted"),
             Field::new(
                 "clearance_m",
                 "number",
@@ -404,8 +427,8 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "",
                 "error model for evaluating headings: `Geometric` (eq. 16–23), `Geometric3d` (the same in both image \
                  axes: landmarks above or below the cameras move in rows too, §5.3.1), `FittedExponential`, \
-                 `FittedExponential3d` (eq. 24 fitted to those two) or `Exponential((alpha: .., beta: .., gamma: .., \
-                 delta: ..))`",
+                 `FittedExponential3d` (eq. 24 fitted to those two) or `Exponential(alpha: .., beta: .., gamma: .., \
+                 delta: ..)`",
             ),
             Field::new(
                 "tracking",
@@ -436,7 +459,7 @@ impl ubf_core::Describe for ActionAidingConfig {
                 "number",
                 "°",
                 "90",
-                "> 0",
+                "> 0, ≤ 180",
                 "camera steering: the farthest the camera looks either side of the heading",
             ),
         ]

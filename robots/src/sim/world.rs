@@ -10,7 +10,7 @@ use super::geometry::{Circle, Point, Segment};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
-use ubf_core::config::{finite, non_negative, positive, unit_interval, Check};
+use ubf_core::config::{coordinate_m, non_negative, positive, unit_interval, Check};
 use ubf_core::Descriptor;
 
 /// A point on the floor, m.
@@ -18,10 +18,10 @@ use ubf_core::Descriptor;
 #[serde(deny_unknown_fields)]
 pub struct Xy {
     /// m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub x: f64,
     /// m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub y: f64,
 }
 
@@ -52,10 +52,10 @@ pub struct WallConfig {
 #[serde(deny_unknown_fields)]
 pub struct BoxConfig {
     /// Centre, m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub x: f64,
     /// Centre, m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub y: f64,
     /// Extent along x, m.
     #[serde(deserialize_with = "positive")]
@@ -81,10 +81,10 @@ pub struct FeaturelessConfig {
     /// Which wall.
     pub side: Side,
     /// Where the stretch starts, m along the corridor.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub from: f64,
     /// Where it ends, m along the corridor.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub to: f64,
 }
 
@@ -93,13 +93,13 @@ pub struct FeaturelessConfig {
 #[serde(deny_unknown_fields)]
 pub struct LandmarkConfig {
     /// m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub x: f64,
     /// m.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "coordinate_m")]
     pub y: f64,
     /// Height above the floor, m.
-    #[serde(default = "LandmarkConfig::default_z", deserialize_with = "finite")]
+    #[serde(default = "LandmarkConfig::default_z", deserialize_with = "coordinate_m")]
     pub z: f64,
 }
 
@@ -109,9 +109,11 @@ impl LandmarkConfig {
     }
 }
 
-/// The most landmarks `random_landmarks` may draw: far more than any
-/// corridor shows a camera, and they fit in memory.
-pub const MOST_RANDOM_LANDMARKS: u32 = 1_000_000;
+/// The most landmarks a world may hold, people's features counted: far
+/// more than any corridor shows a camera (the thesis's had 16 to 80), and
+/// few enough that matching a frame's against the last stays within a
+/// fraction of a second.
+pub const MOST_RANDOM_LANDMARKS: u32 = 10_000;
 
 fn landmark_count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
     let count = u32::deserialize(d)?;
@@ -214,6 +216,14 @@ pub struct WorldConfig {
 
 impl Check for WorldConfig {
     fn check(&self) -> Result<(), String> {
+        // Each frame matches what the camera sees against the last, pair by
+        // pair: the world's features together bound a frame's work.
+        let features = self.landmarks.len() as u64
+            + self.random_landmarks.as_ref().map_or(0, |r| u64::from(r.count))
+            + self.people.iter().map(|p| u64::from(p.features)).sum::<u64>();
+        if features > u64::from(MOST_RANDOM_LANDMARKS) {
+            return Err(format!("{features} landmarks and people's features in all: at most {MOST_RANDOM_LANDMARKS}"));
+        }
         for f in &self.featureless {
             if f.from > f.to {
                 return Err(format!("featureless stretch from {} to {}: `from` must not exceed `to`", f.from, f.to));
