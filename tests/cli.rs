@@ -102,6 +102,31 @@ fn a_file_that_is_no_regular_file_is_refused_not_read() {
 }
 
 #[test]
+fn a_bad_ros_domain_id_is_bad_input_before_anything_runs() {
+    for args in
+        [&["run", "scenarios/corridor-box.ron", "--ros2"][..], &["simulate", "scenarios/corridor-box.ron", "--ros2"]]
+    {
+        let out = Command::new(env!("CARGO_BIN_EXE_ubf"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .env("ROS_DOMAIN_ID", "abc")
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", text(&out.stderr));
+        assert!(text(&out.stderr).contains("ROS_DOMAIN_ID is `abc`"), "{}", text(&out.stderr));
+    }
+}
+
+#[test]
+fn a_plot_that_is_no_png_is_refused_before_any_work() {
+    for args in [&["replay", "out.mcap", "--plot", "plot.txt"][..], &["pipeline", "frames", "--plot", "plot"]] {
+        let out = ubf(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(text(&out.stderr).contains("does not end in .png"), "{}", text(&out.stderr));
+    }
+}
+
+#[test]
 fn unknown_field_is_named_with_its_position() {
     let (code, err) = check(&GOOD.replace("cruise_speed: 0.5", "cruise_sped: 0.5"));
     assert_eq!(code, 2);
@@ -569,6 +594,8 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
                 (start: (x: 2.0, y: 0.0), velocity: (x: 0.0, y: 0.0), features: 9000)]), root: Stop())"#,
             "18000 landmarks and people's features in all: at most 10000",
         ),
+        // A name a terminal would obey: retitled and cleared.
+        (r#"Scenario(name: "\u{1b}]0;pwned\u{7}\u{1b}[2J", max_time_s: 5.0, root: Stop())"#, "control character"),
         // The plot's axes spun forever on a landmark 1e308 m away.
         (r#"Scenario(name: "t", max_time_s: 5.0, world: (landmarks: [(x: 5.0, y: 1e308)]), root: Stop())"#, "1e308"),
         // Headings every 1e-9° (2^31 of them), an error-model table 1e15 m
@@ -602,6 +629,15 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
         assert_eq!(code, 2, "{body}: {stderr}");
         assert!(stderr.contains(says), "{body}: {stderr}");
     }
+    // 20 000 votes a tick, for 100 000 ticks, within the tick bound: tens
+    // of gigabytes of logs.
+    let children = vec!["(behavior: Stop())"; 20_000].join(", ");
+    let wide = format!(
+        r#"Scenario(name: "t", max_time_s: 10000.0, root: Composite(arbiter: HighestPriority, children: [{children}]))"#
+    );
+    let (code, stderr) = check(&wide);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("ticks of a tree of 20001 nodes, logs of about 48.1 GB"), "{stderr}");
     let dir = tempfile::tempdir().unwrap();
     let file = scenario_file(&dir, GOOD);
     let out = dir.path().join("sweep");

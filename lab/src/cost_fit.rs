@@ -234,7 +234,9 @@ pub fn find_logs(dirs: &[PathBuf]) -> Result<Vec<PathBuf>, CostFitError> {
             std::fs::read_dir(path).map_err(read)?.filter_map(|e| e.ok().map(|e| e.path())).collect();
         entries.sort();
         for entry in entries {
-            if entry.is_dir() {
+            // A link to a folder is not followed: one to `..` or `/` would
+            // walk forever, or the whole disk.
+            if entry.is_dir() && !entry.is_symlink() {
                 walk(&entry, out)?;
             } else if entry.file_name().is_some_and(|n| n == "trajectory.csv") {
                 out.push(entry);

@@ -128,13 +128,25 @@ struct YamlCameraInfo {
     projection_matrix: YamlMatrix,
 }
 
+/// The most bytes a calibration file may hold: a stereo calibration is a
+/// few kilobytes, and the YAML parser's time grows with the square of its
+/// nesting (a 200 kB file of brackets took 23 s).
+const MOST_CALIBRATION_BYTES: u64 = 64 << 10;
+
+/// A calibration file's text, if it is a regular file of at most
+/// [`MOST_CALIBRATION_BYTES`].
+fn read_calibration(path: &Path) -> Result<String, CalibrationError> {
+    let bytes = ubf_core::config::read_bounded(path, MOST_CALIBRATION_BYTES).map_err(CalibrationError::read(path))?;
+    String::from_utf8(bytes)
+        .map_err(|e| CalibrationError::read(path)(std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error())))
+}
+
 impl CameraInfo {
     /// Reads a ROS `camera_info` YAML file (as `camera_calibration` writes
     /// it). Errors name the file, and the line and column where YAML knows
     /// them.
     pub fn load(path: &Path) -> Result<CameraInfo, CalibrationError> {
-        let text = std::fs::read_to_string(path).map_err(CalibrationError::read(path))?;
-        Self::from_yaml(&text).map_err(CalibrationError::in_file(path))
+        Self::from_yaml(&read_calibration(path)?).map_err(CalibrationError::in_file(path))
     }
 
     /// Reads `camera_info` YAML text; the error starts with `line:column:`
@@ -269,8 +281,7 @@ impl StereoCalibrationFile {
     /// `K2`, `D2`, `R` and `T`. Errors name the file, and the line and
     /// column or the field.
     pub fn load(path: &Path) -> Result<StereoCalibrationFile, CalibrationError> {
-        let text = std::fs::read_to_string(path).map_err(CalibrationError::read(path))?;
-        Self::from_yaml(&text).map_err(CalibrationError::in_file(path))
+        Self::from_yaml(&read_calibration(path)?).map_err(CalibrationError::in_file(path))
     }
 
     /// Reads OpenCV `FileStorage` YAML text.

@@ -28,6 +28,7 @@ use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     /// A short name for reports.
+    #[serde(deserialize_with = "ubf_core::config::shown_name")]
     pub name: String,
     /// What the scenario is for.
     #[serde(default)]
@@ -107,30 +108,32 @@ impl Scenario {
     /// `trajectory.csv` (about 24 bytes a column a row).
     pub fn work(&self) -> Work {
         let ticks = self.max_ticks();
-        let nodes = ubf_core::TreeLayout::of(self.root.build(&ubf_core::BuildContext::new(0)).as_ref()).nodes.len();
+        let tree = self.root.build(&ubf_core::BuildContext::new(0));
+        let nodes = ubf_core::TreeLayout::of(tree.as_ref()).nodes.len() as u64;
         let camera = self.robot.camera.as_ref();
         let camera_pairs = camera.map_or(0, |c| (self.max_time_s * c.rate_hz).ceil() as u64 + 1);
         let renders = camera.is_some_and(|c| c.images.is_some());
         Work {
             ticks,
-            trajectory_bytes: ticks.saturating_mul(24 * (16 + nodes as u64)),
+            nodes,
+            log_bytes: ticks.saturating_mul(Work::LOG_BYTES_PER_TICK + Work::LOG_BYTES_PER_NODE * nodes),
             camera_pairs,
             rendered_pairs: if renders { camera_pairs } else { 0 },
             pair_bytes: camera.map_or(0, |c| 2 * u64::from(c.stereo.width_px) * u64::from(c.stereo.height_px)),
         }
     }
 
-    /// Refuses a run beyond [`Work::MOST_TICKS`] ticks, saying how to
-    /// proceed.
+    /// Refuses a run beyond [`Work::MOST_TICKS`] ticks, the rendering
+    /// bound or [`Work::MOST_LOG_BYTES`] of logs, saying how to proceed.
     pub fn check_work(&self) -> Result<(), String> {
         let work = self.work();
         if work.ticks > Work::MOST_TICKS {
             return Err(format!(
-                "max_time_s / period_s: {} ticks, more than {} (a trajectory of about {}); \
+                "max_time_s / period_s: {} ticks, more than {} (logs of about {}); \
                  shorten max_time_s, lengthen period_s, or pass --huge to run it anyway",
                 work.ticks,
                 Work::MOST_TICKS,
-                Work::bytes_text(work.trajectory_bytes)
+                Work::bytes_text(work.log_bytes)
             ));
         }
         let pixels = work.rendered_pairs.saturating_mul(work.pair_bytes);
@@ -141,6 +144,16 @@ impl Scenario {
                 work.rendered_pairs,
                 Work::bytes_text(work.pair_bytes),
                 Work::MOST_RENDERED_PIXELS as f64
+            ));
+        }
+        if work.log_bytes > Work::MOST_LOG_BYTES {
+            return Err(format!(
+                "max_time_s / period_s: {} ticks of a tree of {} nodes, logs of about {}, more than {}; \
+                 shorten max_time_s, lengthen period_s, or pass --huge to run it anyway",
+                work.ticks,
+                work.nodes,
+                Work::bytes_text(work.log_bytes),
+                Work::bytes_text(Work::MOST_LOG_BYTES)
             ));
         }
         Ok(())
@@ -180,8 +193,10 @@ impl Scenario {
 pub struct Work {
     /// Control ticks, at most.
     pub ticks: u64,
-    /// Bytes of `trajectory.csv`, about.
-    pub trajectory_bytes: u64,
+    /// The tree's nodes, each voting every tick.
+    pub nodes: u64,
+    /// Bytes of the run's logs (`trajectory.csv` and `run.mcap`), about.
+    pub log_bytes: u64,
     /// Stereo pairs the camera takes, at most (0 without a camera).
     pub camera_pairs: u64,
     /// Of those, the pairs rendered as images (0 when the camera renders
@@ -193,8 +208,19 @@ pub struct Work {
 
 impl Work {
     /// The most ticks a run may take without `--huge`: a week of simulated
-    /// time at 0.1 s, a few hundred megabytes of trajectory.
+    /// time at 0.1 s.
     pub const MOST_TICKS: u64 = 6_000_000;
+
+    /// The most bytes of logs a run may write without `--huge`.
+    pub const MOST_LOG_BYTES: u64 = 4_000_000_000;
+
+    /// Log bytes a tick costs besides its votes: measured, about 120 of
+    /// trajectory and 800 of MCAP with a small tree (60 000 ticks).
+    const LOG_BYTES_PER_TICK: u64 = 1_000;
+
+    /// Log bytes each of a tree's nodes adds to a tick: its vote in both
+    /// logs, its path in the MCAP's JSON.
+    const LOG_BYTES_PER_NODE: u64 = 24;
 
     /// The most pixels a run may render without `--huge`: about 160 000
     /// pairs of 640 × 480, over an hour of rendering at 30 ms a pair.

@@ -34,13 +34,13 @@ pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome 
             );
             bar.finish_and_clear();
             let map = map.map_err(CliError::failed)?;
-            if let Some(path) = &plot {
-                match ubf_lab::figures::draw_environment_map(&map, path) {
-                    Ok(()) => eprintln!("wrote {}", path.display()),
-                    Err(e) => eprintln!("error: {e}"),
-                }
-            }
+            let drawn = plot.as_ref().map(|path| ubf_lab::figures::draw_environment_map(&map, path).map(|()| path));
             super::show(&map, json)?;
+            match drawn {
+                Some(Ok(path)) => eprintln!("wrote {}", path.display()),
+                Some(Err(e)) => return Err(CliError::failed(e)),
+                None => {}
+            }
         }
         ExperimentCommand::ThesisTable2 { step, trials, jobs, json } => {
             if !(step.is_finite() && step > 0.0 && step < 10.0) || trials == 0 || trials > 100_000 {

@@ -300,7 +300,7 @@ enum Command {
         file: PathBuf,
         /// Where to draw the plot (default: beside the log, as
         /// `<name>-replay.png`).
-        #[arg(long, value_name = "FILE.png")]
+        #[arg(long, value_name = "FILE.png", value_parser = parse_png_path)]
         plot: Option<PathBuf>,
     },
     /// Print a scenario's (or robot file's) behaviour tree as Graphviz DOT
@@ -378,7 +378,7 @@ enum Command {
         #[arg(long)]
         keep_disparity_offset: bool,
         /// Draw the estimated path (over the true one, if known) here (PNG).
-        #[arg(long, value_name = "FILE.png")]
+        #[arg(long, value_name = "FILE.png", value_parser = parse_png_path)]
         plot: Option<PathBuf>,
         /// Write every landmark of every pair here (CSV: pair, pixels with
         /// the first pixel's centre at (0, 0), disparity as matched,
@@ -500,7 +500,7 @@ enum ExperimentCommand {
         #[arg(long, value_parser = parse_jobs)]
         jobs: Option<usize>,
         /// Draw the map here (PNG).
-        #[arg(long)]
+        #[arg(long, value_name = "FILE.png", value_parser = parse_png_path)]
         plot: Option<PathBuf>,
         /// Print the results as JSON.
         #[arg(long)]
@@ -694,6 +694,17 @@ pub fn main_with(registry: Registry) -> ExitCode {
             libc::signal(libc::SIGPIPE, libc::SIG_DFL);
         }
     }
+    // A bad ROS_DOMAIN_ID is bad input, said before anything runs.
+    let ros2 = match &cli.command {
+        Command::Run { ros2, .. } => *ros2,
+        Command::Simulate { .. } => true,
+        _ => false,
+    };
+    if ros2 {
+        if let Err(e) = ubf_robots::ros2::domain_from_env() {
+            return finish(Err(CliError::bad_input(e)));
+        }
+    }
     let outcome = match cli.command {
         Command::Run { file, seed, out, overwrite, json, huge, log_images, log_format, ros2, live, watch, speed } => {
             let paced = ros2 || live.is_some() || watch;
@@ -797,6 +808,16 @@ pub fn main_with(registry: Registry) -> ExitCode {
         }
     };
     finish(outcome)
+}
+
+/// A plot's path, which must end in `.png`: the plot is drawn as PNG, and
+/// a path that does not say so would fail only after all the work.
+fn parse_png_path(text: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(text);
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(extension) if extension.eq_ignore_ascii_case("png") => Ok(path),
+        _ => Err(format!("`{text}` does not end in .png: the plot is drawn as PNG")),
+    }
 }
 
 /// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by

@@ -93,8 +93,84 @@ fn crate_name(dir: &Path) -> Result<String, String> {
             dir.display()
         ));
     }
+    let as_crate = name.replace('-', "_");
+    if RESERVED.contains(&as_crate.as_str()) {
+        return Err(format!(
+            "`{}`: the crate is named after its directory, and `{name}` is {}: choose another name",
+            dir.display(),
+            if as_crate.starts_with("ubf") { "a crate it depends on" } else { "a Rust keyword or a standard crate" }
+        ));
+    }
     Ok(name.to_owned())
 }
+
+/// Names Cargo or Rust refuse for a package, or that would clash with
+/// what the crate depends on.
+const RESERVED: &[&str] = &[
+    "abstract",
+    "alloc",
+    "as",
+    "async",
+    "await",
+    "become",
+    "box",
+    "break",
+    "const",
+    "continue",
+    "core",
+    "crate",
+    "do",
+    "dyn",
+    "else",
+    "enum",
+    "extern",
+    "false",
+    "final",
+    "fn",
+    "for",
+    "gen",
+    "if",
+    "impl",
+    "in",
+    "let",
+    "loop",
+    "macro",
+    "match",
+    "mod",
+    "move",
+    "mut",
+    "override",
+    "priv",
+    "proc_macro",
+    "pub",
+    "ref",
+    "return",
+    "self",
+    "static",
+    "std",
+    "struct",
+    "super",
+    "test",
+    "trait",
+    "true",
+    "try",
+    "type",
+    "typeof",
+    "ubf",
+    "ubf_behaviors",
+    "ubf_core",
+    "ubf_lab",
+    "ubf_perception",
+    "ubf_robots",
+    "ubf_session",
+    "unsafe",
+    "unsized",
+    "use",
+    "virtual",
+    "where",
+    "while",
+    "yield",
+];
 
 /// The checkout this binary was built from, if it is still there.
 fn this_checkout() -> Option<PathBuf> {
@@ -132,7 +208,7 @@ mod tests {
     #[test]
     fn a_crate_is_named_after_its_directory_as_cargo_allows() {
         assert_eq!(crate_name(Path::new("work/my-behaviours")).unwrap(), "my-behaviours");
-        for bad in ["My", "1st", "with space", "", "ünï", "a.b"] {
+        for bad in ["My", "1st", "with space", "", "ünï", "a.b", "fn", "self", "test", "std", "ubf", "ubf-core"] {
             assert!(crate_name(Path::new(bad)).is_err(), "{bad}");
         }
     }

@@ -56,6 +56,11 @@ pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> 
     config.until_goal |= until_goal;
     config.publish_ros2 |= ros2;
     config.live = live.or(config.live);
+    let robot_domain_from_env =
+        config.connection == "ros2" && config.ros2.as_ref().is_none_or(|r| r.domain_id.is_none());
+    if robot_domain_from_env || config.publish_ros2 {
+        ubf_robots::ros2::domain_from_env().map_err(CliError::bad_input)?;
+    }
     let stop = crate::drive::install_stop_flag();
     if dry_run {
         crate::drive::dry_run(&config, &model, &stop).map_err(CliError::failed)?;

@@ -201,6 +201,17 @@ pub fn coordinate_m<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     number_where(d, |v| (-1e4..=1e4).contains(&v), "from -10000 to 10000 m")
 }
 
+/// A name shown to people (on a terminal, in a plot): text without control
+/// characters, which a terminal would obey (an escape retitles it, or clears
+/// the screen).
+pub fn shown_name<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+    let name = String::deserialize(d)?;
+    match name.chars().find(|c| c.is_control()) {
+        Some(c) => Err(D::Error::custom(format!("the name holds a control character ({c:?}): write it without"))),
+        None => Ok(name),
+    }
+}
+
 /// A finite number ≥ 0.
 pub fn non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     number_where(d, |v| v.is_finite() && v >= 0.0, "≥ 0")

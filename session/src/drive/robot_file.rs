@@ -131,6 +131,7 @@ pub struct DriveCamera {
 #[serde(deny_unknown_fields, rename = "RobotConfig")]
 pub struct DriveConfig {
     /// A name for logs.
+    #[serde(deserialize_with = "ubf_core::config::shown_name")]
     pub name: String,
     /// A serial device (`/dev/ttyUSB0`) or `tcp://host:port` for an ARCOS
     /// robot, or `ros2` for a ROS 2 robot (`/cmd_vel` in, `/odom` out).
