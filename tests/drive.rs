@@ -479,6 +479,37 @@ fn a_signal_sent_twice_at_once_is_one_interrupt() {
 }
 
 #[test]
+fn a_control_loop_that_stops_ticking_has_the_robot_stopped_from_outside_it() {
+    // The loop hangs 2 s into the drive for 8 s, the robot driving on its
+    // last command: the watch sends STOP once the ticks have been silent
+    // for `link_lost_after_s` (1.3 s), long before the hang ends (without
+    // it, the robot's own watchdog stops the motors, and STOP comes when
+    // the hang ends in a panic, 10 s in).
+    let (mut emulator, address, mut out) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let hanging = "Composite(arbiter: CommandFusion, children: [(behavior: InjectFault(after_s: 2.0, hang_s: 8.0)), \
+                   (behavior: GoTo(cruise_speed: 0.3))])";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", hanging))
+        .unwrap();
+    let began = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap();
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert!(stderr.contains("error: the control loop has not ticked for 1."), "{stderr}");
+    assert!(stderr.contains("robot stopped and held still"), "{stderr}");
+    let stopped = field(&line, "motion_stopped_at").expect("a STOP after motion") - began;
+    assert!(stopped < 6.0, "STOP came {stopped:.1} s into the drive: {line}");
+    // The hang ends in the fault's panic, which ends the drive as ever.
+    assert_eq!(drive.status.code(), Some(1), "{stderr}");
+}
+
+#[test]
 fn a_stall_latches_a_stop_until_the_operator_allows_motion() {
     // Driven into the wall of a 4 m room with nothing to avoid it: the
     // robot stalls once and then stays stopped.

@@ -281,7 +281,9 @@ fn sigterm_stops_the_robot_while_the_control_loop_hangs() {
     // last twist: the first SIGTERM stops it from outside the loop, the
     // second one ends the process with the robot still stopped.
     let dir = tempfile::tempdir().unwrap();
-    let file = robot_file(dir.path(), 20.0, "");
+    // The loop's own watch, which would stop it 1.3 s into the hang, is
+    // given longer, so that the signals do it here.
+    let file = robot_file(dir.path(), 20.0, "safety: (link_lost_after_s: 20.0, stale_after_s: 0.25),");
     let hanging = "root: Composite(arbiter: CommandFusion, children: [(behavior: InjectFault(after_s: 2.0, hang_s: \
                    30.0)), (behavior: GoTo(cruise_speed: 0.3))]),";
     let text = std::fs::read_to_string(&file).unwrap();

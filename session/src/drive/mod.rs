@@ -10,6 +10,7 @@
 mod camera;
 mod dry_run;
 mod log;
+mod loop_watch;
 mod pose_file;
 pub mod robot_file;
 mod service;
@@ -283,6 +284,14 @@ fn drive_sessions(
         if let Some(watchdog) = service::Watchdog::for_session() {
             controller.add_sink(Box::new(watchdog));
         }
+        // Ticks silent as long as a lost link is given stop the robot.
+        let loop_watch = loop_watch::LoopWatch::start(Duration::from_secs_f64(config.safety.link_lost_after_s));
+        match &loop_watch {
+            Ok(watch) => controller.add_sink(watch.sink()),
+            Err(e) => tracing::warn!(
+                "the control loop's watch did not start ({e}); a hung loop stops the robot only by Ctrl-C"
+            ),
+        }
         if let Some(file) = &config.pose_file {
             let sink = pose_file::PoseFileSink::new(file.clone());
             match ubf_core::BackgroundSink::spawn(format!("pose file {}", file.display()), sink, 4) {
@@ -317,6 +326,9 @@ fn drive_sessions(
             Ok(()) => session.run(stop, |_| ControlFlow::Continue(())),
             Err(_) => SessionEnd::Done,
         };
+        if let Ok(watch) = &loop_watch {
+            watch.disarm();
+        }
         let (end, failure) = ended.describe();
         ending.set(end, failure);
         service::stop_sequence();
