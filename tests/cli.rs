@@ -635,10 +635,16 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     let wide = format!(
         r#"Scenario(name: "t", max_time_s: 10000.0, root: Composite(arbiter: HighestPriority, children: [{children}]))"#
     );
-    let (code, stderr) = check(&wide);
-    assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("ticks of a tree of 20001 nodes, logs of about 48.1 GB"), "{stderr}");
     let dir = tempfile::tempdir().unwrap();
+    let wide_file = scenario_file(&dir, &wide);
+    let out = dir.path().join("wide");
+    let refused = ubf(&["run", wide_file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(refused.status.code(), Some(2), "{}", text(&refused.stderr));
+    let said = text(&refused.stderr);
+    assert!(said.contains("100000 ticks × 20001 nodes of the tree, logs of about 48.1 GB"), "{said}");
+    assert!(!out.exists(), "nothing was written");
+    // Without logs to write, the same run is not refused.
+    assert_eq!(check(&wide).0, 0);
     let file = scenario_file(&dir, GOOD);
     let out = dir.path().join("sweep");
     for (seeds, says) in [("0..4000000000", "at most 10 000 000"), ("0..400000", "pass --huge")] {

@@ -123,8 +123,8 @@ impl Scenario {
         }
     }
 
-    /// Refuses a run beyond [`Work::MOST_TICKS`] ticks, the rendering
-    /// bound or [`Work::MOST_LOG_BYTES`] of logs, saying how to proceed.
+    /// Refuses a run beyond [`Work::MOST_TICKS`] ticks or the rendering
+    /// bound, saying how to proceed.
     pub fn check_work(&self) -> Result<(), String> {
         let work = self.work();
         if work.ticks > Work::MOST_TICKS {
@@ -146,9 +146,16 @@ impl Scenario {
                 Work::MOST_RENDERED_PIXELS as f64
             ));
         }
+        Ok(())
+    }
+
+    /// Refuses a run whose logs (`--out`, a sweep's `--trajectories`) would
+    /// pass [`Work::MOST_LOG_BYTES`], saying how to proceed.
+    pub fn check_logs(&self) -> Result<(), String> {
+        let work = self.work();
         if work.log_bytes > Work::MOST_LOG_BYTES {
             return Err(format!(
-                "max_time_s / period_s: {} ticks of a tree of {} nodes, logs of about {}, more than {}; \
+                "max_time_s / period_s: {} ticks × {} nodes of the tree, logs of about {}, more than {}; \
                  shorten max_time_s, lengthen period_s, or pass --huge to run it anyway",
                 work.ticks,
                 work.nodes,

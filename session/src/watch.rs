@@ -71,8 +71,16 @@ impl TreeWatch {
         if self.stamp == Some(stamp) {
             return None;
         }
+        let bytes = match ubf_core::config::read_bounded(&self.path, ubf_core::config::MOST_SETTINGS_BYTES) {
+            Ok(bytes) => bytes,
+            Err(e) => {
+                // Said once per change, and looked at again at the next.
+                self.stamp = Some(stamp);
+                eprintln!("{}: {e}: edit refused; the running tree goes on", self.path.display());
+                return None;
+            }
+        };
         self.stamp = settled(stamp);
-        let bytes = read(&self.path)?;
         if bytes == self.bytes {
             return None;
         }
@@ -136,19 +144,23 @@ impl TreeSource for SharedTreeWatch {
     }
 }
 
-/// What tells a file's edit without reading it: its size and the time it
-/// last changed.
-type Stamp = (u64, std::time::SystemTime);
+/// What tells a file's edit without reading it: its size, when its content
+/// and when its inode last changed (a copy that keeps the time, a chmod),
+/// and which file it is (a rename over it).
+type Stamp = (u64, std::time::SystemTime, (i64, i64), (u64, u64));
 
-/// `path`'s stamp, if it is a regular file.
+/// `path`'s stamp (whatever it is: a FIFO put in its place is refused
+/// once, not opened).
 fn stamp_of(path: &Path) -> Option<Stamp> {
-    let metadata = std::fs::metadata(path).ok().filter(std::fs::Metadata::is_file)?;
-    Some((metadata.len(), metadata.modified().ok()?))
+    use std::os::unix::fs::MetadataExt;
+    let metadata = std::fs::metadata(path).ok()?;
+    let changed = (metadata.ctime(), metadata.ctime_nsec());
+    Some((metadata.len(), metadata.modified().ok()?, changed, (metadata.dev(), metadata.ino())))
 }
 
 /// `stamp`, if it tells the file's next edit: a file changed within the
 /// last second may change again within the clock tick that stamped it,
-/// keeping its size and time, so until then it is read at every look.
+/// keeping its size and times, so until then it is read at every look.
 fn settled(stamp: Stamp) -> Option<Stamp> {
     let age = std::time::SystemTime::now().duration_since(stamp.1).unwrap_or_default();
     (age > Duration::from_secs(1)).then_some(stamp)
@@ -259,6 +271,19 @@ mod tests {
         std::fs::write(&path, "(model: P3dx, root: Stop())").unwrap();
         assert!(watch.look().is_none(), "an edit beyond the tree is refused");
         assert_eq!(watch.current().kind(), "GoTo", "the last edit taken runs");
+        // A file put in its place with the same size and an old time kept
+        // (`cp -p`, an archive) is still an edit.
+        let old = std::time::UNIX_EPOCH + Duration::from_secs(1_000_000_000);
+        let write_old = |at: &Path, text: &str| {
+            std::fs::write(at, text).unwrap();
+            std::fs::File::options().write(true).open(at).unwrap().set_modified(old).unwrap();
+        };
+        write_old(&path, "(model: Powerbot, root: Stop())");
+        assert_eq!(watch.look().map(|t| t.name().to_owned()).as_deref(), Some("Stop"));
+        let copy = dir.path().join("copy.ron");
+        write_old(&copy, "(model: Powerbot, root: GoTo())");
+        std::fs::rename(&copy, &path).unwrap();
+        assert_eq!(watch.look().map(|t| t.name().to_owned()).as_deref(), Some("GoTo"));
         // A FIFO in the file's place is not opened (which would block until
         // a writer came), nor is a device read.
         std::fs::remove_file(&path).unwrap();

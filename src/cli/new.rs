@@ -146,6 +146,8 @@ const RESERVED: &[&str] = &[
     "ref",
     "return",
     "self",
+    "serde",
+    "serde_json",
     "static",
     "std",
     "struct",

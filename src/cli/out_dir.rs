@@ -14,23 +14,25 @@ use std::path::{Path, PathBuf};
 pub(super) struct OutputKind {
     /// The command, as the user typed it (`ubf run`).
     pub command: &'static str,
-    /// Files of which at least one is in every earlier output.
+    /// Files of which at least one is in every earlier output (a sweep's
+    /// shards are told by their records' names instead).
     pub markers: &'static [&'static str],
-    /// Whether an entry of the folder is one the command writes.
-    pub writes: fn(&Path) -> bool,
+    /// The first thing in an entry of the folder that the command did not
+    /// write: the entry itself, or something inside it.
+    pub stranger: fn(&Path) -> Option<PathBuf>,
 }
 
 /// A run's output: `report.json` is written last, `run.mcap` first.
 pub(super) const RUN: OutputKind =
-    OutputKind { command: "ubf run", markers: &["report.json", "run.mcap"], writes: run_writes };
+    OutputKind { command: "ubf run", markers: &["report.json", "run.mcap"], stranger: run_stranger };
 
 /// A sweep's output, finished or interrupted.
 pub(super) const SWEEP: OutputKind =
-    OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"], writes: sweep_writes };
+    OutputKind { command: "ubf sweep", markers: &["summary.json", ".sweep-plan.json"], stranger: sweep_stranger };
 
 /// A recording of stereo pairs.
 pub(super) const FRAMES: OutputKind =
-    OutputKind { command: "ubf frames", markers: &["frames.csv", "camera.ron"], writes: frames_writes };
+    OutputKind { command: "ubf frames", markers: &["frames.csv", "camera.ron"], stranger: frames_stranger };
 
 /// The entry's file name, if it has one that is text.
 fn name_of(entry: &Path) -> &str {
@@ -42,46 +44,79 @@ fn is_partial(name: &str) -> bool {
     name.starts_with('.') && name.ends_with(".partial")
 }
 
-/// Every entry of folder `dir` passes `ours`.
-fn holds_only(dir: &Path, ours: fn(&Path) -> bool) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|entries| entries.flatten().all(|entry| ours(&entry.path())))
+/// A regular file, not a link to one: a link ubf never writes.
+fn is_file(entry: &Path) -> bool {
+    entry.symlink_metadata().is_ok_and(|m| m.is_file())
 }
 
-fn run_writes(entry: &Path) -> bool {
+/// A folder, not a link to one.
+fn is_folder(entry: &Path) -> bool {
+    entry.symlink_metadata().is_ok_and(|m| m.is_dir())
+}
+
+/// The first stranger among folder `dir`'s entries, by `stranger`; the
+/// folder itself if it cannot be read.
+fn stranger_in(dir: &Path, stranger: fn(&Path) -> Option<PathBuf>) -> Option<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Some(dir.to_owned()) };
+    let mut paths: Vec<PathBuf> = entries.flatten().map(|entry| entry.path()).collect();
+    paths.sort();
+    paths.iter().find_map(|path| stranger(path))
+}
+
+/// `entry` itself if `written` says the command did not write it.
+fn unless(entry: &Path, written: bool) -> Option<PathBuf> {
+    (!written).then(|| entry.to_owned())
+}
+
+fn run_stranger(entry: &Path) -> Option<PathBuf> {
     match name_of(entry) {
-        "report.json" | "trajectory.csv" | "plot.png" | "run.mcap" => entry.is_file(),
-        name if name == crate::run::ROSBAG_DIR => entry.is_dir(),
-        name => is_partial(name),
+        // `ubf replay` draws its plot beside the log.
+        "report.json" | "trajectory.csv" | "plot.png" | "run.mcap" | "run-replay.png" => unless(entry, is_file(entry)),
+        name if name == crate::run::ROSBAG_DIR => match is_folder(entry) {
+            true => stranger_in(entry, |file| {
+                let name = name_of(file);
+                unless(file, is_file(file) && (name == "metadata.yaml" || name.ends_with(".mcap")))
+            }),
+            false => Some(entry.to_owned()),
+        },
+        name => unless(entry, is_partial(name) && !entry.is_symlink()),
     }
 }
 
-/// A seed's folder in a sweep: `seed-N`, or `.seed-N.partial` (and the
-/// like) while it is written.
-fn is_seed_folder(entry: &Path) -> bool {
-    let name = name_of(entry);
+/// A sweep's shard record, `shard-K-of-N.json`, or its plan.
+fn is_shard_file(name: &str) -> bool {
+    let name = name.strip_prefix('.').unwrap_or(name);
+    name.starts_with("shard-") && name.ends_with(".json")
+}
+
+/// A seed's folder in a sweep: `seed-N`, or `.seed-N.partial` while it is
+/// written.
+fn is_seed_name(name: &str) -> bool {
     let seed = name.strip_prefix('.').unwrap_or(name).split('.').next().unwrap_or("");
-    let numbered = seed.strip_prefix("seed-").is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
-    numbered && entry.is_dir() && holds_only(entry, run_writes)
+    seed.strip_prefix("seed-").is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
 }
 
-fn sweep_writes(entry: &Path) -> bool {
+fn sweep_stranger(entry: &Path) -> Option<PathBuf> {
     let name = name_of(entry);
-    let is_shard = name.starts_with("shard-") && name.ends_with(".json");
     match name {
-        "summary.json" | "summary.csv" | ".sweep-plan.json" => entry.is_file(),
-        _ if is_shard => entry.is_file(),
-        _ if is_partial(name) => true,
+        "summary.json" | "summary.csv" | ".sweep-plan.json" => unless(entry, is_file(entry)),
+        _ if is_shard_file(name) || is_partial(name) => unless(entry, is_file(entry) || is_folder(entry)),
         // A scenario's folder: its seeds' folders, each a run's output.
-        _ if entry.is_dir() => holds_only(entry, is_seed_folder),
-        _ => false,
+        _ if is_folder(entry) => stranger_in(entry, |seed| match is_seed_name(name_of(seed)) && is_folder(seed) {
+            true => stranger_in(seed, run_stranger),
+            false => Some(seed.to_owned()),
+        }),
+        _ => Some(entry.to_owned()),
     }
 }
 
-fn frames_writes(entry: &Path) -> bool {
+fn frames_stranger(entry: &Path) -> Option<PathBuf> {
     match name_of(entry) {
-        "frames.csv" | "camera.ron" => entry.is_file(),
-        "left" | "right" => entry.is_dir() && holds_only(entry, |image| name_of(image).ends_with(".png")),
-        name => is_partial(name),
+        "frames.csv" | "camera.ron" => unless(entry, is_file(entry)),
+        "left" | "right" if is_folder(entry) => {
+            stranger_in(entry, |image| unless(image, is_file(image) && name_of(image).ends_with(".png")))
+        }
+        name => unless(entry, is_partial(name) && is_file(entry)),
     }
 }
 
@@ -152,14 +187,18 @@ pub(super) fn prepare(out: &Path, kind: &OutputKind, overwrite: bool) -> Result<
     if !overwrite {
         return Err(OutputError::NotEmpty { dir: out.to_owned(), command: kind.command });
     }
-    if !kind.markers.iter().any(|marker| out.join(marker).is_file()) {
+    let marked = kind.markers.iter().any(|marker| is_file(&out.join(marker)))
+        || (kind.command == SWEEP.command && entries.iter().any(|entry| is_shard_file(name_of(entry))));
+    if !marked {
         return Err(OutputError::NotOurs { dir: out.to_owned(), command: kind.command, markers: kind.markers });
     }
-    if let Some(stranger) = entries.iter().find(|entry| !(kind.writes)(entry)) {
-        return Err(OutputError::Stranger { path: stranger.clone(), command: kind.command });
+    let mut sorted = entries.clone();
+    sorted.sort();
+    if let Some(stranger) = sorted.iter().find_map(|entry| (kind.stranger)(entry)) {
+        return Err(OutputError::Stranger { path: stranger, command: kind.command });
     }
     for entry in &entries {
-        let removed = if entry.is_dir() { std::fs::remove_dir_all(entry) } else { std::fs::remove_file(entry) };
+        let removed = if is_folder(entry) { std::fs::remove_dir_all(entry) } else { std::fs::remove_file(entry) };
         removed.map_err(|source| OutputError::Clearing { path: entry.clone(), source })?;
     }
     Ok(())
@@ -222,11 +261,30 @@ mod tests {
         let refused = prepare(&sweep, &SWEEP, true).unwrap_err().to_string();
         assert!(refused.contains("corridor"), "{refused}");
         assert!(sweep.join("corridor/notes.txt").exists() && sweep.join("summary.json").exists());
-        // Without the stranger, the sweep's output goes and the folder stays.
+        // A stranger deep inside is the one named; a link is never ours.
         std::fs::remove_file(sweep.join("corridor/notes.txt")).unwrap();
+        std::fs::write(sweep.join("corridor/seed-0/notes.txt"), "kept").unwrap();
+        let refused = prepare(&sweep, &SWEEP, true).unwrap_err().to_string();
+        assert!(refused.contains("seed-0/notes.txt"), "{refused}");
+        std::fs::remove_file(sweep.join("corridor/seed-0/notes.txt")).unwrap();
+        std::os::unix::fs::symlink(dir.path().join("run"), sweep.join("corridor/seed-0/run-rosbag2")).unwrap();
+        assert!(prepare(&sweep, &SWEEP, true).unwrap_err().to_string().contains("run-rosbag2"));
+        std::fs::remove_file(sweep.join("corridor/seed-0/run-rosbag2")).unwrap();
+        // Without the stranger, the sweep's output goes and the folder stays.
         std::fs::create_dir_all(sweep.join("corridor/.seed-1.partial")).unwrap();
         std::fs::write(sweep.join("shard-0-of-2.json"), "{}").unwrap();
         prepare(&sweep, &SWEEP, true).unwrap();
         assert_eq!(std::fs::read_dir(&sweep).unwrap().count(), 0);
+        // A rosbag2 folder is looked into too; a shard's output is a sweep's.
+        let bag = run.join("run-rosbag2");
+        std::fs::create_dir(&bag).unwrap();
+        std::fs::write(bag.join("metadata.yaml"), "").unwrap();
+        std::fs::write(bag.join("notes.md"), "kept").unwrap();
+        std::fs::remove_file(run.join("my.ron")).unwrap();
+        assert!(prepare(&run, &RUN, true).unwrap_err().to_string().contains("run-rosbag2/notes.md"));
+        std::fs::remove_file(bag.join("notes.md")).unwrap();
+        prepare(&run, &RUN, true).unwrap();
+        std::fs::write(sweep.join("shard-0-of-2.json"), "{}").unwrap();
+        prepare(&sweep, &SWEEP, true).unwrap();
     }
 }

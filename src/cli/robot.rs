@@ -56,9 +56,8 @@ pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> 
     config.until_goal |= until_goal;
     config.publish_ros2 |= ros2;
     config.live = live.or(config.live);
-    let robot_domain_from_env =
-        config.connection == "ros2" && config.ros2.as_ref().is_none_or(|r| r.domain_id.is_none());
-    if robot_domain_from_env || config.publish_ros2 {
+    let domain_from_env = config.ros2.as_ref().is_none_or(|r| r.domain_id.is_none());
+    if domain_from_env && (config.connection == "ros2" || config.publish_ros2) {
         ubf_robots::ros2::domain_from_env().map_err(CliError::bad_input)?;
     }
     let stop = crate::drive::install_stop_flag();

@@ -37,6 +37,9 @@ pub(super) fn command(
     let scenario = load(registry, file).map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
     if let Some(outputs) = &outputs {
+        if !huge {
+            scenario.check_logs().map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
+        }
         super::out_dir::prepare(outputs.dir, &super::out_dir::RUN, overwrite)?;
     }
     if let Some(live) = live.as_mut().filter(|_| watch) {

@@ -47,6 +47,9 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
     for file in files {
         let loaded = if huge { Scenario::load_unbounded(registry, file) } else { Scenario::load(registry, file) };
         let scenario = loaded.map_err(CliError::bad_input)?;
+        if trajectories && !huge {
+            scenario.check_logs().map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
+        }
         let stem = label_of(file).map_err(CliError::bad_input)?;
         let bytes = std::fs::read(file).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
         identity.push_str(&format!("; {stem}: {:016x}", fnv1a(&bytes)));

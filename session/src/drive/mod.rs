@@ -127,13 +127,15 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
     let _ = ctrlc::set_handler(move || {
         match first {
             None => {
-                first = Some(Instant::now());
                 flag.store(true, Ordering::SeqCst);
                 if let Ok(guard) = ON_INTERRUPT.try_lock() {
                     if let Some(emergency) = guard.as_ref() {
                         let _ = emergency.halt();
                     }
                 }
+                // Timed from when the halt is done: a signal sent twice at
+                // once waited behind it.
+                first = Some(Instant::now());
                 return;
             }
             Some(at) if at.elapsed() < SAME_INTERRUPT => return,
