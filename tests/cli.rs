@@ -122,7 +122,7 @@ fn a_plot_that_is_no_png_is_refused_before_any_work() {
     for args in [&["replay", "out.mcap", "--plot", "plot.txt"][..], &["pipeline", "frames", "--plot", "plot"]] {
         let out = ubf(args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
-        assert!(text(&out.stderr).contains("does not end in .png"), "{}", text(&out.stderr));
+        assert!(text(&out.stderr).contains("is not a FILE.png"), "{}", text(&out.stderr));
     }
 }
 

@@ -816,7 +816,7 @@ fn parse_png_path(text: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(text);
     match path.extension().and_then(|e| e.to_str()) {
         Some(extension) if extension.eq_ignore_ascii_case("png") => Ok(path),
-        _ => Err(format!("`{text}` does not end in .png: the plot is drawn as PNG")),
+        _ => Err(format!("`{text}` is not a FILE.png: the plot is drawn as PNG, named so")),
     }
 }
 

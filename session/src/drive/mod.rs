@@ -141,15 +141,15 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
             Some(at) if at.elapsed() < SAME_INTERRUPT => return,
             Some(_) => {}
         }
-        let mut sent = None;
+        let mut stopped = None;
         if let Ok(guard) = ON_INTERRUPT.try_lock() {
             if let Some(emergency) = guard.as_ref() {
-                let _ = emergency.stop_now();
-                sent = Some(emergency.stop_now_sends());
+                stopped = Some(emergency.stop_now().map(|()| emergency.stop_now_sends()));
             }
         }
-        match sent {
-            Some(sent) => eprintln!("interrupted twice: robot sent {sent}; exiting now"),
+        match stopped {
+            Some(Ok(sent)) => eprintln!("interrupted twice: robot sent {sent}; exiting now"),
+            Some(Err(e)) => eprintln!("interrupted twice: stopping the robot failed ({e}); exiting now"),
             None => eprintln!("interrupted twice: exiting now"),
         }
         std::process::exit(130);
