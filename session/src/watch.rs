@@ -71,7 +71,7 @@ impl TreeWatch {
         if self.stamp == Some(stamp) {
             return None;
         }
-        let bytes = match ubf_core::config::read_bounded(&self.path, ubf_core::config::MOST_SETTINGS_BYTES) {
+        let bytes = match read(&self.path) {
             Ok(bytes) => bytes,
             Err(e) => {
                 // Said once per change, and looked at again at the next.
@@ -167,8 +167,8 @@ fn settled(stamp: Stamp) -> Option<Stamp> {
 }
 
 /// `path`'s bytes, if it is a regular file of a settings file's size.
-fn read(path: &Path) -> Option<Vec<u8>> {
-    ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES).ok()
+fn read(path: &Path) -> std::io::Result<Vec<u8>> {
+    ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES)
 }
 
 /// A file's fields other than its tree, each as its RON text (comments and

@@ -57,7 +57,7 @@ pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> 
     config.publish_ros2 |= ros2;
     config.live = live.or(config.live);
     let domain_from_env = config.ros2.as_ref().is_none_or(|r| r.domain_id.is_none());
-    if domain_from_env && (config.connection == "ros2" || config.publish_ros2) {
+    if domain_from_env && (config.connection == crate::drive::robot_file::ROS2_CONNECTION || config.publish_ros2) {
         ubf_robots::ros2::domain_from_env().map_err(CliError::bad_input)?;
     }
     let stop = crate::drive::install_stop_flag();

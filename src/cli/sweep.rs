@@ -51,7 +51,8 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
             scenario.check_logs().map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
         }
         let stem = label_of(file).map_err(CliError::bad_input)?;
-        let bytes = std::fs::read(file).map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
+        let bytes = ubf_core::config::read_bounded(file, ubf_core::config::MOST_SETTINGS_BYTES)
+            .map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
         identity.push_str(&format!("; {stem}: {:016x}", fnv1a(&bytes)));
         for (scenario, stem) in in_layouts(scenario, &stem, layout_seeds)
             .map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?
