@@ -171,7 +171,7 @@ impl CostFit {
 /// file had it (as built in, if there is no file yet). The file is written
 /// whole: to a temporary name, then renamed.
 pub fn write_fitted(path: &Path, fit: &CostFit, by: &str) -> Result<(), String> {
-    let mut fitted = match std::fs::read_to_string(path) {
+    let mut fitted = match ubf_core::config::read_text_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES) {
         Ok(text) => FittedCosts::parse(&text).map_err(|e| format!("{}:{e}", path.display()))?,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => FittedCosts::built_in().clone(),
         Err(e) => return Err(format!("{}: {e}", path.display())),
@@ -293,7 +293,8 @@ pub(crate) fn stretches(frames: &[Frame]) -> Vec<Stretch> {
 
 /// The stereo frames of the log at `path`.
 pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, CostFitError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CostFitError::Read { path: path.to_owned(), source })?;
+    let text = ubf_core::config::read_text_bounded(path, ubf_session::scenario::Work::MOST_LOG_BYTES)
+        .map_err(|source| CostFitError::Read { path: path.to_owned(), source })?;
     let format = |line: usize, message: String| CostFitError::Format { path: path.to_owned(), line, message };
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
@@ -459,7 +460,8 @@ impl Samples {
 fn run_name(path: &Path) -> Result<(String, u64), CostFitError> {
     let report = path.with_file_name("report.json");
     let fail = |message: String| CostFitError::Report { path: report.clone(), message };
-    let text = std::fs::read_to_string(&report).map_err(|e| fail(e.to_string()))?;
+    let text = ubf_core::config::read_text_bounded(&report, ubf_core::config::MOST_SETTINGS_BYTES)
+        .map_err(|e| fail(e.to_string()))?;
     let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
     match (value["scenario"].as_str(), value["seed"].as_u64()) {
         (Some(scenario), Some(seed)) => Ok((scenario.to_owned(), seed)),

@@ -15,7 +15,6 @@
 
 use crate::source::{ImageDirectory, SourceError};
 use crate::stereo::{CameraMount, PrincipalPoint, StereoCamera};
-use std::fs;
 use std::path::{Path, PathBuf};
 use ubf_core::Pose2;
 
@@ -74,6 +73,13 @@ pub fn open(dir: &Path, poses: Option<&Path>) -> Result<Sequence, SourceError> {
     Ok(Sequence { camera, pairs, truth })
 }
 
+/// A sequence's text file (its times, poses or calibration), within the
+/// bound of any settings file: the longest KITTI sequence's poses are
+/// under a megabyte.
+fn read_text(path: &Path) -> std::io::Result<String> {
+    ubf_core::config::read_text_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES)
+}
+
 fn index_error(path: &Path, line: usize, message: String) -> SourceError {
     SourceError::Index { path: path.to_owned(), line, message }
 }
@@ -81,7 +87,7 @@ fn index_error(path: &Path, line: usize, message: String) -> SourceError {
 /// Lines of `width` numbers (blank lines skipped), with the line of any
 /// that is not.
 fn read_numbers(path: &Path, width: usize) -> Result<Vec<Vec<f64>>, SourceError> {
-    let text = fs::read_to_string(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
+    let text = read_text(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
     let mut rows = Vec::new();
     for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
         let row: Vec<f64> = line
@@ -99,7 +105,7 @@ fn read_numbers(path: &Path, width: usize) -> Result<Vec<Vec<f64>>, SourceError>
 /// point from `P0`, the baseline from `P1`'s fourth column (`−f·b`), and
 /// the image size from the first left image.
 fn read_calibration(path: &Path) -> Result<StereoCamera, SourceError> {
-    let text = fs::read_to_string(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
+    let text = read_text(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
     let matrix = |name: &str| -> Result<[f64; 12], SourceError> {
         let (i, line) = text
             .lines()

@@ -107,7 +107,8 @@ pub fn perturb_sequence(
     fn io(path: &Path) -> impl Fn(std::io::Error) -> String + '_ {
         move |e| format!("{}: {e}", path.display())
     }
-    let times = std::fs::read_to_string(from.join("times.txt")).map_err(io(&from.join("times.txt")))?;
+    let times = ubf_core::config::read_text_bounded(&from.join("times.txt"), ubf_core::config::MOST_SETTINGS_BYTES)
+        .map_err(io(&from.join("times.txt")))?;
     let count = times.lines().filter(|l| !l.trim().is_empty()).count().min(frames.unwrap_or(usize::MAX));
     for dir in ["image_0", "image_1"] {
         std::fs::create_dir_all(to.join(dir)).map_err(io(&to.join(dir)))?;
@@ -119,7 +120,8 @@ pub fn perturb_sequence(
     std::fs::copy(from.join("calib.txt"), to.join("calib.txt")).map_err(io(&from.join("calib.txt")))?;
     let poses = from.join("poses.txt");
     if poses.is_file() {
-        let text = std::fs::read_to_string(&poses).map_err(io(&poses))?;
+        let text =
+            ubf_core::config::read_text_bounded(&poses, ubf_core::config::MOST_SETTINGS_BYTES).map_err(io(&poses))?;
         std::fs::write(to.join("poses.txt"), keep(&text)).map_err(io(&to.join("poses.txt")))?;
     }
     for i in 0..count {

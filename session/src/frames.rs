@@ -629,7 +629,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<Replay, FramesError
 /// there is none.
 pub fn load_camera(dir: &Path) -> Result<StereoCamera, FramesError> {
     let path = dir.join(CAMERA_FILE);
-    let bytes = match std::fs::read(&path) {
+    let bytes = match ubf_core::config::read_bounded(&path, ubf_core::config::MOST_SETTINGS_BYTES) {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(StereoCamera::default()),
         Err(e) => return Err(FramesError::file(&path)(e)),

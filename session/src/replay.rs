@@ -3,6 +3,7 @@
 
 use crate::json_topics::{RunMessage, TickMessage, WorldMessage};
 use crate::mcap_log::LogError;
+use std::io::Read;
 use std::path::Path;
 
 /// The longest record (a chunk, compressed or not) [`read`] accepts: far
@@ -61,22 +62,21 @@ pub struct ReplayedRun {
 /// a killed process left, up to its last whole chunk.
 pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
     let fail = |message: String| LogError::reading(path, message);
-    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    // Read as the parser asks, not whole: a log may be gigabytes. A FIFO
+    // or a device in its place is refused rather than read without end.
+    let mut file = std::io::BufReader::new(ubf_core::config::open_regular(path).map_err(|e| fail(e.to_string()))?);
     // A record's length comes from the file: one corrupted length must be
     // an error, not an attempt to allocate exabytes.
     let options = mcap::sans_io::LinearReaderOptions::default()
         .with_skip_end_magic(true)
         .with_record_length_limit(MOST_RECORD_BYTES);
     let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
-    let mut remaining: &[u8] = &bytes;
     let stream = std::iter::from_fn(|| loop {
         match reader.next_event()? {
-            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
-                let n = need.min(remaining.len());
-                reader.insert(n).copy_from_slice(&remaining[..n]);
-                reader.notify_read(n);
-                remaining = &remaining[n..];
-            }
+            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => match file.read(reader.insert(need)) {
+                Ok(n) => reader.notify_read(n),
+                Err(e) => return Some(Err(mcap::McapError::from(e))),
+            },
             Ok(mcap::sans_io::MessageReadEvent::Message(message)) => return Some(Ok(message)),
             Err(e) => return Some(Err(e)),
         }

@@ -63,17 +63,54 @@ pub const MOST_SETTINGS_BYTES: u64 = 16 << 20;
 /// so instead.
 pub fn read_bounded(path: &std::path::Path, most: u64) -> std::io::Result<Vec<u8>> {
     use std::io::{Error, ErrorKind, Read};
-    // Looked at before it is opened: opening a FIFO blocks until a writer
-    // comes.
-    if !std::fs::metadata(path)?.is_file() {
-        return Err(Error::new(ErrorKind::InvalidInput, "not a regular file"));
-    }
     let mut bytes = Vec::new();
-    std::fs::File::open(path)?.take(most + 1).read_to_end(&mut bytes)?;
+    open_regular(path)?.take(most + 1).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > most {
         return Err(Error::new(ErrorKind::InvalidData, format!("larger than {most} bytes")));
     }
     Ok(bytes)
+}
+
+/// [`read_bounded`] for a text file: bytes that are not UTF-8 are an
+/// error of kind `InvalidData`.
+pub fn read_text_bounded(path: &std::path::Path, most: u64) -> std::io::Result<String> {
+    String::from_utf8(read_bounded(path, most)?)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
+fn not_regular() -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file")
+}
+
+/// Opens `path` for reading if it is a regular file, for a reader that
+/// streams it: a FIFO would block the reader, a device never end. Looked
+/// at before it is opened, so that a device is not opened at all (opening
+/// a serial port can reset what is on its other end).
+pub fn open_regular(path: &std::path::Path) -> std::io::Result<std::fs::File> {
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(not_regular());
+    }
+    open_unwaiting(path)
+}
+
+/// Opens `path` for reading if what is opened is a regular file. The look
+/// before the open can be overtaken: a FIFO swapped in between would block
+/// a plain open until a writer came, so the open does not wait, and the
+/// handle itself is looked at.
+fn open_unwaiting(path: &std::path::Path) -> std::io::Result<std::fs::File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // Reads of a regular file ignore the flag.
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path)?;
+    if !file.metadata()?.is_file() {
+        return Err(not_regular());
+    }
+    Ok(file)
 }
 
 /// Why the file at `path` could not be read, for a person: a relative
@@ -291,5 +328,38 @@ pub fn optional_non_negative<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f
     match Option::<f64>::deserialize(d)? {
         Some(v) if !(v.is_finite() && v >= 0.0) => Err(D::Error::custom(format!("{v} is out of range: must be ≥ 0"))),
         v => Ok(v),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_that_overtakes_the_look_is_refused_without_waiting() {
+        // The open step on its own, as if the FIFO had been swapped in after
+        // the look: a plain open would wait for a writer that never comes.
+        let path = std::env::temp_dir().join(format!("ubf-open-regular-{}", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        assert!(std::process::Command::new("mkfifo").arg(&path).status().unwrap().success());
+        let (sent, opened) = crossbeam_channel::bounded(1);
+        let fifo = path.clone();
+        std::thread::spawn(move || sent.send(open_unwaiting(&fifo).map(drop)));
+        let outcome = opened.recv_timeout(std::time::Duration::from_secs(10));
+        std::fs::remove_file(&path).unwrap();
+        let error = outcome.expect("the open waited for a writer").unwrap_err();
+        assert_eq!(error.to_string(), "not a regular file");
+    }
+
+    #[test]
+    fn a_regular_file_within_the_bound_is_read_and_one_beyond_it_refused() {
+        let path = std::env::temp_dir().join(format!("ubf-read-bounded-{}", std::process::id()));
+        std::fs::write(&path, b"12345").unwrap();
+        let within = read_bounded(&path, 5).unwrap();
+        let beyond = read_bounded(&path, 4).unwrap_err();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(within, b"12345");
+        assert_eq!(beyond.to_string(), "larger than 4 bytes");
     }
 }

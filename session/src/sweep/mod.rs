@@ -267,7 +267,7 @@ impl Plan {
     /// finished, or nothing at all.
     fn check_resumable(&self, out: &Path, path: &Path) -> Result<(), SweepError> {
         let refuse = |why: String| Err(SweepError::Refused(format!("--resume: {why}")));
-        match std::fs::read(path) {
+        match ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES) {
             Ok(bytes) => {
                 return match serde_json::from_slice::<Plan>(&bytes) {
                     Ok(plan) if plan == *self => Ok(()),
@@ -285,7 +285,7 @@ impl Plan {
         // No plan: a finished sweep of the same seeds and scenarios, or a
         // folder with nothing of this sweep's in it.
         let finished = out.join(self.final_name());
-        if let Ok(bytes) = std::fs::read(&finished) {
+        if let Ok(bytes) = ubf_core::config::read_bounded(&finished, ubf_core::config::MOST_SETTINGS_BYTES) {
             let value: serde_json::Value = serde_json::from_slice(&bytes).unwrap_or_default();
             let labels: Option<Vec<&str>> = match self.shard {
                 None => value["scenarios"].as_object().map(|s| s.keys().map(String::as_str).collect()),
