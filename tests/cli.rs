@@ -466,10 +466,18 @@ fn a_closed_pipe_ends_a_command_quietly() {
 }
 
 #[test]
-fn zero_jobs_are_refused() {
+fn zero_jobs_and_zero_frames_are_refused() {
     let out = ubf(&["sweep", "scenarios/goto-open-floor.ron", "--seeds", "0..2", "--out", "x", "--jobs", "0"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("at least one job"), "{}", text(&out.stderr));
+    // It wrote one pair.
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("frames");
+    let out =
+        ubf(&["frames", "scenarios/goto-open-floor.ron", "--out", out_dir.to_str().unwrap(), "--max-frames", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("at least 1"), "{}", text(&out.stderr));
+    assert!(!out_dir.exists());
 }
 
 #[test]
@@ -487,6 +495,13 @@ fn a_start_inside_a_wall_is_refused_by_check_and_run() {
         assert_eq!(out.status.code(), Some(2), "{command}: {}", text(&out.stderr));
         assert!(text(&out.stderr).contains("robot.start"), "{command}: {}", text(&out.stderr));
     }
+    // Where the start is written, the error points at it.
+    let written = scenario_file(
+        &dir,
+        &body.replace("max_time_s: 10.0,", "max_time_s: 10.0,\n    robot: (start: (x: 0.1, y: 0.0)),"),
+    );
+    let out = ubf(&["check", written.to_str().unwrap()]);
+    assert!(text(&out.stderr).contains("bad.ron:2:13: robot.start: at (0.1, 0)"), "{}", text(&out.stderr));
     let moved =
         scenario_file(&dir, &body.replace("max_time_s: 10.0,", "max_time_s: 10.0, robot: (start: (x: 1.0, y: 0.0)),"));
     assert!(ubf(&["check", moved.to_str().unwrap()]).status.success());
@@ -598,6 +613,14 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
         (r#"Scenario(name: "\u{1b}]0;pwned\u{7}\u{1b}[2J", max_time_s: 5.0, root: Stop())"#, "control character"),
         // The plot's axes spun forever on a landmark 1e308 m away.
         (r#"Scenario(name: "t", max_time_s: 5.0, world: (landmarks: [(x: 5.0, y: 1e308)]), root: Stop())"#, "1e308"),
+        // A number quoted back as written, not as three hundred digits.
+        (r#"Scenario(name: "t", max_time_s: 5.0, robot: (camera: (rate_hz: 1e300)), root: Stop())"#, "rate_hz 1e300:"),
+        // A person's velocity is a speed, not a place.
+        (
+            r#"Scenario(name: "t", max_time_s: 5.0, world: (people: [(start: (x: 1.0, y: 0.0),
+                velocity: (x: 400.0, y: 0.0))]), root: Stop())"#,
+            "from -10 to 10 m/s",
+        ),
         // Headings every 1e-9° (2^31 of them), an error-model table 1e15 m
         // deep, a model of NaN.
         (r#"Scenario(name: "t", max_time_s: 5.0, root: ActionAiding(angle_step_deg: 1e-9))"#, "from 0.1 to 180°"),
@@ -618,7 +641,7 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
         (
             r#"Scenario(name: "t", max_time_s: 10.0, robot: (start: (x: 1.0, y: 0.0)), goal: (x: 30.0, y: 0.0),
                 world: (corridor: (width: 4.0, length: 20.0)), root: Stop())"#,
-            "goal: (30, 0) lies outside the corridor",
+            "FILE:1:73: goal: (30, 0) lies outside the corridor",
         ),
         (
             r#"Scenario(name: "t", max_time_s: 5e5, robot: (camera: (images: (), rate_hz: 100.0)), root: Stop())"#,
@@ -950,4 +973,19 @@ fn a_log_that_is_not_there_is_said_to_be_unreadable_not_unwritable() {
     let said = text(&missing.stderr);
     assert!(said.starts_with("error: reading no-such-log.mcap: "), "{said}");
     assert!(!said.contains("writing"), "{said}");
+}
+
+#[test]
+fn aiding_on_a_robot_without_a_camera_says_so() {
+    // It drives straight at the goal, as it would with no aid at all.
+    let dir = tempfile::tempdir().unwrap();
+    let body = r#"Scenario(name: "blind", max_time_s: 8.0, robot: (start: (x: 1.0, y: 0.0)), goal: (x: 8.0, y: 0.0),
+        world: (corridor: (width: 4.0, length: 20.0)), root: ActionAiding(technique: Scan))"#;
+    let out = ubf(&["run", scenario_file(&dir, body).to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let said = text(&out.stderr).matches("no stereo frame with its calibration in 5 s").count();
+    assert_eq!(said, 1, "{}", text(&out.stderr));
+    let with_camera = body.replace("start: (x: 1.0, y: 0.0))", "start: (x: 1.0, y: 0.0), camera: ())");
+    let out = ubf(&["run", scenario_file(&dir, &with_camera).to_str().unwrap()]);
+    assert!(!text(&out.stderr).contains("no stereo frame"), "{}", text(&out.stderr));
 }

@@ -78,7 +78,7 @@ impl ubf_core::config::Check for FeatureConfig {
             return Err(format!("max_distance: {}; a descriptor has 256 bits", self.max_distance));
         }
         if !(self.ratio > 0.0 && self.ratio <= 1.0) {
-            return Err(format!("ratio: {}; within (0, 1]", self.ratio));
+            return Err(format!("ratio: {}; within (0, 1]", ubf_core::config::shown(self.ratio)));
         }
         if self.row_tolerance_px > 64 {
             return Err(format!("row_tolerance_px: {}; at most 64", self.row_tolerance_px));

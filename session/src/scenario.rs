@@ -86,21 +86,23 @@ impl Scenario {
     /// Reads a scenario file, and refuses one whose robot starts touching a
     /// wall, a box or a person (a run from there could not move).
     pub fn load(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
-        let scenario = Scenario::load_unbounded(registry, path)?;
-        scenario.check_work().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;
-        Ok(scenario)
+        Scenario::load_checked(registry, path, true)
     }
 
     /// [`Scenario::load`] without the bound on the work a run may do: for a
     /// deliberately huge run (`--huge`).
     pub fn load_unbounded(registry: &Registry, path: &Path) -> Result<Scenario, LoadError> {
+        Scenario::load_checked(registry, path, false)
+    }
+
+    fn load_checked(registry: &Registry, path: &Path, bound_work: bool) -> Result<Scenario, LoadError> {
         let bytes = ubf_core::config::read_bounded(path, ubf_core::config::MOST_SETTINGS_BYTES)
             .map_err(|source| LoadError::Io { path: path.to_owned(), source })?;
-        let text =
-            ubf_core::config::utf8_text(bytes).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
-        let scenario =
-            Scenario::from_ron(registry, &text).map_err(|error| LoadError::Parse { path: path.to_owned(), error })?;
-        scenario.check_start().map_err(|message| LoadError::Invalid { path: path.to_owned(), message })?;
+        let parse_error = |error| LoadError::Parse { path: path.to_owned(), error };
+        let text = ubf_core::config::utf8_text(bytes).map_err(parse_error)?;
+        let scenario = Scenario::from_ron(registry, &text).map_err(parse_error)?;
+        let checked = scenario.check_start().and_then(|()| if bound_work { scenario.check_work() } else { Ok(()) });
+        checked.map_err(|refusal| parse_error(refusal.at(&text)))?;
         Ok(scenario)
     }
 
@@ -125,26 +127,32 @@ impl Scenario {
 
     /// Refuses a run beyond [`Work::MOST_TICKS`] ticks or the rendering
     /// bound, saying how to proceed.
-    pub fn check_work(&self) -> Result<(), String> {
+    pub fn check_work(&self) -> Result<(), Refusal> {
         let work = self.work();
         if work.ticks > Work::MOST_TICKS {
-            return Err(format!(
-                "max_time_s / period_s: {} ticks, more than {} (logs of about {}); \
+            return Refusal::of(
+                &["max_time_s"],
+                format!(
+                    "max_time_s / period_s: {} ticks, more than {} (logs of about {}); \
                  shorten max_time_s, lengthen period_s, or pass --huge to run it anyway",
-                work.ticks,
-                Work::MOST_TICKS,
-                Work::bytes_text(work.log_bytes)
-            ));
+                    work.ticks,
+                    Work::MOST_TICKS,
+                    Work::bytes_text(work.log_bytes)
+                ),
+            );
         }
         let pixels = work.rendered_pairs.saturating_mul(work.pair_bytes);
         if pixels > Work::MOST_RENDERED_PIXELS {
-            return Err(format!(
-                "robot.camera.images: {} rendered pairs of {} each, more than {:.0e} pixels (hours of rendering); \
+            return Refusal::of(
+                &["robot", "camera", "images"],
+                format!(
+                    "robot.camera.images: {} rendered pairs of {} each, more than {:.0e} pixels (hours of rendering); \
                  shorten max_time_s, lower rate_hz or the image size, or pass --huge to run it anyway",
-                work.rendered_pairs,
-                Work::bytes_text(work.pair_bytes),
-                Work::MOST_RENDERED_PIXELS as f64
-            ));
+                    work.rendered_pairs,
+                    Work::bytes_text(work.pair_bytes),
+                    Work::MOST_RENDERED_PIXELS as f64
+                ),
+            );
         }
         Ok(())
     }
@@ -168,30 +176,59 @@ impl Scenario {
 
     /// Whether the robot can start where the scenario puts it, and reach
     /// its goal's place.
-    pub fn check_start(&self) -> Result<(), String> {
+    pub fn check_start(&self) -> Result<(), Refusal> {
         let robot = ubf_robots::sim::SimRobot::new(&self.robot, &self.world, self.period_s, self.seed);
         if robot.starts_in_contact() {
             let start = self.robot.start;
-            return Err(format!(
-                "robot.start: at ({}, {}) the robot's outline overlaps a wall, a box or a person; \
+            return Refusal::of(
+                &["robot", "start"],
+                format!(
+                    "robot.start: at ({}, {}) the robot's outline overlaps a wall, a box or a person; \
                  a corridor runs from x = 0, so start it at least a metre in",
-                start.x, start.y
-            ));
+                    start.x, start.y
+                ),
+            );
         }
         if let (Some(goal), Some(corridor)) = (self.goal, self.world.corridor) {
             let inside = goal.x > 0.0 && goal.x < corridor.length && goal.y.abs() < corridor.width / 2.0;
             if !inside {
-                return Err(format!(
-                    "goal: ({}, {}) lies outside the corridor (x from 0 to {}, y within ±{}); the robot could \
+                return Refusal::of(
+                    &["goal"],
+                    format!(
+                        "goal: ({}, {}) lies outside the corridor (x from 0 to {}, y within ±{}); the robot could \
                      never reach it",
-                    goal.x,
-                    goal.y,
-                    corridor.length,
-                    corridor.width / 2.0
-                ));
+                        goal.x,
+                        goal.y,
+                        corridor.length,
+                        corridor.width / 2.0
+                    ),
+                );
             }
         }
         Ok(())
+    }
+}
+
+/// Why a scenario that parses cannot run, and the field that says so.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct Refusal {
+    /// The field's path from the top (`["robot", "start"]`).
+    pub field: &'static [&'static str],
+    /// What is wrong, naming the field.
+    pub message: String,
+}
+
+impl Refusal {
+    fn of(field: &'static [&'static str], message: String) -> Result<(), Refusal> {
+        Err(Refusal { field, message })
+    }
+
+    /// The refusal as an error at the field in the scenario's `text` (at
+    /// its start where the field is not written).
+    pub fn at(&self, text: &str) -> RonError {
+        let (line, column) = ubf_core::config::field_position(text, self.field).unwrap_or((1, 1));
+        RonError { line, column, message: self.message.clone() }
     }
 }
 
@@ -258,15 +295,8 @@ pub enum LoadError {
         /// Why.
         source: std::io::Error,
     },
-    /// The file parses but describes a run that cannot work.
-    #[error("{}: {message}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong, naming the field.
-        message: String,
-    },
-    /// The file is not a valid scenario: `FILE:LINE:COL: message`.
+    /// The file is not a valid scenario, or describes a run that cannot
+    /// work: `FILE:LINE:COL: message`.
     #[error("{}:{error}", path.display())]
     Parse {
         /// The file.

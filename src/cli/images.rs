@@ -53,6 +53,15 @@ pub(super) fn pipeline(dir: &Path, options: &crate::frames::ReplayOptions, json:
     Ok(Exit::Success)
 }
 
+/// A number of stereo pairs to record: at least one (a recording of none
+/// would still be a directory of one pair and its calibration).
+pub(super) fn parse_frame_count(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!("expected a number of pairs, at least 1; got {text:?}")),
+    }
+}
+
 /// A speed or turn-rate limit: finite and positive.
 pub(super) fn parse_limit(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {

@@ -25,7 +25,7 @@ mod sweep;
 use crate::ros2_log::LogFormat;
 use clap::{Parser, Subcommand};
 use experiment::{parse_depths, parse_fusion, parse_heights, parse_model, parse_objective};
-use images::{parse_limit, parse_offset};
+use images::{parse_frame_count, parse_limit, parse_offset};
 use robot::{parse_room, parse_silence, parse_sip_period};
 use run::{parse_seconds, parse_speed};
 use std::net::SocketAddr;
@@ -330,8 +330,8 @@ enum Command {
         /// Seed (default: the scenario's).
         #[arg(long)]
         seed: Option<u64>,
-        /// Stop after this many pairs.
-        #[arg(long, default_value_t = 100_000)]
+        /// Stop after this many pairs (at least 1).
+        #[arg(long, default_value_t = 100_000, value_parser = parse_frame_count)]
         max_frames: usize,
         /// Record even beyond 10 GB of images (a deliberately huge
         /// recording).

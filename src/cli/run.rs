@@ -37,6 +37,14 @@ pub(super) fn command(
     let scenario = load(registry, file).map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
     if let Some(outputs) = &outputs {
+        let renders = scenario.robot.camera.as_ref().is_some_and(|camera| camera.images.is_some());
+        if outputs.images && !renders {
+            return Err(CliError::bad_input(format!(
+                "--log-images: {}'s robot has no camera that renders images (`robot.camera.images`), so there \
+                 are none to log",
+                file.display()
+            )));
+        }
         if !huge {
             scenario.check_logs().map_err(|e| CliError::bad_input(format!("{}: {e}", file.display())))?;
         }

@@ -138,6 +138,112 @@ pub fn utf8_text(bytes: Vec<u8>) -> Result<String, RonError> {
     })
 }
 
+/// Where the field at `path` (`["robot", "start"]`: the `start` field of
+/// the top-level `robot` field) is named in the RON document `text`, as
+/// 1-based line and column; where a field on the path is not written (it
+/// took its default), the last one that is; `None` if not even the first
+/// is. For errors about a document that parsed, so that they point where
+/// its reader should look.
+pub fn field_position(text: &str, path: &[&str]) -> Option<(usize, usize)> {
+    let mut found: Option<(usize, usize)> = None;
+    // The depth the next field on the path is written at: the top-level
+    // struct's fields are at depth 1.
+    let mut matched = 0;
+    let mut depth = 0usize;
+    let (mut line, mut column) = (1, 1);
+    let mut chars = text.chars().peekable();
+    // The identifier being read, and where it began.
+    let mut word = String::new();
+    let mut word_at = (1, 1);
+    // An identifier just read, waiting to see whether a `:` follows.
+    let mut pending: Option<(String, (usize, usize))> = None;
+    while let Some(c) = chars.next() {
+        let at = (line, column);
+        if c == '\n' {
+            (line, column) = (line + 1, 1);
+        } else {
+            column += 1;
+        }
+        if c.is_alphanumeric() || c == '_' {
+            if word.is_empty() {
+                word_at = at;
+            }
+            word.push(c);
+            continue;
+        }
+        if !word.is_empty() {
+            pending = Some((std::mem::take(&mut word), word_at));
+        }
+        match c {
+            _ if c.is_whitespace() => continue,
+            '/' if chars.peek() == Some(&'/') => {
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        (line, column) = (line + 1, 1);
+                        break;
+                    }
+                }
+                continue;
+            }
+            '/' if chars.peek() == Some(&'*') => {
+                let mut last = ' ';
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        (line, column) = (line + 1, 1);
+                    } else {
+                        column += 1;
+                    }
+                    if last == '*' && c == '/' {
+                        break;
+                    }
+                    last = c;
+                }
+                continue;
+            }
+            '"' => {
+                let mut escaped = false;
+                for c in chars.by_ref() {
+                    if c == '\n' {
+                        (line, column) = (line + 1, 1);
+                    } else {
+                        column += 1;
+                    }
+                    match c {
+                        '"' if !escaped => break,
+                        '\\' => escaped = !escaped,
+                        _ => escaped = false,
+                    }
+                }
+            }
+            ':' if chars.peek() != Some(&':') => {
+                if let Some((name, name_at)) = pending.take() {
+                    if depth == matched + 1 && name == path[matched] {
+                        found = Some(name_at);
+                        matched += 1;
+                        if matched == path.len() {
+                            return found;
+                        }
+                    }
+                }
+                continue;
+            }
+            '(' | '[' | '{' => depth += 1,
+            ')' | ']' | '}' => {
+                depth = depth.saturating_sub(1);
+                if depth < matched {
+                    // Out of the last field found's value: its child is
+                    // not written.
+                    return found;
+                }
+            }
+            ',' if depth == matched && matched > 0 => return found,
+            _ => {}
+        }
+        pending = None;
+    }
+    found
+}
+
 /// The RON dialect of scenario and robot files: `Name(field: ..)` for
 /// behaviours with a config, and `field: value` for optional fields.
 pub fn ron_options() -> ron::Options {
@@ -175,8 +281,9 @@ fn number_where<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule:
     }
 }
 
-/// A number as a person would write it: `1e-300`, not three hundred zeros.
-fn shown(v: f64) -> String {
+/// A number as a person would write it: `1e-300`, not three hundred zeros
+/// (as `{}` would print it), for messages that quote what a file says.
+pub fn shown(v: f64) -> String {
     if v != 0.0 && v.is_finite() && !(1e-4..1e7).contains(&v.abs()) {
         format!("{v:e}")
     } else {
@@ -350,6 +457,18 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         let error = outcome.expect("the open waited for a writer").unwrap_err();
         assert_eq!(error.to_string(), "not a regular file");
+    }
+
+    #[test]
+    fn a_field_is_found_by_its_path_and_not_in_strings_comments_or_other_fields() {
+        let text = "Scenario(\n  name: \"goal: x\", // goal: no\n  robot: (speed: 1, start: (x: 1)),\n  world: (start: 2),\n  goal: (x: 3),\n)";
+        assert_eq!(field_position(text, &["goal"]), Some((5, 3)));
+        assert_eq!(field_position(text, &["robot", "start"]), Some((3, 21)));
+        // Not written: the nearest that is.
+        assert_eq!(field_position(text, &["world", "goal"]), Some((4, 3)));
+        assert_eq!(field_position("Scenario(robot: (start: 1), world: (x: 1))", &["robot", "x"]), Some((1, 10)));
+        assert_eq!(field_position(text, &["seed"]), None);
+        assert_eq!(field_position(text, &["start"]), None);
     }
 
     #[test]

@@ -51,7 +51,14 @@ pub struct ActionAiding {
     scanned_s: f64,
     started_s: Option<f64>,
     last_s: f64,
+    /// Whether it has said that no camera frame came, which leaves it
+    /// driving straight: said once a run, not every tick.
+    said_blind: bool,
 }
+
+/// How long aiding waits for a camera frame before saying it has none: a
+/// real camera takes a moment to start.
+const BLIND_AFTER_S: f64 = 5.0;
 
 /// What every phase reads of the tick.
 struct Tick {
@@ -104,6 +111,7 @@ impl ActionAiding {
             scanned_s: 0.0,
             started_s: None,
             last_s: 0.0,
+            said_blind: false,
         }
     }
 
@@ -352,6 +360,7 @@ impl ActionAiding {
                 }
             }
         }
+        self.say_if_blind(state.time);
         self.echoes.update(state);
         let tick = Tick { pose, goal: (goal.x, goal.y), to_goal, distance, time: state.time, vote: self.vote(state) };
         // Three passes at most: a finished phase hands over within the tick
@@ -367,6 +376,21 @@ impl ActionAiding {
             }
         }
         Action::with_vote(tick.vote).velocity(0.0).rot_velocity(0.0)
+    }
+
+    /// Says, once, that no camera frame has come: without one, every aid
+    /// drives straight at the goal, which a scenario whose robot has no
+    /// camera would otherwise do without a word.
+    fn say_if_blind(&mut self, time: f64) {
+        let aiding = self.config.technique != Technique::None || self.config.steer != Steer::Robot;
+        let waited = time - self.started_s.unwrap_or(time) >= BLIND_AFTER_S;
+        if aiding && waited && self.camera.is_none() && !self.said_blind {
+            self.said_blind = true;
+            tracing::warn!(
+                "ActionAiding: no stereo frame with its calibration in {BLIND_AFTER_S} s (has the robot a camera?); \
+                 without one it drives straight at the goal"
+            );
+        }
     }
 
     /// One pass of the phase machine, and the only place a phase changes:

@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use std::sync::Arc;
-use ubf_core::config::{non_negative, positive, unit_interval, Check};
+use ubf_core::config::{non_negative, positive, shown, unit_interval, Check};
 use ubf_core::{Aim, CameraMount, LandmarkObservation, Pose2, StereoImages, StereoPixels};
 use ubf_perception::features::StereoPipeline;
 use ubf_perception::StereoCamera;
@@ -94,10 +94,10 @@ impl SimCameraConfig {
             ));
         }
         if self.pixel_noise_px > 100.0 {
-            return Err(format!("camera: pixel_noise_px {:?}: at most 100 px", self.pixel_noise_px));
+            return Err(format!("camera: pixel_noise_px {}: at most 100 px", shown(self.pixel_noise_px)));
         }
         if self.rate_hz > 1000.0 {
-            return Err(format!("camera: rate_hz {}: at most 1000 frames a second", self.rate_hz));
+            return Err(format!("camera: rate_hz {}: at most 1000 frames a second", shown(self.rate_hz)));
         }
         let held_tilt = self.pan_tilt.map_or(0.0, |unit| unit.tilt_deg);
         if let Some(unit) = &self.pan_tilt {

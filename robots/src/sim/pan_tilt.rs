@@ -5,7 +5,7 @@
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
-use ubf_core::config::{finite, non_negative, positive, Check};
+use ubf_core::config::{finite, non_negative, positive, shown, Check};
 use ubf_core::{anchor_mean, Aim, PanTilt, RobotError};
 
 /// A pan-tilt unit's settings, as written under the camera in a scenario
@@ -58,11 +58,12 @@ impl Check for PanTiltConfig {
         if !(-180.0..=0.0).contains(&self.pan_min_deg) || !(0.0..=180.0).contains(&self.pan_max_deg) {
             return Err(format!(
                 "pan_tilt: pan_min_deg {} and pan_max_deg {} must lie within -180..0 and 0..180",
-                self.pan_min_deg, self.pan_max_deg
+                shown(self.pan_min_deg),
+                shown(self.pan_max_deg)
             ));
         }
         if self.tilt_deg.abs() > 90.0 {
-            return Err(format!("pan_tilt: tilt_deg {}: within ±90", self.tilt_deg));
+            return Err(format!("pan_tilt: tilt_deg {}: within ±90", shown(self.tilt_deg)));
         }
         Ok(())
     }

@@ -25,6 +25,23 @@ pub struct Xy {
     pub y: f64,
 }
 
+/// A velocity on the floor, m/s: each component within ±10 m/s (faster
+/// than anyone walks or runs, so a slip of the keyboard is caught).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityXy {
+    /// m/s.
+    #[serde(deserialize_with = "walking_m_s")]
+    pub x: f64,
+    /// m/s.
+    #[serde(deserialize_with = "walking_m_s")]
+    pub y: f64,
+}
+
+fn walking_m_s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, -10.0..=10.0, "from -10 to 10 m/s")
+}
+
 /// A corridor: two side walls and two end walls.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -166,8 +183,8 @@ impl RandomLandmarks {
 pub struct PersonConfig {
     /// Where the person is at time 0.
     pub start: Xy,
-    /// Walking velocity, m/s.
-    pub velocity: Xy,
+    /// Walking velocity.
+    pub velocity: VelocityXy,
     /// Body radius, m.
     #[serde(default = "PersonConfig::default_radius", deserialize_with = "positive")]
     pub radius: f64,
@@ -514,7 +531,7 @@ mod tests {
             corridor: Some(CorridorConfig { width: 4.0, length: 10.0 }),
             people: vec![PersonConfig {
                 start: Xy { x: 5.0, y: 0.0 },
-                velocity: Xy { x: 1.0, y: 0.0 },
+                velocity: VelocityXy { x: 1.0, y: 0.0 },
                 radius: 0.5,
                 features: 2,
             }],
