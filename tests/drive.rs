@@ -455,6 +455,70 @@ fn interrupt_at_speed(signal: &str) -> (std::process::ExitStatus, String, String
     (status, stderr, line)
 }
 
+/// A TCP proxy to the emulator at `upstream` (`tcp://host:port`): its
+/// address, for one drive. `after` the drive connects, it half-closes the
+/// link towards the drive (the drive reads its end, as from a robot whose
+/// sending side failed) while still passing the drive's commands on.
+fn half_closing_proxy(upstream: &str, after: Duration) -> String {
+    use std::io::{Read, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = format!("tcp://{}", listener.local_addr().unwrap());
+    let upstream = upstream.trim_start_matches("tcp://").to_owned();
+    std::thread::spawn(move || {
+        let (mut drive, _) = listener.accept().unwrap();
+        let mut robot = std::net::TcpStream::connect(upstream).unwrap();
+        let (mut commands, mut to_robot) = (drive.try_clone().unwrap(), robot.try_clone().unwrap());
+        std::thread::spawn(move || {
+            let _ = std::io::copy(&mut commands, &mut to_robot);
+            // The drive has gone: the emulator's session ends, and it reports.
+            let _ = to_robot.shutdown(std::net::Shutdown::Both);
+        });
+        robot.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+        let started = std::time::Instant::now();
+        let mut buffer = [0u8; 4096];
+        let mut passing = true;
+        loop {
+            if passing && started.elapsed() >= after {
+                drive.shutdown(std::net::Shutdown::Write).unwrap();
+                passing = false;
+            }
+            match robot.read(&mut buffer) {
+                Ok(0) => return,
+                Err(e) if !matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => return,
+                // Still read once the drive no longer hears them, so that
+                // the emulator never blocks writing its SIPs.
+                Ok(n) if passing => drive.write_all(&buffer[..n]).unwrap(),
+                _ => {}
+            }
+        }
+    });
+    address
+}
+
+#[test]
+fn a_link_half_closed_at_speed_still_brakes_before_the_motors_go_off() {
+    // The drive reads the link's end 4 s in, at 1 m/s; its STOP and ENABLE 0
+    // still reach the robot, so ENABLE 0 must wait out the braking as after
+    // any STOP. It came 11 ms after STOP, at 240 mm/s, before.
+    let (mut emulator, upstream, mut out) = emulator();
+    let address = half_closing_proxy(&upstream, Duration::from_secs(4));
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    let fast = "Composite(arbiter: CommandFusion, children: [(behavior: GoTo(cruise_speed: 1.0))])";
+    let extra = "goal: (x: 40.0, y: 0.0), on_link_loss: Exit,";
+    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), extra, fast)).unwrap();
+    let drive = Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).output().unwrap();
+    let line = report_line(&mut out);
+    emulator.kill().unwrap();
+    let stderr = String::from_utf8_lossy(&drive.stderr);
+    assert_eq!(drive.status.code(), Some(1), "the link was lost: {stderr}");
+    let fastest = fastest_odometry_speed(&std::fs::read_to_string(dir.path().join("log.csv")).unwrap());
+    assert!(fastest > 0.9, "the robot was at speed when the link half-closed: {fastest} m/s");
+    let speed = field(&line, "speed_at_disable_mm_s").expect("ENABLE 0 arrived");
+    assert!(speed.abs() <= 20.0, "motors switched off at {speed} mm/s: {line}\n{stderr}");
+    assert!(stderr.contains("no sensor data after STOP; waited the"), "{stderr}");
+}
+
 #[test]
 fn a_second_interrupt_forces_the_exit_after_stop() {
     // Half a second into the 2 s of braking the first one started.

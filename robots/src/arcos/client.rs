@@ -494,42 +494,46 @@ impl ArcosRobot {
     /// ([`STOPPED_MM_S`]), or until the speed it had at STOP could have
     /// been braked away at the controller's deceleration plus the
     /// configured margin: STOP decelerates under power, while motors
-    /// switched off at speed let a 100 kg robot coast.
+    /// switched off at speed let a 100 kg robot coast. A link whose reading
+    /// side has ended (the other end half-closed it, or its bytes went bad)
+    /// may still carry STOP and ENABLE 0, so the wait is then served in
+    /// full, blind.
     fn wait_for_standstill(&self) {
         let asked = Instant::now();
-        let bound = {
+        let (bound, speed_at_stop) = {
             let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             let (v, w) = latest.sip.as_ref().map_or((0.0, 0.0), |sip| self.speeds(sip));
             let (decel, rot_decel) = self.decelerations();
-            self.standstill_wait + braking_time(v, decel).max(braking_time(w, rot_decel))
+            let bound = self.standstill_wait + braking_time(v, decel).max(braking_time(w, rot_decel));
+            (bound, latest.sip.as_ref().map(|_| v))
         };
+        let mut fresh_speed = None;
         while asked.elapsed() < bound {
             std::thread::sleep(Duration::from_millis(10));
             let latest = self.latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-            if latest.ended.is_some() {
-                return;
-            }
             let fresh = latest.arrived.is_some_and(|t| t > asked);
             if let (true, Some(sip)) = (fresh, &latest.sip) {
                 let (v, w) = self.speeds(sip);
                 if v.abs() <= STOPPED_MM_S && w.abs() <= STOPPED_DEG_S {
                     return;
                 }
+                fresh_speed = Some(v);
             }
         }
-        let speed = self
-            .latest
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .sip
-            .as_ref()
-            .map(|s| self.speeds(s).0);
-        tracing::warn!(
-            "{}: still at {:.0} mm/s {:.1} s after STOP; switching the motors off",
-            self.identity.name,
-            speed.unwrap_or(f64::NAN),
-            bound.as_secs_f64()
-        );
+        let name = &self.identity.name;
+        let waited = bound.as_secs_f64();
+        match (fresh_speed, speed_at_stop) {
+            (Some(v), _) => {
+                tracing::warn!("{name}: still at {v:.0} mm/s {waited:.1} s after STOP; switching the motors off")
+            }
+            (None, Some(v)) => tracing::warn!(
+                "{name}: no sensor data after STOP; waited the {waited:.1} s it needs to brake from {v:.0} mm/s \
+                 before switching the motors off"
+            ),
+            (None, None) => tracing::warn!(
+                "{name}: no sensor data ever came; waited {waited:.1} s after STOP before switching the motors off"
+            ),
+        }
     }
 
     /// The decelerations STOP brakes at, mm/s² and °/s²: those the session

@@ -2,7 +2,7 @@
 //! simulator at `host:8101`), behind one trait.
 
 use std::io::{self, Read, Write};
-use std::net::TcpStream;
+use std::net::{TcpStream, ToSocketAddrs};
 use std::time::Duration;
 
 /// How long a read waits before giving the caller a chance to do other
@@ -11,6 +11,12 @@ pub const READ_TIMEOUT: Duration = Duration::from_millis(20);
 
 /// Longest a write may wait for a peer that has stopped reading.
 pub const WRITE_TIMEOUT: Duration = Duration::from_millis(500);
+
+/// Longest a TCP connection may take to open. A robot on the local network
+/// answers in milliseconds; one that never answers (its queue full, the
+/// packets dropped) would otherwise hold the connect for two minutes, deaf
+/// to a stop.
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// A two-way byte link. Reads time out after [`READ_TIMEOUT`] with
 /// `TimedOut` or `WouldBlock`, which callers treat as "nothing yet".
@@ -77,7 +83,7 @@ pub fn is_timeout(e: &io::Error) -> bool {
 /// `baud`.
 pub fn open(address: &str, baud: u32) -> io::Result<Box<dyn Link>> {
     if let Some(host) = address.strip_prefix("tcp://") {
-        let stream = TcpStream::connect(host)?;
+        let stream = connect_tcp(host)?;
         stream.set_nodelay(true)?;
         stream.set_read_timeout(Some(READ_TIMEOUT))?;
         // A peer that stops reading must not hang a STOP on its way out.
@@ -85,6 +91,19 @@ pub fn open(address: &str, baud: u32) -> io::Result<Box<dyn Link>> {
         return Ok(Box::new(stream));
     }
     open_serial(address, baud)
+}
+
+/// Connects to `host` (`name:port`) at the first of its addresses that
+/// answers within [`CONNECT_TIMEOUT`].
+fn connect_tcp(host: &str) -> io::Result<TcpStream> {
+    let mut last = None;
+    for address in host.to_socket_addrs()? {
+        match TcpStream::connect_timeout(&address, CONNECT_TIMEOUT) {
+            Ok(stream) => return Ok(stream),
+            Err(e) => last = Some(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| io::Error::new(io::ErrorKind::NotFound, format!("{host}: no address"))))
 }
 
 #[cfg(unix)]
@@ -96,4 +115,25 @@ fn open_serial(path: &str, baud: u32) -> io::Result<Box<dyn Link>> {
 #[cfg(not(unix))]
 fn open_serial(path: &str, _baud: u32) -> io::Result<Box<dyn Link>> {
     Err(io::Error::other(format!("{path}: serial ports are supported on Unix only")))
+}
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_robot_that_never_answers_the_connection_is_given_up_on() {
+        // A listener whose one queued connection is taken: the next one's
+        // SYN goes unanswered, which a plain connect waits two minutes for.
+        let listener = socket2::Socket::new(socket2::Domain::IPV4, socket2::Type::STREAM, None).unwrap();
+        listener.bind(&std::net::SocketAddr::from(([127, 0, 0, 1], 0)).into()).unwrap();
+        listener.listen(0).unwrap();
+        let address = listener.local_addr().unwrap().as_socket().unwrap();
+        let _queued = TcpStream::connect(address).unwrap();
+        let asked = std::time::Instant::now();
+        let refused = open(&format!("tcp://{address}"), 0).map(drop).unwrap_err();
+        let took = asked.elapsed();
+        assert_eq!(refused.kind(), io::ErrorKind::TimedOut, "{refused}");
+        assert!(took < CONNECT_TIMEOUT * 3, "gave up after {took:?}");
+    }
 }

@@ -68,12 +68,12 @@ impl<'a> Reader<'a> {
     pub(super) fn i16(&mut self, what: &'static str) -> Result<i16, DecodeError> {
         Ok(self.u16(what)? as i16)
     }
-    /// A NUL-terminated string (lossy UTF-8).
+    /// A NUL-terminated string, as [`text`] reads it.
     pub(super) fn string(&mut self, what: &'static str) -> Result<String, DecodeError> {
         let rest = &self.bytes[self.at.min(self.bytes.len())..];
         let end = rest.iter().position(|&b| b == 0).ok_or(DecodeError::Truncated { what, needed: 1, got: 0 })?;
         self.at += end + 1;
-        Ok(String::from_utf8_lossy(&rest[..end]).into_owned())
+        Ok(text(&rest[..end]))
     }
     pub(super) fn remaining(&self) -> usize {
         self.bytes.len().saturating_sub(self.at)
@@ -90,4 +90,14 @@ impl<'a> Reader<'a> {
             None
         }
     }
+}
+
+/// A string from the robot, as it is shown on a terminal and in logs:
+/// lossy UTF-8, with control characters escaped (`\u{1b}`), which a
+/// terminal would obey and a log would take for a line of its own.
+pub(super) fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes)
+        .chars()
+        .flat_map(|c| if c.is_control() { c.escape_default().collect::<Vec<_>>() } else { vec![c] })
+        .collect()
 }

@@ -197,7 +197,7 @@ impl Identity {
     /// strings (a missing terminator ends at the body's end).
     pub fn parse(body: &[u8]) -> Result<Identity, DecodeError> {
         let rest = body.strip_prefix(&[2]).ok_or(DecodeError::Truncated { what: "SYNC2 echo", needed: 1, got: 0 })?;
-        let mut parts = rest.split(|&b| b == 0).map(|s| String::from_utf8_lossy(s).into_owned());
+        let mut parts = rest.split(|&b| b == 0).map(super::decode::text);
         let mut next = |what| parts.next().ok_or(DecodeError::Truncated { what, needed: 1, got: 0 });
         Ok(Identity { name: next("name")?, class: next("class")?, subclass: next("subclass")? })
     }
@@ -263,5 +263,12 @@ mod tests {
         let id = Identity { name: "AMRISim".into(), class: "Pioneer".into(), subclass: "powerbot".into() };
         assert_eq!(Identity::parse(&id.body()).unwrap(), id);
         assert!(Identity::parse(&[1, 0]).is_err());
+    }
+
+    #[test]
+    fn a_name_with_control_characters_is_read_escaped() {
+        // A terminal would clear itself; a log would show a forged line.
+        let body = b"\x02\x1b[2J\nerror: fake\0Pioneer\0powerbot\0";
+        assert_eq!(Identity::parse(body).unwrap().name, "\\u{1b}[2J\\nerror: fake");
     }
 }
