@@ -178,3 +178,50 @@ fn a_foxglove_client_watches_a_drive_live() {
     let status = wait_for(&mut drive, 60.0).expect("the drive ends at its goal");
     assert!(status.success(), "{status}");
 }
+
+/// Sends `count` WebSocket text messages of `text` to the live view at
+/// `url` (`ws://host:port`) as fast as the socket takes them, after the
+/// Foxglove handshake: a client that speaks the protocol badly.
+fn send_raw_messages(url: &str, text: &str, count: usize) {
+    use std::io::Write;
+    let address = url.trim_start_matches("ws://");
+    let mut socket = std::net::TcpStream::connect(address).unwrap();
+    let upgrade = format!(
+        "GET / HTTP/1.1\r\nHost: {address}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\
+         Sec-WebSocket-Protocol: foxglove.sdk.v1\r\n\r\n"
+    );
+    socket.write_all(upgrade.as_bytes()).unwrap();
+    let mut reply = BufReader::new(socket.try_clone().unwrap());
+    let mut status = String::new();
+    reply.read_line(&mut status).unwrap();
+    assert!(status.contains(" 101 "), "the view refused the handshake: {status}");
+    // A text frame, final, masked with a zero mask (a client's frames must
+    // be masked), its length in one byte.
+    assert!(text.len() < 126);
+    let mut frame = vec![0x81, 0x80 | text.len() as u8, 0, 0, 0, 0];
+    frame.extend_from_slice(text.as_bytes());
+    for _ in 0..count {
+        if socket.write_all(&frame).is_err() {
+            break; // dropped by the server: what it may do
+        }
+    }
+}
+
+#[test]
+fn a_client_sending_garbage_cannot_flood_the_log() {
+    // The server library says ERROR for every malformed message it reads:
+    // 160 lines in this test's second before the budget, 13 667 in five
+    // seconds from a client that kept sending.
+    let (run, url, mut err) = start_live(&["run", "scenarios/goto-open-floor.ron", "--live", "127.0.0.1:0"]);
+    let started = std::time::Instant::now();
+    send_raw_messages(&url, r#"{"op":"no such op"}"#, 2_000);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let seconds = started.elapsed().as_secs() + 1;
+    drop(run);
+    let mut rest = String::new();
+    err.read_to_string(&mut rest).unwrap();
+    let lines = rest.lines().filter(|l| l.contains("foxglove")).count() as u64;
+    assert!(lines > 0, "the client's messages were not seen: {rest}");
+    assert!(lines <= 10 * seconds, "{lines} lines in {seconds} s: {rest}");
+}

@@ -80,6 +80,13 @@ impl JsonChannels for LiveChannels {
     }
 }
 
+/// Messages held for a viewer that falls behind, after which its oldest
+/// are dropped (a viewer that stops reading its control messages is cut
+/// off). The library's 1024 held about 24 MB a stalled viewer with
+/// rendered images, and viewers are anyone who can reach the port; 256 is
+/// over a second of every topic at the view's 20 Hz.
+const VIEWER_BACKLOG: usize = 256;
+
 impl LiveServer {
     /// Serves the live view on `address` (port 0: a free port, which
     /// [`LiveServer::address`] tells), with `/report`'s schema named and
@@ -92,6 +99,7 @@ impl LiveServer {
         let server = WebSocketServer::new()
             .name(concat!("ubf ", env!("CARGO_PKG_VERSION")))
             .bind(address.ip().to_string(), address.port())
+            .message_backlog_size(VIEWER_BACKLOG)
             .context(&context)
             .start_blocking()
             .map_err(|e| fail(&e))?;

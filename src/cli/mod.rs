@@ -21,6 +21,7 @@ mod robot;
 mod run;
 mod shard;
 mod sweep;
+mod viewer_log;
 
 use crate::ros2_log::LogFormat;
 use clap::{Parser, Subcommand};
@@ -831,11 +832,20 @@ fn init_tracing(verbose: u8, quiet: bool) {
         (false, 2) => "debug",
         (false, _) => "trace",
     };
+    use tracing_subscriber::filter::{DynFilterFn, FilterExt};
+    use tracing_subscriber::layer::SubscriberExt;
+    use tracing_subscriber::util::SubscriberInitExt;
+    use tracing_subscriber::Layer;
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
+    // Counted only once the level lets a line through, and asked line by
+    // line (a plain `FilterFn` is asked once a call site).
+    let budget = DynFilterFn::new(|metadata, _| viewer_log::admit(metadata.target()))
+        .with_callsite_filter(|metadata| viewer_log::interest(metadata.target()));
+    let filter = filter.and(budget);
     use std::io::IsTerminal;
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
+    let layer = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
-        .try_init();
+        .with_filter(filter);
+    let _ = tracing_subscriber::registry().with(layer).try_init();
 }
