@@ -194,6 +194,69 @@ fn a_dead_robot_is_reported_not_waited_for() {
     assert!(state.sensor_age > 0.3, "and the state says its data is old: {}", state.sensor_age);
 }
 
+/// A TCP proxy to the emulator at `upstream` (`tcp://host:port`): its
+/// address. Once `armed` is set, it moves every SIP's x position on by
+/// 16 000 units (9.3 m on a Powerbot), as corrupt data would.
+fn jumping_proxy(upstream: &str, armed: Arc<AtomicBool>) -> String {
+    use std::io::Read;
+    use ubf_robots::arcos::codec::{frame, Sip, StreamDecoder};
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = format!("tcp://{}", listener.local_addr().unwrap());
+    let upstream = upstream.trim_start_matches("tcp://").to_owned();
+    std::thread::spawn(move || {
+        let (mut client, _) = listener.accept().unwrap();
+        let mut robot = std::net::TcpStream::connect(upstream).unwrap();
+        let (mut commands, mut to_robot) = (client.try_clone().unwrap(), robot.try_clone().unwrap());
+        std::thread::spawn(move || std::io::copy(&mut commands, &mut to_robot));
+        let mut decoder = StreamDecoder::new();
+        let mut buffer = [0u8; 4096];
+        while let Ok(n @ 1..) = robot.read(&mut buffer) {
+            decoder.push(&buffer[..n]);
+            while let Some(body) = decoder.next_body() {
+                let body = match Sip::parse(&body) {
+                    Ok(mut sip) if armed.load(Ordering::Relaxed) => {
+                        sip.xpos = sip.xpos.wrapping_add(16_000) & 0x7FFF;
+                        sip.body()
+                    }
+                    _ => body,
+                };
+                if client.write_all(&frame(&body)).is_err() {
+                    return;
+                }
+            }
+        }
+    });
+    address
+}
+
+#[test]
+fn odometry_that_jumps_further_than_any_robot_drives_ends_the_link() {
+    // Steered by, it drove the robot anywhere and could fake a goal reached;
+    // before, the client took it without a word.
+    let emulator = Emulator::tcp(RobotModel::powerbot());
+    let armed = Arc::new(AtomicBool::new(false));
+    let address = jumping_proxy(&emulator.address, Arc::clone(&armed));
+    let link = link::open(&address, 9600).unwrap();
+    let mut robot = ArcosRobot::connect(link, RobotModel::powerbot(), &ConnectOptions::default()).unwrap();
+    let mut state = State::default();
+    drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.5, &mut state);
+    armed.store(true, Ordering::Relaxed);
+    let mut failed = None;
+    for _ in 0..40 {
+        if let Err(e) = robot.sense(&mut state).and_then(|()| robot.act(&Command::Stop)) {
+            failed = Some(e);
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let failed = failed.expect("corrupt odometry must surface as an error");
+    assert!(failed.is_link_loss(), "{failed:?}");
+    assert!(failed.to_string().contains("the odometry jumped 9.32 m in"), "{failed}");
+    assert!(state.pose.x < 1.0, "the jump was never taken as the pose: {:?}", state.pose);
+    robot.shutdown().unwrap();
+    emulator.finish();
+}
+
 #[test]
 fn config_is_read_and_the_controllers_tops_bound_the_model() {
     let emulator = Emulator::tcp(RobotModel::powerbot());

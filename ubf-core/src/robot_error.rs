@@ -114,6 +114,15 @@ pub enum LinkLoss {
     /// reset.
     #[error("reading the link failed: {0}")]
     ReadFailed(std::io::ErrorKind),
+    /// The robot's odometry moved further between two readings than any
+    /// robot drives: its data are corrupt, whatever else the link says.
+    #[error("the odometry jumped {metres:.2} m in {seconds:.2} s, faster than any robot drives: its data are corrupt")]
+    ImpossibleMotion {
+        /// How far it jumped.
+        metres: f64,
+        /// Between readings this far apart.
+        seconds: f64,
+    },
     /// The robot did not answer the handshake.
     #[error("no handshake after {attempts} attempts")]
     NoHandshake {

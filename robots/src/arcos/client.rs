@@ -114,6 +114,8 @@ enum Ended {
     Closed,
     /// A read failed with this kind of error.
     Failed(io::ErrorKind),
+    /// The odometry jumped this far (m) between SIPs this far apart (s).
+    Jumped(f64, f64),
 }
 
 impl From<Ended> for LinkLoss {
@@ -121,6 +123,7 @@ impl From<Ended> for LinkLoss {
         match ended {
             Ended::Closed => LinkLoss::Closed,
             Ended::Failed(kind) => LinkLoss::ReadFailed(kind),
+            Ended::Jumped(metres, seconds) => LinkLoss::ImpossibleMotion { metres, seconds },
         }
     }
 }
@@ -374,7 +377,7 @@ impl ArcosRobot {
         let (stop, shared) = (Arc::clone(&stop_reader), Arc::clone(&latest));
         let reader = std::thread::Builder::new()
             .name("arcos-reader".into())
-            .spawn(move || read_sips(reader_link, &shared, &sonar_slot, &stop))
+            .spawn(move || read_sips(reader_link, &shared, &sonar_slot, model.arcos.dist_conv_factor, &stop))
             .map_err(RobotError::Io)?;
         let ranges = model
             .sonar
@@ -434,13 +437,32 @@ impl ArcosRobot {
     }
 }
 
+/// The fastest any robot on ARCOS drives, with room to spare (a Powerbot's
+/// top speed is 2 m/s), mm/s: odometry that moves faster between two SIPs
+/// is corrupt.
+const MOST_SPEED_MM_S: f64 = 5000.0;
+
+/// The time a SIP's motion is counted over at the least, s: SIPs that
+/// arrive bunched (a busy machine, a buffer flushed) each still carry a
+/// cycle's motion.
+const SIP_CYCLE_S: f64 = 0.1;
+
 /// The reader thread: packets into the shared latest reading, until told
 /// to stop or the link fails (then the reading is marked ended and the
 /// robot sees a disconnection). Every SIP goes through the unwrapper here,
-/// or a wrap between two ticks would be missed.
-fn read_sips(mut link: Box<dyn Link>, latest: &Mutex<Latest>, sonar_slot: &[Option<usize>; 256], stop: &AtomicBool) {
+/// or a wrap between two ticks would be missed. Odometry that jumps
+/// further than [`MOST_SPEED_MM_S`] allows ends the link as well: steering
+/// by it would drive the robot anywhere, and fake a goal reached.
+fn read_sips(
+    mut link: Box<dyn Link>,
+    latest: &Mutex<Latest>,
+    sonar_slot: &[Option<usize>; 256],
+    mm_per_unit: f64,
+    stop: &AtomicBool,
+) {
     let mut decoder = StreamDecoder::new();
     let mut unwrapper = Unwrapper::default();
+    let mut last: Option<((i64, i64), Instant)> = None;
     let mut buffer = [0u8; 512];
     let end = |latest: &Mutex<Latest>, how| {
         latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner).ended = Some(how);
@@ -455,6 +477,15 @@ fn read_sips(mut link: Box<dyn Link>, latest: &Mutex<Latest>, sonar_slot: &[Opti
         while let Some(body) = decoder.next_body() {
             let Ok(mut sip) = Sip::parse(&body) else { continue };
             let position = unwrapper.update(sip.xpos, sip.ypos);
+            let now = Instant::now();
+            if let Some(((x, y), at)) = last {
+                let moved_mm = ((position.0 - x) as f64).hypot((position.1 - y) as f64) * mm_per_unit;
+                let seconds = now.duration_since(at).as_secs_f64();
+                if moved_mm > MOST_SPEED_MM_S * seconds.max(SIP_CYCLE_S) {
+                    return end(latest, Ended::Jumped(moved_mm / 1000.0, seconds));
+                }
+            }
+            last = Some((position, now));
             let mut shared = latest.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
             for (channel, range) in std::mem::take(&mut sip.sonar) {
                 if let Some(slot) = sonar_slot[usize::from(channel)] {
@@ -463,7 +494,7 @@ fn read_sips(mut link: Box<dyn Link>, latest: &Mutex<Latest>, sonar_slot: &[Opti
             }
             shared.sip = Some(sip);
             shared.position = position;
-            shared.arrived = Some(Instant::now());
+            shared.arrived = Some(now);
         }
     }
 }
