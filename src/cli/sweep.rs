@@ -91,10 +91,12 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
             let total = items.len() * (seeds.end - seeds.start) as usize;
             let runs = (0..total).filter(|&t| shard.takes(t)).count();
             println!(
-                "shard {}/{}: {runs} runs in {:.2} s on {jobs} job(s); {} failed",
+                "shard {}/{}: {} in {:.2} s on {}; {} failed",
                 shard.index,
                 shard.count,
+                counted(runs, "run"),
                 stopwatch.elapsed_s(),
+                counted(jobs, "job"),
                 record.failed.len()
             );
             println!(
@@ -111,11 +113,13 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
             let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
             let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
             println!(
-                "{runs} runs of {} scenario(s) × seeds {}..{} in {:.2} s on {jobs} job(s); {failed} failed",
-                items.len(),
+                "{} of {} × seeds {}..{} in {:.2} s on {}; {failed} failed",
+                counted(runs, "run"),
+                counted(items.len(), "scenario"),
                 seeds.start,
                 seeds.end,
-                stopwatch.elapsed_s()
+                stopwatch.elapsed_s(),
+                counted(jobs, "job")
             );
             println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
             let by_scenario = summary.scenarios.iter();
@@ -187,7 +191,7 @@ pub(super) fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Outcome {
     })?;
     let runs: usize = summary.scenarios.values().map(|s| s.runs).sum();
     let failed: usize = summary.scenarios.values().map(|s| s.failed.len()).sum();
-    println!("merged {runs} runs of {} scenario(s); {failed} failed", summary.scenarios.len());
+    println!("merged {} of {}; {failed} failed", counted(runs, "run"), counted(summary.scenarios.len(), "scenario"));
     println!("summary: {}/summary.csv, {}/summary.json", out.display(), out.display());
     Ok(Exit::Success)
 }
@@ -265,6 +269,11 @@ pub struct LayoutSeeds(pub Vec<u64>);
 const MOST_JOBS: usize = 1024;
 
 /// Parses a number of jobs, 1 to [`MOST_JOBS`].
+/// `n` and `noun`, plural unless one: "1 run", "12 runs".
+fn counted(n: usize, noun: &str) -> String {
+    format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
+}
+
 pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("at least one job is needed".into()),

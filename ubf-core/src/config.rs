@@ -47,10 +47,34 @@ impl From<ron::error::SpannedError> for RonError {
             text if text.starts_with("Exceeded recursion limit") => {
                 "nested too deeply: a behaviour tree may be at most 15 composites deep".to_owned()
             }
-            text => text,
+            text => match misspelt(&text) {
+                Some(meant) => format!("{text}; did you mean `{meant}`?"),
+                None => text,
+            },
         };
         RonError { line: e.span.start.line, column: e.span.start.col, message }
     }
+}
+
+/// What the parser's "Unexpected field named `cruise_sped`, expected one of
+/// `cruise_speed`, …" (or variant) most likely meant, if one name is close.
+fn misspelt(message: &str) -> Option<&str> {
+    let found = message.strip_prefix("Unexpected ")?.split_once("named `")?.1.split('`').next()?;
+    let expected = message.split_once(", expected ")?.1;
+    let known = expected.split('`').skip(1).step_by(2);
+    nearest(found, known)
+}
+
+/// The name in `known` that `found` most likely misspells, if one is close
+/// (as a person would mistype it: a letter dropped, swapped or in the
+/// wrong case).
+pub fn nearest<'a>(found: &str, known: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    known
+        .into_iter()
+        .map(|name| (strsim::jaro_winkler(&found.to_lowercase(), &name.to_lowercase()), name))
+        .filter(|(likeness, _)| *likeness > 0.85)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, name)| name)
 }
 
 /// The most bytes a settings file (a scenario, a robot or model file, a
@@ -469,6 +493,17 @@ mod tests {
         assert_eq!(field_position("Scenario(robot: (start: 1), world: (x: 1))", &["robot", "x"]), Some((1, 10)));
         assert_eq!(field_position(text, &["seed"]), None);
         assert_eq!(field_position(text, &["start"]), None);
+    }
+
+    #[test]
+    fn a_misspelt_name_is_matched_and_a_strange_one_is_not() {
+        let field = "Unexpected field named `cruise_sped`, expected one of `cruise_speed`, `turn_gain` instead";
+        assert_eq!(misspelt(field), Some("cruise_speed"));
+        let variant = "Unexpected enum variant named `HighestPrority`, expected one of `HighestPriority`, `MonteCarlo`";
+        assert_eq!(misspelt(variant), Some("HighestPriority"));
+        assert_eq!(misspelt("Unexpected field named `zzz`, expected one of `cruise_speed`, `vote` instead"), None);
+        assert_eq!(nearest("GoTO", ["Stop", "GoTo", "SweepCamera"]), Some("GoTo"));
+        assert_eq!(nearest("Wander", ["Stop", "GoTo", "SweepCamera"]), None);
     }
 
     #[test]

@@ -203,7 +203,9 @@ impl<'de> Visitor<'de> for SpecVisitor {
             None => Err(de::Error::custom("behaviour trees must be read through Registry::from_ron")),
             Some(registry) => registry.entries.get(&kind).map(|e| Arc::clone(&e.parser)).ok_or_else(|| {
                 let known: Vec<&str> = registry.names().collect();
-                de::Error::custom(format!("unknown behaviour `{kind}`; known behaviours: {}", known.join(", ")))
+                let meant = config::nearest(&kind, known.iter().copied())
+                    .map_or(String::new(), |name| format!(" (did you mean `{name}`?)"));
+                de::Error::custom(format!("unknown behaviour `{kind}`{meant}; known behaviours: {}", known.join(", ")))
             }),
         })?;
         let factory = variant.newtype_variant_seed(ConfigSeed(parser.as_ref()))?;
