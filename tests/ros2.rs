@@ -266,6 +266,31 @@ fn odometry_that_stops_coming_stops_the_robot_at_once() {
 }
 
 #[test]
+fn odometry_that_jumps_further_than_any_robot_drives_stops_the_robot() {
+    // Steered by, it once drove the robot 6 m past its goal without a word.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--odom-jump-after 1", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    assert!(stderr(&session).contains("the odometry jumped 100.0"), "{}", stderr(&session));
+    assert!(session.twists.iter().any(|t| !is_zero(&t["twist"])), "it drove before the jump");
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
+fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
+    // Taken as open space, it let the robot drive through a wall.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--scan --wall-x 10 --scan-nan-after 1", &file, None) else {
+        return;
+    };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    assert!(stderr(&session).contains("the scan on /scan: all of its"), "{}", stderr(&session));
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
 fn sigterm_leaves_the_robot_with_a_zero_twist() {
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 20.0, "");

@@ -72,6 +72,11 @@ def main():
     parser.add_argument("--wall-x", type=float, help="x of a wall (odom frame) that the scan sees")
     parser.add_argument("--stop-odom-after", type=float, metavar="S",
                         help="stop publishing odometry S seconds after the robot first moved")
+    parser.add_argument("--odom-jump-after", type=float, metavar="S",
+                        help="S seconds after the robot first moved, put its odometry 100 m further on in x, "
+                             "as corrupt data would")
+    parser.add_argument("--scan-nan-after", type=float, metavar="S",
+                        help="S seconds after the robot first moved, publish scans whose every beam is NaN")
     parser.add_argument("--odom-best-effort", action="store_true",
                         help="publish /odom best effort, as some drivers do (a reliable reader then hears nothing)")
     parser.add_argument("--record", metavar="FILE", help="write received Twists and a summary as JSON lines")
@@ -127,7 +132,9 @@ def main():
         header = Header(stamp=stamp(), frame_id="odom")
         if args.stop_odom_after is None or moved_at is None or now - moved_at < args.stop_odom_after:
             odom = Odometry(header=header, child_frame_id="base_link")
-            odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
+            jumped = args.odom_jump_after is not None and moved_at is not None \
+                and now - moved_at >= args.odom_jump_after
+            odom.pose.pose.position.x, odom.pose.pose.position.y = x + (100.0 if jumped else 0.0), y
             odom.pose.pose.orientation = Quaternion(z=math.sin(theta / 2), w=math.cos(theta / 2))
             odom.twist.twist = command
             odom_writer.write(odom)
@@ -138,7 +145,8 @@ def main():
                 angle_min=-math.pi, angle_max=math.pi - 2 * math.pi / BEAMS,
                 angle_increment=2 * math.pi / BEAMS, scan_time=period,
                 range_min=RANGE_MIN, range_max=RANGE_MAX,
-                ranges=scan_ranges(x, y, theta, args.wall_x)))
+                ranges=[math.nan] * BEAMS if args.scan_nan_after is not None and moved_at is not None
+                and now - moved_at >= args.scan_nan_after else scan_ranges(x, y, theta, args.wall_x)))
 
     if record:
         summary = {"pose": {"x": x, "y": y, "theta": theta},

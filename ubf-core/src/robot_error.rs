@@ -82,6 +82,26 @@ impl RobotError {
     }
 }
 
+/// The fastest any ground robot this drives moves, with room to spare
+/// (a Powerbot's top speed is 2 m/s), m/s.
+const MOST_ROBOT_SPEED_M_S: f64 = 5.0;
+
+/// The least time a reading's motion is counted over, s: readings that
+/// arrive bunched (a busy machine, a buffer flushed) each still carry a
+/// cycle's motion.
+const LEAST_READING_GAP_S: f64 = 0.1;
+
+impl LinkLoss {
+    /// The odometry's move of `metres` between readings `seconds` apart,
+    /// if it is further than any robot drives ([`LinkLoss::ImpossibleMotion`]):
+    /// steered by, such data would drive the robot anywhere, or fake a goal
+    /// reached.
+    pub fn impossible_motion(metres: f64, seconds: f64) -> Option<LinkLoss> {
+        let possible = metres <= MOST_ROBOT_SPEED_M_S * seconds.max(LEAST_READING_GAP_S);
+        (!possible).then_some(LinkLoss::ImpossibleMotion { metres, seconds })
+    }
+}
+
 impl From<LinkLoss> for RobotError {
     fn from(reason: LinkLoss) -> Self {
         RobotError::Disconnected { reason }

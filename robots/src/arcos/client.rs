@@ -437,22 +437,12 @@ impl ArcosRobot {
     }
 }
 
-/// The fastest any robot on ARCOS drives, with room to spare (a Powerbot's
-/// top speed is 2 m/s), mm/s: odometry that moves faster between two SIPs
-/// is corrupt.
-const MOST_SPEED_MM_S: f64 = 5000.0;
-
-/// The time a SIP's motion is counted over at the least, s: SIPs that
-/// arrive bunched (a busy machine, a buffer flushed) each still carry a
-/// cycle's motion.
-const SIP_CYCLE_S: f64 = 0.1;
-
 /// The reader thread: packets into the shared latest reading, until told
 /// to stop or the link fails (then the reading is marked ended and the
 /// robot sees a disconnection). Every SIP goes through the unwrapper here,
 /// or a wrap between two ticks would be missed. Odometry that jumps
-/// further than [`MOST_SPEED_MM_S`] allows ends the link as well: steering
-/// by it would drive the robot anywhere, and fake a goal reached.
+/// further than any robot drives ends the link as well
+/// ([`LinkLoss::impossible_motion`]).
 fn read_sips(
     mut link: Box<dyn Link>,
     latest: &Mutex<Latest>,
@@ -479,10 +469,10 @@ fn read_sips(
             let position = unwrapper.update(sip.xpos, sip.ypos);
             let now = Instant::now();
             if let Some(((x, y), at)) = last {
-                let moved_mm = ((position.0 - x) as f64).hypot((position.1 - y) as f64) * mm_per_unit;
+                let metres = ((position.0 - x) as f64).hypot((position.1 - y) as f64) * mm_per_unit / 1000.0;
                 let seconds = now.duration_since(at).as_secs_f64();
-                if moved_mm > MOST_SPEED_MM_S * seconds.max(SIP_CYCLE_S) {
-                    return end(latest, Ended::Jumped(moved_mm / 1000.0, seconds));
+                if LinkLoss::impossible_motion(metres, seconds).is_some() {
+                    return end(latest, Ended::Jumped(metres, seconds));
                 }
             }
             last = Some((position, now));

@@ -158,6 +158,37 @@ pub struct Pose {
 }
 
 impl Pose {
+    /// Why the pose is no pose, if it is not: a position not finite, or an
+    /// orientation that is no rotation (its norm far from 1: all zeros from
+    /// a driver that never fills it, or numbers not normalised, whose yaw
+    /// means nothing).
+    pub fn why_unusable(&self) -> Option<String> {
+        let shown = ubf_core::config::shown;
+        let Point { x, y, z } = self.position;
+        if ![x, y, z].iter().all(|v| v.is_finite()) {
+            return Some(format!("its position ({}, {}, {}) is not finite", shown(x), shown(y), shown(z)));
+        }
+        let Quaternion { x, y, z, w } = self.orientation;
+        let norm = (x * x + y * y + z * z + w * w).sqrt();
+        if !((1.0 - ROTATION_NORM_SLACK)..=(1.0 + ROTATION_NORM_SLACK)).contains(&norm) {
+            return Some(format!(
+                "its orientation ({}, {}, {}, {}) is no rotation (its norm is {}, not 1)",
+                shown(x),
+                shown(y),
+                shown(z),
+                shown(w),
+                shown(norm)
+            ));
+        }
+        None
+    }
+}
+
+/// How far from 1 a quaternion's norm may be and it still be taken as a
+/// rotation: drivers' arithmetic in single precision is well within it.
+const ROTATION_NORM_SLACK: f64 = 0.1;
+
+impl Pose {
     /// A planar pose.
     pub fn planar(pose: &Pose2) -> Pose {
         Pose { position: Point { x: pose.x, y: pose.y, z: 0.0 }, orientation: Quaternion::from_yaw(pose.theta) }
@@ -240,6 +271,36 @@ pub struct LaserScan {
     pub intensities: Vec<f32>,
 }
 ros_message!(LaserScan, "sensor_msgs/msg/LaserScan", "sensor_msgs__LaserScan.msg");
+
+impl LaserScan {
+    /// Why the scan says nothing about where obstacles are, if it does not:
+    /// beams whose directions cannot be told, a valid span that is empty,
+    /// no beams, or every beam invalid (NaN, by REP 117). Taken as open
+    /// space, such a scan would let the robot drive into what it misses.
+    pub fn why_unusable(&self) -> Option<String> {
+        let shown = |v: f32| ubf_core::config::shown(f64::from(v));
+        let geometry = [self.angle_min, self.angle_increment, self.range_min, self.range_max];
+        if !geometry.iter().all(|v| v.is_finite()) {
+            return Some(format!(
+                "angle_min {}, angle_increment {}, range_min {}, range_max {}: not all finite",
+                shown(self.angle_min),
+                shown(self.angle_increment),
+                shown(self.range_min),
+                shown(self.range_max)
+            ));
+        }
+        if self.range_min > self.range_max {
+            return Some(format!("range_min {} is beyond range_max {}", shown(self.range_min), shown(self.range_max)));
+        }
+        if self.ranges.is_empty() {
+            return Some("it has no beams".into());
+        }
+        if self.ranges.iter().all(|r| r.is_nan()) {
+            return Some(format!("all of its {} beams are NaN (invalid)", self.ranges.len()));
+        }
+        None
+    }
+}
 
 /// `geometry_msgs/msg/PoseStamped`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -387,6 +448,39 @@ mod tests {
         for yaw in [-3.0, -1.0, 0.0, 0.5, 3.1] {
             assert!((Quaternion::from_yaw(yaw).yaw() - yaw).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_pose_that_is_no_pose_is_named() {
+        let good = Pose { position: Point { x: 1.0, y: 2.0, z: 0.0 }, orientation: Quaternion::from_yaw(0.7) };
+        assert_eq!(good.why_unusable(), None);
+        let far = Pose { position: Point { x: f64::NAN, ..good.position }, ..good };
+        assert_eq!(far.why_unusable().unwrap(), "its position (NaN, 2, 0) is not finite");
+        let unfilled = Pose { orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 0.0 }, ..good };
+        assert!(unfilled.why_unusable().unwrap().contains("is no rotation (its norm is 0, not 1)"));
+        let unnormalised = Pose { orientation: Quaternion { x: 3.0, y: -7.0, z: 0.0, w: 1.0 }, ..good };
+        assert!(unnormalised.why_unusable().is_some());
+    }
+
+    #[test]
+    fn a_scan_that_says_nothing_of_obstacles_is_named() {
+        let good = LaserScan {
+            angle_min: -1.0,
+            angle_increment: 0.1,
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges: vec![1.0, f32::NAN, f32::INFINITY],
+            ..LaserScan::default()
+        };
+        assert_eq!(good.why_unusable(), None);
+        let nan_angles = LaserScan { angle_increment: f32::NAN, ..good.clone() };
+        assert!(nan_angles.why_unusable().unwrap().contains("not all finite"));
+        let inverted = LaserScan { range_min: 20.0, ..good.clone() };
+        assert_eq!(inverted.why_unusable().unwrap(), "range_min 20 is beyond range_max 10");
+        let empty = LaserScan { ranges: vec![], ..good.clone() };
+        assert_eq!(empty.why_unusable().unwrap(), "it has no beams");
+        let blind = LaserScan { ranges: vec![f32::NAN; 3], ..good };
+        assert_eq!(blind.why_unusable().unwrap(), "all of its 3 beams are NaN (invalid)");
     }
 
     #[test]

@@ -105,6 +105,7 @@ impl Ros2Robot {
         let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
         let first = loop {
             if let Some(odometry) = odom.take_latest()? {
+                usable_odometry(&odometry, &node.resolve(&config.odom))?;
                 break odometry;
             }
             if Instant::now() >= deadline {
@@ -228,6 +229,15 @@ impl EmergencyStop for Ros2EmergencyStop {
     }
 }
 
+/// Refuses odometry that is no pose (on `topic`), which steered by would
+/// send the robot anywhere.
+fn usable_odometry(odometry: &Odometry, topic: &str) -> Result<(), RobotError> {
+    match odometry.pose.pose.why_unusable() {
+        Some(why) => Err(RobotError::Protocol { what: format!("the odometry on {topic}"), source: why.into() }),
+        None => Ok(()),
+    }
+}
+
 /// A scan's beams as range readings from the robot's centre (the scanner's
 /// offset from `base_link` is not looked up).
 fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
@@ -248,6 +258,14 @@ impl Robot for Ros2Robot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let now = Instant::now();
         if let Some(odometry) = self.odom.take_latest()? {
+            let topic = self.node.resolve(&self.config.odom);
+            usable_odometry(&odometry, &topic)?;
+            let (last, at) = &self.latest_odom;
+            let (from, to) = (last.pose.pose.position, odometry.pose.pose.position);
+            let metres = (to.x - from.x).hypot(to.y - from.y);
+            if let Some(jump) = LinkLoss::impossible_motion(metres, (now - *at).as_secs_f64()) {
+                return Err(jump.into());
+            }
             self.latest_odom = (odometry, now);
         }
         let age = now - self.latest_odom.1;
@@ -256,6 +274,10 @@ impl Robot for Ros2Robot {
             return Err(self.lost("odometry", &topic, age));
         }
         if let Some(scan) = self.scan.take_latest()? {
+            if let Some(why) = scan.why_unusable() {
+                let what = format!("the scan on {}", self.node.resolve(&self.config.scan));
+                return Err(RobotError::Protocol { what, source: why.into() });
+            }
             self.latest_scan = Some((scan, now));
         }
         match &self.latest_scan {
