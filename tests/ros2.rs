@@ -278,6 +278,18 @@ fn odometry_that_jumps_further_than_any_robot_drives_stops_the_robot() {
 }
 
 #[test]
+fn a_second_odometry_publisher_stops_the_robot() {
+    // The reader kept one writer's messages, and a stray one at x = -10 m
+    // once took over and spun the robot round.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--second-odom-after 1", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    assert!(stderr(&session).contains("/odom: two writers publish on it at once"), "{}", stderr(&session));
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
 fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
     // Taken as open space, it let the robot drive through a wall.
     let dir = tempfile::tempdir().unwrap();

@@ -75,6 +75,9 @@ def main():
     parser.add_argument("--odom-jump-after", type=float, metavar="S",
                         help="S seconds after the robot first moved, put its odometry 100 m further on in x, "
                              "as corrupt data would")
+    parser.add_argument("--second-odom-after", type=float, metavar="S",
+                        help="S seconds after the robot first moved, publish a second odometry on /odom from "
+                             "another writer, at x = -10 m, as a stray driver would")
     parser.add_argument("--scan-nan-after", type=float, metavar="S",
                         help="S seconds after the robot first moved, publish scans whose every beam is NaN")
     parser.add_argument("--odom-best-effort", action="store_true",
@@ -90,6 +93,8 @@ def main():
     cmd_reader = DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), Twist), qos())
     odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
                              qos(sensor_data=args.odom_best_effort))
+    second_odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
+                                    qos()) if args.second_odom_after is not None else None
     scan_writer = DataWriter(participant, Topic(participant, ros_topic("scan", args.namespace), LaserScan),
                              qos(sensor_data=True)) if args.scan else None
     waitset = WaitSet(participant)
@@ -139,6 +144,11 @@ def main():
             odom.twist.twist = command
             odom_writer.write(odom)
             odom_at = time.monotonic()
+        if second_odom_writer and moved_at is not None and now - moved_at >= args.second_odom_after:
+            stray = Odometry(header=header, child_frame_id="base_link")
+            stray.pose.pose.position.x = -10.0
+            stray.pose.pose.orientation = Quaternion(z=0.0, w=1.0)
+            second_odom_writer.write(stray)
         if scan_writer:
             scan_writer.write(LaserScan(
                 header=Header(stamp=header.stamp, frame_id="base_link"),

@@ -85,16 +85,36 @@ impl<M: RosMessage> Publisher<M> {
 pub struct Subscription<M: RosMessage> {
     reader: DataReaderCdr<M>,
     name: String,
+    /// The writer of the last message taken, and when it was taken.
+    last_writer: Option<(rustdds::GUID, std::time::Instant)>,
 }
+
+/// How long after a writer's last message another writer's is taken as a
+/// second source, not as the first one's successor (a driver restarted).
+const OTHER_WRITER_WITHIN: std::time::Duration = std::time::Duration::from_secs(1);
 
 impl<M: RosMessage> Subscription<M> {
     /// The newest message that came since the last call, if any (older
-    /// ones are taken and dropped: a controller wants the latest).
+    /// ones are taken and dropped: a controller wants the latest). Two
+    /// writers publishing on the topic at once are an error: which one is
+    /// the robot cannot be told, and the reader would keep either one's
+    /// messages (a second odometry publisher once steered the robot).
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
         let mut latest = None;
         loop {
             match self.reader.take_next_sample() {
-                Ok(Some(sample)) => latest = Some(sample.into_value()),
+                Ok(Some(sample)) => {
+                    let (writer, now) = (sample.sample_info().writer_guid(), std::time::Instant::now());
+                    if let Some((last, at)) = self.last_writer {
+                        if last != writer && now - at < OTHER_WRITER_WITHIN {
+                            let why = "two writers publish on it at once: which one is the robot cannot be told; \
+                                       stop the other";
+                            return Err(RobotError::Protocol { what: self.name.clone(), source: why.into() });
+                        }
+                    }
+                    self.last_writer = Some((writer, now));
+                    latest = Some(sample.into_value());
+                }
                 Ok(None) => return Ok(latest),
                 Err(e) => {
                     return Err(RobotError::Protocol {
@@ -206,7 +226,7 @@ impl Node {
         let topic = self.topic::<M>(name, qos)?;
         let name = self.resolve(name);
         match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies())) {
-            Ok(reader) => Ok(Subscription { reader, name }),
+            Ok(reader) => Ok(Subscription { reader, name, last_writer: None }),
             Err(e) => Err(setup(format!("subscribing {name}"), e)),
         }
     }
