@@ -22,6 +22,7 @@ fn root() -> &'static Path {
 fn start_live(args: &[&str]) -> (Killed, String, BufReader<ChildStderr>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_ubf"))
         .args(args)
+        .env_remove("RUST_LOG")
         .current_dir(root())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

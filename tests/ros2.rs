@@ -291,7 +291,8 @@ fn a_second_odometry_publisher_stops_the_robot() {
 
 #[test]
 fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
-    // Taken as open space, it let the robot drive through a wall.
+    // Taken as open space, it let the robot drive through a wall. It is
+    // taken as no scan, so the robot stops as for a silent scanner.
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 20.0, "");
     let Some(session) = drive_beside_robot(dir.path(), "--scan --wall-x 10 --scan-nan-after 1", &file, None) else {
@@ -299,6 +300,7 @@ fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
     };
     assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
     assert!(stderr(&session).contains("the scan on /scan: all of its"), "{}", stderr(&session));
+    assert!(stderr(&session).contains("no usable scan on /scan for"), "{}", stderr(&session));
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
 }
 

@@ -19,7 +19,7 @@
 
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
-use ubf_core::config::{checked, RonError};
+use ubf_core::config::{checked, shown, RonError};
 use ubf_core::{BehaviorSpec, Goal, OnBehaviorPanic, ProgressCheck, Registry};
 use ubf_robots::sim::{SimRobotConfig, WorldConfig};
 
@@ -185,7 +185,8 @@ impl Scenario {
                 format!(
                     "robot.start: at ({}, {}) the robot's outline overlaps a wall, a box or a person; \
                  a corridor runs from x = 0, so start it at least a metre in",
-                    start.x, start.y
+                    shown(start.x),
+                    shown(start.y)
                 ),
             );
         }
@@ -197,10 +198,10 @@ impl Scenario {
                     format!(
                         "goal: ({}, {}) lies outside the corridor (x from 0 to {}, y within ±{}); the robot could \
                      never reach it",
-                        goal.x,
-                        goal.y,
-                        corridor.length,
-                        corridor.width / 2.0
+                        shown(goal.x),
+                        shown(goal.y),
+                        shown(corridor.length),
+                        shown(corridor.width / 2.0)
                     ),
                 );
             }

@@ -268,12 +268,12 @@ pub struct LayoutSeeds(pub Vec<u64>);
 /// cores only costs memory.
 const MOST_JOBS: usize = 1024;
 
-/// Parses a number of jobs, 1 to [`MOST_JOBS`].
 /// `n` and `noun`, plural unless one: "1 run", "12 runs".
 fn counted(n: usize, noun: &str) -> String {
     format!("{n} {noun}{}", if n == 1 { "" } else { "s" })
 }
 
+/// Parses a number of jobs, 1 to [`MOST_JOBS`].
 pub(super) fn parse_jobs(text: &str) -> Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("at least one job is needed".into()),

@@ -167,8 +167,13 @@ pub fn utf8_text(bytes: Vec<u8>) -> Result<String, RonError> {
 /// 1-based line and column; where a field on the path is not written (it
 /// took its default), the last one that is; `None` if not even the first
 /// is. For errors about a document that parsed, so that they point where
-/// its reader should look.
+/// its reader should look. (Raw strings are not followed, and a field
+/// inside `Some((..))` is found as its parent: both fall back, never
+/// mislead.)
 pub fn field_position(text: &str, path: &[&str]) -> Option<(usize, usize)> {
+    if path.is_empty() {
+        return None;
+    }
     let mut found: Option<(usize, usize)> = None;
     // The depth the next field on the path is written at: the top-level
     // struct's fields are at depth 1.

@@ -88,8 +88,10 @@ const MOST_ROBOT_SPEED_M_S: f64 = 5.0;
 
 /// The least time a reading's motion is counted over, s: readings that
 /// arrive bunched (a busy machine, a buffer flushed) each still carry a
-/// cycle's motion.
-const LEAST_READING_GAP_S: f64 = 0.1;
+/// cycle's motion (0.1 s on ARCOS), and a reading or two lost between them
+/// (a checksum failed) carried theirs. Still short enough to catch a jump
+/// of metres.
+const LEAST_READING_GAP_S: f64 = 0.3;
 
 impl LinkLoss {
     /// The odometry's move of `metres` between readings `seconds` apart,

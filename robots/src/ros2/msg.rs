@@ -57,6 +57,11 @@ impl Time {
         let sec = seconds.floor();
         Time { sec: sec.min(i32::MAX as f64) as i32, nanosec: (((seconds - sec) * 1e9) as u32).min(999_999_999) }
     }
+
+    /// The time in seconds.
+    pub fn seconds(&self) -> f64 {
+        f64::from(self.sec) + f64::from(self.nanosec) * 1e-9
+    }
 }
 
 /// `std_msgs/msg/Header`.

@@ -85,8 +85,9 @@ impl<M: RosMessage> Publisher<M> {
 pub struct Subscription<M: RosMessage> {
     reader: DataReaderCdr<M>,
     name: String,
-    /// The writer of the last message taken, and when it was taken.
-    last_writer: Option<(rustdds::GUID, std::time::Instant)>,
+    /// The writer of the last message taken, and when it was taken, where
+    /// the topic must have one writer only ([`Subscription::single_writer`]).
+    last_writer: Option<Option<(rustdds::GUID, std::time::Instant)>>,
 }
 
 /// How long after a writer's last message another writer's is taken as a
@@ -94,25 +95,34 @@ pub struct Subscription<M: RosMessage> {
 const OTHER_WRITER_WITHIN: std::time::Duration = std::time::Duration::from_secs(1);
 
 impl<M: RosMessage> Subscription<M> {
+    /// This subscription, for a topic only one writer may publish on (a
+    /// robot's odometry and scan, not the commands several may send): two
+    /// writers at once are then an error from [`Subscription::take_latest`],
+    /// as which one is the robot cannot be told, and the reader would keep
+    /// either one's messages (a stray odometry once steered the robot).
+    pub fn single_writer(mut self) -> Self {
+        self.last_writer = Some(None);
+        self
+    }
+
     /// The newest message that came since the last call, if any (older
-    /// ones are taken and dropped: a controller wants the latest). Two
-    /// writers publishing on the topic at once are an error: which one is
-    /// the robot cannot be told, and the reader would keep either one's
-    /// messages (a second odometry publisher once steered the robot).
+    /// ones are taken and dropped: a controller wants the latest).
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
         let mut latest = None;
         loop {
             match self.reader.take_next_sample() {
                 Ok(Some(sample)) => {
-                    let (writer, now) = (sample.sample_info().writer_guid(), std::time::Instant::now());
-                    if let Some((last, at)) = self.last_writer {
-                        if last != writer && now - at < OTHER_WRITER_WITHIN {
-                            let why = "two writers publish on it at once: which one is the robot cannot be told; \
-                                       stop the other";
-                            return Err(RobotError::Protocol { what: self.name.clone(), source: why.into() });
+                    if let Some(last_writer) = &mut self.last_writer {
+                        let (writer, now) = (sample.sample_info().writer_guid(), std::time::Instant::now());
+                        if let Some((last, at)) = *last_writer {
+                            if last != writer && now - at < OTHER_WRITER_WITHIN {
+                                let why = "two writers publish on it at once: which one is the robot cannot be \
+                                           told; stop the other";
+                                return Err(RobotError::Protocol { what: self.name.clone(), source: why.into() });
+                            }
                         }
+                        *last_writer = Some((writer, now));
                     }
-                    self.last_writer = Some((writer, now));
                     latest = Some(sample.into_value());
                 }
                 Ok(None) => return Ok(latest),

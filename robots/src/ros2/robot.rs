@@ -84,6 +84,10 @@ pub struct Ros2Robot {
     origin: Pose2,
     latest_odom: (Odometry, Instant),
     latest_scan: Option<(LaserScan, Instant)>,
+    /// Why the scans have said nothing of obstacles, since when: each is
+    /// taken as no scan, so that the robot stops as for a silent scanner
+    /// if no usable one follows.
+    unusable_scans: Option<(String, Instant)>,
     stopped: bool,
     /// Last, so that it is dropped after its readers and writer.
     node: Node,
@@ -100,8 +104,8 @@ impl Ros2Robot {
         };
         let mut node = Node::join(domain, &config.namespace)?;
         let cmd_vel = node.writer::<Twist>(&config.cmd_vel, Qos::Reliable)?;
-        let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?;
-        let scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?;
+        let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?.single_writer();
+        let scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
         let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
         let first = loop {
             if let Some(odometry) = odom.take_latest()? {
@@ -142,6 +146,7 @@ impl Ros2Robot {
             origin,
             latest_odom: (first, Instant::now()),
             latest_scan: None,
+            unusable_scans: None,
             stopped: false,
         })
     }
@@ -263,7 +268,12 @@ impl Robot for Ros2Robot {
             let (last, at) = &self.latest_odom;
             let (from, to) = (last.pose.pose.position, odometry.pose.pose.position);
             let metres = (to.x - from.x).hypot(to.y - from.y);
-            if let Some(jump) = LinkLoss::impossible_motion(metres, (now - *at).as_secs_f64()) {
+            // Over the longer of the gaps they were taken and stamped at:
+            // messages delayed in delivery, or from a simulation faster
+            // than real time, arrive closer together than they were made.
+            let stamped = odometry.header.stamp.seconds() - last.header.stamp.seconds();
+            let seconds = (now - *at).as_secs_f64().max(if last.header.stamp.sec > 0 { stamped } else { 0.0 });
+            if let Some(jump) = LinkLoss::impossible_motion(metres, seconds) {
                 return Err(jump.into());
             }
             self.latest_odom = (odometry, now);
@@ -274,17 +284,32 @@ impl Robot for Ros2Robot {
             return Err(self.lost("odometry", &topic, age));
         }
         if let Some(scan) = self.scan.take_latest()? {
-            if let Some(why) = scan.why_unusable() {
-                let what = format!("the scan on {}", self.node.resolve(&self.config.scan));
-                return Err(RobotError::Protocol { what, source: why.into() });
+            match scan.why_unusable() {
+                Some(why) => {
+                    let since = self.unusable_scans.take().map_or(now, |(_, since)| since);
+                    self.unusable_scans = Some((why, since));
+                }
+                None => {
+                    self.unusable_scans = None;
+                    self.latest_scan = Some((scan, now));
+                }
             }
-            self.latest_scan = Some((scan, now));
+        }
+        // Since the last usable scan, or the first scan if none was.
+        let usable_since = self.latest_scan.as_ref().map(|(_, at)| *at);
+        let since = usable_since.or(self.unusable_scans.as_ref().map(|(_, since)| *since));
+        if let Some(since) = since.filter(|since| now - *since > STALE_SCAN.max(self.stale_after)) {
+            let topic = self.config.scan.clone();
+            let what = match &self.unusable_scans {
+                Some((why, _)) => {
+                    tracing::warn!("the scan on {}: {why}", self.node.resolve(&topic));
+                    "usable scan"
+                }
+                None => "scan",
+            };
+            return Err(self.lost(what, &topic, now - since));
         }
         match &self.latest_scan {
-            Some((_, at)) if now - *at > STALE_SCAN.max(self.stale_after) => {
-                let (topic, silent) = (self.config.scan.clone(), now - *at);
-                return Err(self.lost("scan", &topic, silent));
-            }
             Some((scan, _)) => ranges_of(scan, &mut state.ranges),
             None => state.ranges.clear(),
         }

@@ -26,7 +26,8 @@ pub struct Xy {
 }
 
 /// A velocity on the floor, m/s: each component within ±10 m/s (faster
-/// than anyone walks or runs, so a slip of the keyboard is caught).
+/// than anyone walks or runs, so a slip of the keyboard is caught; the
+/// speed itself, up to 14 m/s, is not bounded further).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VelocityXy {

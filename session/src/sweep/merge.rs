@@ -32,7 +32,7 @@ pub enum MergeError {
 
 /// The largest shard record [`merge`] reads: a record lists its failed
 /// runs, a few hundred bytes each.
-const MOST_RECORD_BYTES: u64 = 256 << 20;
+pub(super) const MOST_RECORD_BYTES: u64 = 256 << 20;
 
 /// The most missing shards an error lists one by one.
 const MOST_MISSING_LISTED: usize = 20;

@@ -285,7 +285,8 @@ impl Plan {
         // No plan: a finished sweep of the same seeds and scenarios, or a
         // folder with nothing of this sweep's in it.
         let finished = out.join(self.final_name());
-        if let Ok(bytes) = ubf_core::config::read_bounded(&finished, ubf_core::config::MOST_SETTINGS_BYTES) {
+        // A shard's record is read with the bound its merge reads it with.
+        if let Ok(bytes) = ubf_core::config::read_bounded(&finished, merge::MOST_RECORD_BYTES) {
             let value: serde_json::Value = serde_json::from_slice(&bytes).unwrap_or_default();
             let labels: Option<Vec<&str>> = match self.shard {
                 None => value["scenarios"].as_object().map(|s| s.keys().map(String::as_str).collect()),

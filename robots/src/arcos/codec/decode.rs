@@ -96,8 +96,12 @@ impl<'a> Reader<'a> {
 /// lossy UTF-8, with control characters escaped (`\u{1b}`), which a
 /// terminal would obey and a log would take for a line of its own.
 pub(super) fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes)
-        .chars()
-        .flat_map(|c| if c.is_control() { c.escape_default().collect::<Vec<_>>() } else { vec![c] })
-        .collect()
+    let mut text = String::new();
+    for c in String::from_utf8_lossy(bytes).chars() {
+        match c.is_control() {
+            true => text.extend(c.escape_default()),
+            false => text.push(c),
+        }
+    }
+    text
 }
