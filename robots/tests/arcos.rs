@@ -171,6 +171,18 @@ fn odometry_stays_continuous_across_the_wrap_and_below_zero() {
     emulator.finish();
 }
 
+/// Senses and stops `robot` every 50 ms, `tries` times at most, until one
+/// of them fails: that error.
+fn first_failure(robot: &mut ArcosRobot, state: &mut State, tries: usize) -> Option<ubf_core::RobotError> {
+    for _ in 0..tries {
+        if let Err(e) = robot.sense(state).and_then(|()| robot.act(&Command::Stop)) {
+            return Some(e);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
+}
+
 #[test]
 fn a_dead_robot_is_reported_not_waited_for() {
     let emulator = Emulator::tcp(RobotModel::powerbot());
@@ -180,15 +192,7 @@ fn a_dead_robot_is_reported_not_waited_for() {
     // The robot side goes away mid-run.
     emulator.finish();
     std::thread::sleep(Duration::from_millis(300));
-    let mut failed = None;
-    for _ in 0..20 {
-        if let Err(e) = robot.sense(&mut state).and_then(|()| robot.act(&Command::Stop)) {
-            failed = Some(e);
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let failed = failed.expect("a vanished robot must surface as an error");
+    let failed = first_failure(&mut robot, &mut state, 20).expect("a vanished robot must surface as an error");
     // The drive reopens the link on a lost link, and only on one.
     assert!(failed.is_link_loss(), "{failed:?}");
     assert!(state.sensor_age > 0.3, "and the state says its data is old: {}", state.sensor_age);
@@ -241,15 +245,7 @@ fn odometry_that_jumps_further_than_any_robot_drives_ends_the_link() {
     let mut state = State::default();
     drive(&mut robot, Command::Drive { velocity: 0.3, turn: Turn::Rate(0.0) }, 0.5, &mut state);
     armed.store(true, Ordering::Relaxed);
-    let mut failed = None;
-    for _ in 0..40 {
-        if let Err(e) = robot.sense(&mut state).and_then(|()| robot.act(&Command::Stop)) {
-            failed = Some(e);
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let failed = failed.expect("corrupt odometry must surface as an error");
+    let failed = first_failure(&mut robot, &mut state, 40).expect("corrupt odometry must surface as an error");
     assert!(failed.is_link_loss(), "{failed:?}");
     // 9.30 m and whatever the robot drove in the same SIP's time.
     assert!(failed.to_string().contains("the odometry jumped 9."), "{failed}");
