@@ -69,15 +69,57 @@ impl Clock for WallClock {
 
 /// Sleeps until the next tick of a real-time period is due; after an
 /// overrun the next tick is one period on, not a burst of catch-up ticks.
+/// Ticks that end more than a period late are said on stderr, at most
+/// every [`SAY_LATE_EVERY`]: on a robot they mean acting on old readings,
+/// and nothing else would tell.
 #[derive(Clone, Debug)]
 struct Pacer {
     period: Duration,
     next: Instant,
+    late: LateTicks,
+}
+
+/// How often late ticks are said at most.
+const SAY_LATE_EVERY: Duration = Duration::from_secs(10);
+
+/// The ticks that ended more than a period after the next was due, since
+/// they were last said.
+#[derive(Clone, Debug, Default)]
+struct LateTicks {
+    count: u32,
+    latest: Duration,
+    said_at: Option<Instant>,
+}
+
+impl LateTicks {
+    /// Counts a tick that ended `late` after the next was due (`period`
+    /// apart), at `now`; what to say, if it is time to say it.
+    fn count(&mut self, late: Duration, period: Duration, now: Instant) -> Option<String> {
+        if late <= period {
+            return None;
+        }
+        self.count += 1;
+        self.latest = late;
+        if self.said_at.is_some_and(|at| now - at < SAY_LATE_EVERY) {
+            return None;
+        }
+        let count = std::mem::take(&mut self.count);
+        let latest = self.latest.as_secs_f64();
+        let since = match self.said_at.replace(now) {
+            Some(_) => format!(" ({count} since this was last said)"),
+            None => String::new(),
+        };
+        Some(format!(
+            "the control loop is behind: a tick ended {latest:.2} s after the next was due, with ticks every {:.2} s{since}; \
+             the robot acts on older readings",
+            period.as_secs_f64()
+        ))
+    }
 }
 
 impl Pacer {
     fn new(period: Duration) -> Self {
-        Pacer { period, next: Instant::now() + period }
+        Pacer { period, next: Instant::now() + period, late: LateTicks::default() }
     }
 
     fn wait(&mut self) {
@@ -86,6 +128,9 @@ impl Pacer {
             std::thread::sleep(self.next - now);
             self.next += self.period;
         } else {
+            if let Some(said) = self.late.count(now - self.next, self.period, now) {
+                tracing::warn!("{said}");
+            }
             self.next = now + self.period;
         }
     }
@@ -142,6 +187,20 @@ impl Stopwatch {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn late_ticks_are_said_at_once_then_at_most_every_ten_seconds() {
+        let (mut late, period, start) = (LateTicks::default(), Duration::from_millis(100), Instant::now());
+        let at = |s: f64| start + Duration::from_secs_f64(s);
+        // Within a period of the due time: not late.
+        assert_eq!(late.count(Duration::from_millis(90), period, at(0.0)), None);
+        let first = late.count(Duration::from_millis(700), period, at(1.0)).unwrap();
+        assert!(first.starts_with("the control loop is behind: a tick ended 0.70 s after"), "{first}");
+        assert_eq!(late.count(Duration::from_millis(300), period, at(2.0)), None);
+        assert_eq!(late.count(Duration::from_millis(400), period, at(5.0)), None);
+        let next = late.count(Duration::from_millis(500), period, at(11.0)).unwrap();
+        assert!(next.contains("0.50 s after") && next.contains("(3 since this was last said)"), "{next}");
+    }
 
     #[test]
     fn sim_clock_advances_by_whole_periods() {
