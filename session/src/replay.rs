@@ -75,6 +75,7 @@ pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
         match reader.next_event()? {
             Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => match file.read(reader.insert(need)) {
                 Ok(n) => reader.notify_read(n),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => reader.notify_read(0),
                 Err(e) => return Some(Err(mcap::McapError::from(e))),
             },
             Ok(mcap::sans_io::MessageReadEvent::Message(message)) => return Some(Ok(message)),
@@ -87,6 +88,9 @@ pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
     for message in stream {
         let message = match message {
             Ok(m) => m,
+            // The disk failed: not a log cut short, which is what the
+            // parser's own errors are here.
+            Err(mcap::McapError::Io(e)) => return Err(fail(e.to_string())),
             Err(e) => {
                 out.cut_short = Some(e.to_string());
                 break;

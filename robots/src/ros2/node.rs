@@ -129,11 +129,28 @@ impl<M: RosMessage> Subscription<M> {
                 Err(e) => {
                     return Err(RobotError::Protocol {
                         what: format!("a message on {}", self.name),
-                        source: Box::new(e),
+                        source: unreadable::<M>(e).into(),
                     })
                 }
             }
         }
+    }
+}
+
+/// What a message that could not be taken as `M` was, as a sentence: the
+/// middleware's own text names the topic twice and the type as a Rust
+/// value, and hides the one reason it gives in the middle.
+fn unreadable<M: RosMessage>(error: rustdds::dds::ReadError) -> String {
+    match error {
+        rustdds::dds::ReadError::Deserialization { reason } => {
+            let reason = reason.strip_prefix("Failed to deserialize sample bytes: ").unwrap_or(&reason);
+            let reason = reason.split(", ").next().unwrap_or(reason);
+            format!(
+                "it could not be read as {} ({reason}): something on the domain publishes another message there",
+                M::NAME
+            )
+        }
+        other => other.to_string(),
     }
 }
 
@@ -295,5 +312,25 @@ impl Node {
                 M::NAME
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unreadable_message_is_said_in_a_sentence() {
+        // As the middleware said it for a short Odometry from a stranger.
+        let reason = "Failed to deserialize sample bytes: unexpected end of input, , Topic = rt/odom, Type = \
+                      TypeDesc { my_name: \"nav_msgs::msg::dds_::Odometry_\" }";
+        let said = unreadable::<super::super::msg::Odometry>(rustdds::dds::ReadError::Deserialization {
+            reason: reason.into(),
+        });
+        assert_eq!(
+            said,
+            "it could not be read as nav_msgs/msg/Odometry (unexpected end of input): something on the domain \
+             publishes another message there"
+        );
     }
 }
