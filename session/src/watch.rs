@@ -159,12 +159,17 @@ fn stamp_of(path: &Path) -> Option<Stamp> {
 }
 
 /// `stamp`, if it tells the file's next edit: a file changed within the
-/// last second may change again within the clock tick that stamped it,
-/// keeping its size and times, so until then it is read at every look.
+/// coarsest step a file system stamps times in may change again within
+/// that step, keeping its size and times, so until then it is read at
+/// every look.
 fn settled(stamp: Stamp) -> Option<Stamp> {
     let age = std::time::SystemTime::now().duration_since(stamp.1).unwrap_or_default();
-    (age > Duration::from_secs(1)).then_some(stamp)
+    (age > COARSEST_TIMESTAMP_STEP).then_some(stamp)
 }
+
+/// FAT's, on the USB stick a scenario may be edited on: 2 s (ext4 and
+/// most others stamp to the nanosecond, HFS+ to the second).
+const COARSEST_TIMESTAMP_STEP: Duration = Duration::from_secs(2);
 
 /// `path`'s bytes, if it is a regular file of a settings file's size.
 fn read(path: &Path) -> std::io::Result<Vec<u8>> {
@@ -242,6 +247,17 @@ mod tests {
         assert_eq!(changed_fields(before.as_ref(), moved.as_ref()), ["`connection`", "`model`"]);
         let added = fields("Robot(connection: \"tcp://a:1\", model: Powerbot, goal: (x: 1.0), root: Stop())");
         assert_eq!(changed_fields(before.as_ref(), added.as_ref()), ["`goal`"]);
+    }
+
+    #[test]
+    fn a_stamp_within_fats_two_seconds_is_not_settled() {
+        // On FAT a second edit 1.5 s after the first can keep the size and
+        // every time the stamp holds (ctime is mtime there), and would be
+        // missed for good had the first been taken as settled.
+        let now = std::time::SystemTime::now();
+        let stamp = |age: f64| (10, now - Duration::from_secs_f64(age), (0, 0), (0, 0));
+        assert_eq!(settled(stamp(1.5)), None);
+        assert_eq!(settled(stamp(2.5)), Some(stamp(2.5)));
     }
 
     #[test]
