@@ -844,6 +844,7 @@ fn init_tracing(verbose: u8, quiet: bool) {
     let filter = filter.and(budget);
     use std::io::IsTerminal;
     let layer = tracing_subscriber::fmt::layer()
+        .event_format(viewer_log::OneLineForViewers(tracing_subscriber::fmt::format()))
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
         .with_filter(filter);

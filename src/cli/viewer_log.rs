@@ -1,8 +1,8 @@
-//! A budget on the log lines the live view's clients can cause. The
-//! Foxglove server library logs an ERROR line for every malformed message a
-//! client sends, and anyone who can reach the view's port is a client: one
-//! of them wrote 12 MB of stderr a second, enough to fill a journal or a
-//! redirected log, and to bury what the robot said.
+//! A budget on the log lines the live view's clients can cause, each kept
+//! to one line. The Foxglove server library logs an ERROR line for every
+//! malformed message a client sends, and anyone who can reach the view's
+//! port is a client: one of them wrote 12 MB of stderr a second, enough to
+//! fill a journal or a redirected log, and to bury what the robot said.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::LazyLock;
@@ -31,6 +31,33 @@ pub(super) fn admit(target: &str) -> bool {
     static START: LazyLock<Instant> = LazyLock::new(Instant::now);
     static BUDGET: Budget = Budget::new();
     !is_viewers(target) || BUDGET.admit(START.elapsed().as_secs())
+}
+
+/// A line format that keeps each of the live view's library's lines one
+/// line: its messages quote what a client sent, and a newline in that
+/// would start a line of the client's own making (`… ERROR ubf: the robot
+/// has reached its goal`). Every other line is formatted by `F` as it is.
+pub(super) struct OneLineForViewers<F>(pub(super) F);
+
+impl<S, N, F> tracing_subscriber::fmt::FormatEvent<S, N> for OneLineForViewers<F>
+where
+    S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
+    N: for<'a> tracing_subscriber::fmt::FormatFields<'a> + 'static,
+    F: tracing_subscriber::fmt::FormatEvent<S, N>,
+{
+    fn format_event(
+        &self,
+        context: &tracing_subscriber::fmt::FmtContext<'_, S, N>,
+        mut writer: tracing_subscriber::fmt::format::Writer<'_>,
+        event: &tracing::Event<'_>,
+    ) -> std::fmt::Result {
+        if !is_viewers(event.metadata().target()) {
+            return self.0.format_event(context, writer, event);
+        }
+        let mut line = String::new();
+        self.0.format_event(context, tracing_subscriber::fmt::format::Writer::new(&mut line), event)?;
+        writeln!(writer, "{}", line.trim_end_matches('\n').replace('\n', "\\n"))
+    }
 }
 
 /// Lines counted in the second they were asked for; one word holds both,
@@ -66,6 +93,39 @@ mod tests {
         assert_eq!(admitted(5), MOST_LINES_PER_S);
         assert_eq!(admitted(5), 0);
         assert_eq!(admitted(6), MOST_LINES_PER_S);
+    }
+
+    #[test]
+    fn a_newline_a_client_sent_does_not_start_a_line() {
+        let written = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let sink = std::sync::Arc::clone(&written);
+        let subscriber = tracing_subscriber::fmt()
+            .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
+            .with_ansi(false)
+            .event_format(OneLineForViewers(tracing_subscriber::fmt::format()))
+            .finish();
+        tracing::subscriber::with_default(subscriber, || {
+            tracing::error!(target: "foxglove::websocket", "Invalid message: `x\nERROR ubf: forged`");
+            tracing::warn!(target: "ubf", "ours\nspans two lines");
+        });
+        let text = String::from_utf8(written.lock().unwrap().clone()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3, "{text}");
+        assert!(lines[0].ends_with("Invalid message: `x\\nERROR ubf: forged`"), "{text}");
+        assert_eq!(lines[2], "spans two lines");
+    }
+
+    /// A writer into a shared buffer.
+    struct Sink(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+    impl std::io::Write for Sink {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(bytes);
+            Ok(bytes.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
     }
 
     #[test]
