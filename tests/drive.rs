@@ -549,21 +549,10 @@ fn a_control_loop_that_stops_ticking_has_the_robot_stopped_from_outside_it() {
     // for `link_lost_after_s` (1.3 s), long before the hang ends (without
     // it, the robot's own watchdog stops the motors, and STOP comes when
     // the hang ends in a panic, 10 s in).
-    let (mut emulator, address, mut out) = emulator();
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
     let hanging = "Composite(arbiter: CommandFusion, children: [(behavior: InjectFault(after_s: 2.0, hang_s: 8.0)), \
                    (behavior: GoTo(cruise_speed: 0.3))])";
-    std::fs::write(&file, robot_file(&address, &dir.path().join("log.csv"), "goal: (x: 20.0, y: 0.0),", hanging))
-        .unwrap();
     let began = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs_f64();
-    let drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["drive", file.to_str().unwrap()])
-        .env("RUST_BACKTRACE", "0")
-        .output()
-        .unwrap();
-    let line = report_line(&mut out);
-    emulator.kill().unwrap();
+    let (drive, line, _dir) = drive_on(&[], "goal: (x: 20.0, y: 0.0),", hanging);
     let stderr = String::from_utf8_lossy(&drive.stderr);
     assert!(stderr.contains("error: the control loop has not ticked for 1."), "{stderr}");
     assert!(stderr.contains("robot stopped and held still"), "{stderr}");

@@ -130,7 +130,7 @@ impl Scenario {
     pub fn check_work(&self) -> Result<(), Refusal> {
         let work = self.work();
         if work.ticks > Work::MOST_TICKS {
-            return Refusal::of(
+            return Err(Refusal::new(
                 &["max_time_s"],
                 format!(
                     "max_time_s / period_s: {} ticks, more than {} (logs of about {}); \
@@ -139,11 +139,11 @@ impl Scenario {
                     Work::MOST_TICKS,
                     Work::bytes_text(work.log_bytes)
                 ),
-            );
+            ));
         }
         let pixels = work.rendered_pairs.saturating_mul(work.pair_bytes);
         if pixels > Work::MOST_RENDERED_PIXELS {
-            return Refusal::of(
+            return Err(Refusal::new(
                 &["robot", "camera", "images"],
                 format!(
                     "robot.camera.images: {} rendered pairs of {} each, more than {:.0e} pixels (hours of rendering); \
@@ -152,7 +152,7 @@ impl Scenario {
                     Work::bytes_text(work.pair_bytes),
                     Work::MOST_RENDERED_PIXELS as f64
                 ),
-            );
+            ));
         }
         Ok(())
     }
@@ -180,7 +180,7 @@ impl Scenario {
         let robot = ubf_robots::sim::SimRobot::new(&self.robot, &self.world, self.period_s, self.seed);
         if robot.starts_in_contact() {
             let start = self.robot.start;
-            return Refusal::of(
+            return Err(Refusal::new(
                 &["robot", "start"],
                 format!(
                     "robot.start: at ({}, {}) the robot's outline overlaps a wall, a box or a person; \
@@ -188,12 +188,12 @@ impl Scenario {
                     shown(start.x),
                     shown(start.y)
                 ),
-            );
+            ));
         }
         if let (Some(goal), Some(corridor)) = (self.goal, self.world.corridor) {
             let inside = goal.x > 0.0 && goal.x < corridor.length && goal.y.abs() < corridor.width / 2.0;
             if !inside {
-                return Refusal::of(
+                return Err(Refusal::new(
                     &["goal"],
                     format!(
                         "goal: ({}, {}) lies outside the corridor (x from 0 to {}, y within ±{}); the robot could \
@@ -203,7 +203,7 @@ impl Scenario {
                         shown(corridor.length),
                         shown(corridor.width / 2.0)
                     ),
-                );
+                ));
             }
         }
         Ok(())
@@ -221,8 +221,8 @@ pub struct Refusal {
 }
 
 impl Refusal {
-    fn of(field: &'static [&'static str], message: String) -> Result<(), Refusal> {
-        Err(Refusal { field, message })
+    fn new(field: &'static [&'static str], message: String) -> Refusal {
+        Refusal { field, message }
     }
 
     /// The refusal as an error at the field in the scenario's `text` (at

@@ -105,6 +105,11 @@ impl<M: RosMessage> Subscription<M> {
         self
     }
 
+    /// The topic, resolved in the node's namespace (`/robot1/odom`).
+    pub fn topic(&self) -> &str {
+        &self.name
+    }
+
     /// The newest message that came since the last call, if any (older
     /// ones are taken and dropped: a controller wants the latest).
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {

@@ -109,7 +109,7 @@ impl Ros2Robot {
         let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
         let first = loop {
             if let Some(odometry) = odom.take_latest()? {
-                usable_odometry(&odometry, &node.resolve(&config.odom))?;
+                usable_odometry(&odometry, odom.topic())?;
                 break odometry;
             }
             if Instant::now() >= deadline {
@@ -263,8 +263,7 @@ impl Robot for Ros2Robot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let now = Instant::now();
         if let Some(odometry) = self.odom.take_latest()? {
-            let topic = self.node.resolve(&self.config.odom);
-            usable_odometry(&odometry, &topic)?;
+            usable_odometry(&odometry, self.odom.topic())?;
             let (last, at) = &self.latest_odom;
             let (from, to) = (last.pose.pose.position, odometry.pose.pose.position);
             let metres = (to.x - from.x).hypot(to.y - from.y);
@@ -302,7 +301,7 @@ impl Robot for Ros2Robot {
             let topic = self.config.scan.clone();
             let what = match &self.unusable_scans {
                 Some((why, _)) => {
-                    tracing::warn!("the scan on {}: {why}", self.node.resolve(&topic));
+                    tracing::warn!("the scan on {}: {why}", self.scan.topic());
                     "usable scan"
                 }
                 None => "scan",
