@@ -163,15 +163,24 @@ pub struct Pose {
 }
 
 impl Pose {
-    /// Why the pose is no pose, if it is not: a position not finite, or an
-    /// orientation that is no rotation (its norm far from 1: all zeros from
-    /// a driver that never fills it, or numbers not normalised, whose yaw
-    /// means nothing).
+    /// Why the pose is no pose, if it is not: a position not finite or
+    /// further out than any odometry counts, or an orientation that is no
+    /// rotation (its norm far from 1: all zeros from a driver that never
+    /// fills it, or numbers not normalised, whose yaw means nothing).
     pub fn why_unusable(&self) -> Option<String> {
         let shown = ubf_core::config::shown;
         let Point { x, y, z } = self.position;
         if ![x, y, z].iter().all(|v| v.is_finite()) {
             return Some(format!("its position ({}, {}, {}) is not finite", shown(x), shown(y), shown(z)));
+        }
+        if ![x, y, z].iter().all(|v| v.abs() <= MOST_POSITION_M) {
+            return Some(format!(
+                "its position ({}, {}, {}) lies further than {} km from odometry's origin, which no robot drives",
+                shown(x),
+                shown(y),
+                shown(z),
+                MOST_POSITION_M / 1e3
+            ));
         }
         let Quaternion { x, y, z, w } = self.orientation;
         let norm = (x * x + y * y + z * z + w * w).sqrt();
@@ -188,6 +197,11 @@ impl Pose {
         None
     }
 }
+
+/// How far from its origin odometry may put the robot, m. Beyond it the
+/// numbers are garbage (the robot's motion is then lost in their
+/// rounding, and a pose printed runs to hundreds of digits).
+const MOST_POSITION_M: f64 = 1e9;
 
 /// How far from 1 a quaternion's norm may be and it still be taken as a
 /// rotation: drivers' arithmetic in single precision is well within it.
@@ -461,6 +475,13 @@ mod tests {
         assert_eq!(good.why_unusable(), None);
         let far = Pose { position: Point { x: f64::NAN, ..good.position }, ..good };
         assert_eq!(far.why_unusable().unwrap(), "its position (NaN, 2, 0) is not finite");
+        let huge = Pose { position: Point { y: -1e300, ..good.position }, ..good };
+        assert_eq!(
+            huge.why_unusable().unwrap(),
+            "its position (1, -1e300, 0) lies further than 1000000 km from odometry's origin, which no robot drives"
+        );
+        let far_but_counted = Pose { position: Point { x: 9e8, ..good.position }, ..good };
+        assert_eq!(far_but_counted.why_unusable(), None);
         let unfilled = Pose { orientation: Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 0.0 }, ..good };
         assert!(unfilled.why_unusable().unwrap().contains("is no rotation (its norm is 0, not 1)"));
         let unnormalised = Pose { orientation: Quaternion { x: 3.0, y: -7.0, z: 0.0, w: 1.0 }, ..good };
