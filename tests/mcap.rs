@@ -156,6 +156,38 @@ fn a_damaged_log_is_refused_or_read_as_far_as_it_goes_never_a_crash() {
     }
 }
 
+/// A source that yields `bytes`, then fails as a disk does.
+struct FailingAfter<'a> {
+    bytes: &'a [u8],
+}
+
+impl std::io::Read for FailingAfter<'_> {
+    fn read(&mut self, into: &mut [u8]) -> std::io::Result<usize> {
+        if self.bytes.is_empty() {
+            return Err(std::io::Error::other("input/output error on the disk"));
+        }
+        let n = into.len().min(self.bytes.len());
+        into[..n].copy_from_slice(&self.bytes[..n]);
+        self.bytes = &self.bytes[n..];
+        Ok(n)
+    }
+}
+
+#[test]
+fn a_log_whose_disk_fails_is_an_error_not_a_log_cut_short() {
+    let dir = tempfile::tempdir().unwrap();
+    run(&scenario(), 6, Some(dir.path())).unwrap();
+    let bytes = std::fs::read(dir.path().join("run.mcap")).unwrap();
+    let half = &bytes[..bytes.len() / 2];
+    let name = Path::new("run.mcap");
+    // The same half of a log: ended there, it is a log cut short ...
+    let ended = ubf::replay::read_from(half, name).unwrap();
+    assert!(ended.cut_short.is_some() && !ended.timeline.time.is_empty());
+    // ... failing there, it is the disk's error, said as such.
+    let failed = ubf::replay::read_from(FailingAfter { bytes: half }, name).unwrap_err().to_string();
+    assert!(failed.contains("run.mcap") && failed.contains("input/output error on the disk"), "{failed}");
+}
+
 #[test]
 fn rendered_pairs_are_logged_as_the_pngs_a_recording_holds() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/rendered-corridor.ron");

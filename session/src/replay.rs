@@ -61,10 +61,17 @@ pub struct ReplayedRun {
 /// Reads the log at `path` back: everything up to its end, or, for a log
 /// a killed process left, up to its last whole chunk.
 pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
+    // A FIFO or a device in the log's place is refused rather than read
+    // without end.
+    let file = ubf_core::config::open_regular(path).map_err(|e| LogError::reading(path, e.to_string()))?;
+    read_from(std::io::BufReader::new(file), path)
+}
+
+/// Reads a log back from `source` as [`read`] does, its errors naming
+/// `path`. A read that fails (the disk, the network) is an error; a log
+/// that ends early is read up to its last whole chunk.
+pub fn read_from(mut source: impl Read, path: &Path) -> Result<ReplayedRun, LogError> {
     let fail = |message: String| LogError::reading(path, message);
-    // Read as the parser asks, not whole: a log may be gigabytes. A FIFO
-    // or a device in its place is refused rather than read without end.
-    let mut file = std::io::BufReader::new(ubf_core::config::open_regular(path).map_err(|e| fail(e.to_string()))?);
     // A record's length comes from the file: one corrupted length must be
     // an error, not an attempt to allocate exabytes.
     let options = mcap::sans_io::LinearReaderOptions::default()
@@ -73,7 +80,8 @@ pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
     let mut reader = mcap::sans_io::MessageReader::new_with_options(options);
     let stream = std::iter::from_fn(|| loop {
         match reader.next_event()? {
-            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => match file.read(reader.insert(need)) {
+            // Read as the parser asks, not whole: a log may be gigabytes.
+            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => match source.read(reader.insert(need)) {
                 Ok(n) => reader.notify_read(n),
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => reader.notify_read(0),
                 Err(e) => return Some(Err(mcap::McapError::from(e))),
