@@ -577,3 +577,26 @@ fn a_scenario_whose_name_is_no_folder_name_is_refused_and_nothing_is_written_out
     assert!(left.is_empty(), "{left:?}");
     assert!(!dir.path().join("a/seed-1").exists() && !deep.join("seed-1").exists());
 }
+
+#[test]
+fn a_warning_every_run_gives_is_said_once_a_sweep() {
+    // The steered camera's scenario without its camera: every run's aid
+    // warns that it has nothing to aid with.
+    let original =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/steered-camera.ron")).unwrap();
+    let (from, to) = (original.find("        camera: (").unwrap(), original.find("        egomotion:").unwrap());
+    let blind = format!(
+        "{}{}",
+        &original[..from],
+        &original[to..].replacen("        egomotion: (estimator: Rigid()),\n", "", 1)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("blind.ron");
+    std::fs::write(&file, blind).unwrap();
+    let out = dir.path().join("sweep");
+    let run = ubf(&["sweep", file.to_str().unwrap(), "--seeds", "1..6", "--out", out.to_str().unwrap()]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let said = text(&run.stderr);
+    assert_eq!(said.matches("no stereo frame").count(), 1, "{said}");
+    assert!(said.contains("held back 4 repeats of 1 warning above"), "{said}");
+}

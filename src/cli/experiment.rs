@@ -10,8 +10,16 @@ use ubf_lab::experiment::{thesis_endpoint, thesis_table2, thesis_table4, Endpoin
 use ubf_perception::egomotion::OdometryFusion;
 use ubf_perception::error_model::ErrorModelKind;
 
-/// Runs one experiment and prints its table (or JSON).
+/// Runs one experiment and prints its table (or JSON). Its many runs say
+/// each warning once.
 pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome {
+    super::repeated_warnings::say_once();
+    let outcome = experiment(registry, which);
+    super::repeated_warnings::say_held_back();
+    outcome
+}
+
+fn experiment(registry: &Registry, which: ExperimentCommand) -> Outcome {
     match which {
         ExperimentCommand::WhereAidingPays { seeds, held_out_seeds, layout_seed, jobs, plot, json } => {
             let runs = 3 * seeds.clone().count() + 2 * held_out_seeds.clone().count();

@@ -17,6 +17,7 @@ mod images;
 mod inspect;
 mod new;
 mod out_dir;
+mod repeated_warnings;
 mod robot;
 mod run;
 mod shard;
@@ -841,7 +842,9 @@ fn init_tracing(verbose: u8, quiet: bool) {
     // line (a plain `FilterFn` is asked once a call site).
     let budget = DynFilterFn::new(|metadata, _| viewer_log::admit(metadata.target()))
         .with_callsite_filter(|metadata| viewer_log::interest(metadata.target()));
-    let filter = filter.and(budget);
+    let once = DynFilterFn::new(|metadata, _| repeated_warnings::admit(metadata))
+        .with_callsite_filter(repeated_warnings::interest);
+    let filter = filter.and(budget).and(once);
     use std::io::IsTerminal;
     let layer = tracing_subscriber::fmt::layer()
         .event_format(viewer_log::OneLineForViewers(tracing_subscriber::fmt::format()))
