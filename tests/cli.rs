@@ -590,7 +590,10 @@ fn work_beyond_the_bounds_is_refused_before_it_starts() {
     // Each of these passed `check` once and then hung, filled the disk,
     // aborted or panicked.
     for (body, says) in [
-        (r#"Scenario(name: "t", period_s: 1e-300, max_time_s: 10.0, root: Stop())"#, "1:31: 1e-300 is out of range"),
+        (
+            r#"Scenario(name: "t", period_s: 1e-300, max_time_s: 10.0, root: Stop())"#,
+            "1:31: period_s: 1e-300 is out of range",
+        ),
         (r#"Scenario(name: "t", max_time_s: 1e300, root: Stop())"#, "1e300 is out of range"),
         (r#"Scenario(name: "t", period_s: 0.001, max_time_s: 1e7, root: Stop())"#, "pass --huge"),
         (

@@ -298,7 +298,25 @@ fn with_hint(mut error: RonError, text: &str) -> RonError {
         error.message += "; write an optional setting as `Some(field: ..)` or just `(field: ..)`, without the inner \
                           parentheses";
     }
+    // A value out of range or of the wrong kind: the message names
+    // neither its field nor what the line means, so the field is named.
+    let value_at = before.chars().count().min(error.column.saturating_sub(1));
+    let of_value = ["is out of range", "out of bounds", "Expected ", "variant named"];
+    if of_value.iter().any(|fault| error.message.contains(fault)) {
+        if let Some(field) = field_of_value(&before.chars().take(value_at).collect::<String>()) {
+            error.message = format!("{field}: {}", error.message);
+        }
+    }
     error
+}
+
+/// The field whose value starts where `line_before` ends (`    width: `
+/// gives `width`; the parser may stop past a number's sign), if it does.
+fn field_of_value(line_before: &str) -> Option<&str> {
+    let name = line_before.trim_end_matches(['-', '+']).trim_end().strip_suffix(':')?.trim_end();
+    let start = name.rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
+    let field = &name[start..];
+    field.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_').then_some(field)
 }
 
 fn number_where<'de, D: Deserializer<'de>>(d: D, ok: impl Fn(f64) -> bool, rule: &str) -> Result<f64, D::Error> {
@@ -498,6 +516,29 @@ mod tests {
         assert_eq!(field_position("Scenario(robot: (start: 1), world: (x: 1))", &["robot", "x"]), Some((1, 10)));
         assert_eq!(field_position(text, &["seed"]), None);
         assert_eq!(field_position(text, &["start"]), None);
+    }
+
+    #[test]
+    fn a_value_the_parser_stops_at_is_said_with_its_field() {
+        #[derive(Debug, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)]
+        struct Corridor {
+            #[serde(deserialize_with = "extent_m")]
+            width: f64,
+            count: u32,
+        }
+        let said = |text: &str| from_ron::<Corridor>(text).unwrap_err().to_string();
+        assert_eq!(
+            said("(\n  width: -3.0,\n  count: 1)"),
+            "2:10: width: -3 is out of range: must be from 0.01 to 10000 m"
+        );
+        assert_eq!(said("(width: 6.0, count:-40)"), "1:21: count: Integer is out of bounds");
+        // Not at a value: nothing added.
+        assert!(said("(width: 6.0, cont: 4)").starts_with("1:14: Unexpected field named `cont`"));
+        assert_eq!(field_of_value("  goal: "), Some("goal"));
+        assert_eq!(field_of_value("(x: 1, \"a:\" "), None);
+        assert_eq!(field_of_value("  9lives: "), None);
     }
 
     #[test]
