@@ -130,7 +130,8 @@ fn read_calibration(path: &Path) -> Result<StereoCamera, SourceError> {
         ));
     }
     let first = path.with_file_name("image_0").join("000000.png");
-    let (width, height) = image::image_dimensions(&first)
+    let (width, height) = crate::source::open_image(&first)?
+        .into_dimensions()
         .map_err(|e| SourceError::Image { path: first.clone(), message: e.to_string() })?;
     let camera = StereoCamera {
         width_px: width,

@@ -128,7 +128,7 @@ pub fn perturb_sequence(
         let name = format!("{i:06}.png");
         let load = |dir: &str| {
             let path = from.join(dir).join(&name);
-            image::open(&path).map(|i| i.into_luma8()).map_err(|e| format!("{}: {e}", path.display()))
+            crate::source::read_grey(&path).map_err(|e| e.to_string())
         };
         let (left, right) = perturbation.apply(&load("image_0")?, &load("image_1")?);
         for (dir, image) in [("image_0", left), ("image_1", right)] {

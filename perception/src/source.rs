@@ -195,8 +195,17 @@ impl ImageDirectory {
     }
 }
 
-fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
-    let image = image::open(path).map_err(|e| match e {
+/// A reader of the image at `path`, its format told by its first bytes. A
+/// FIFO or a device in the image's place is refused rather than waited on.
+pub fn open_image(path: &Path) -> Result<image::ImageReader<io::BufReader<fs::File>>, SourceError> {
+    let io_error = |source| SourceError::Io { path: path.to_owned(), source };
+    let file = ubf_core::config::open_regular(path).map_err(io_error)?;
+    image::ImageReader::new(io::BufReader::new(file)).with_guessed_format().map_err(io_error)
+}
+
+/// The image at `path` in grey levels.
+pub fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
+    let image = open_image(path)?.decode().map_err(|e| match e {
         image::ImageError::IoError(source) => SourceError::Io { path: path.to_owned(), source },
         other => SourceError::Image { path: path.to_owned(), message: other.to_string() },
     })?;
@@ -269,6 +278,21 @@ impl ImageDirectoryWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_in_an_image_s_place_is_refused_not_waited_on() {
+        let path = std::env::temp_dir().join(format!("ubf-source-fifo-{}.png", std::process::id()));
+        let _ = fs::remove_file(&path);
+        assert!(std::process::Command::new("mkfifo").arg(&path).status().unwrap().success());
+        let (sent, read) = std::sync::mpsc::channel();
+        let fifo = path.clone();
+        std::thread::spawn(move || sent.send(read_grey(&fifo).map(drop).map_err(|e| e.to_string())));
+        let outcome = read.recv_timeout(std::time::Duration::from_secs(10));
+        fs::remove_file(&path).unwrap();
+        let said = outcome.expect("reading the image waited for a writer").unwrap_err();
+        assert!(said.ends_with("not a regular file"), "{said}");
+    }
 
     #[test]
     fn pairs_written_are_replayed_in_order() {
