@@ -311,11 +311,13 @@ fn with_hint(mut error: RonError, text: &str) -> RonError {
 }
 
 /// The field whose value starts where `line_before` ends (`    width: `
-/// gives `width`; the parser may stop past a number's sign), if it does.
+/// gives `width`; the parser may stop past a number's sign, or inside an
+/// optional value's `Some(`), if it does.
 fn field_of_value(line_before: &str) -> Option<&str> {
-    let name = line_before.trim_end_matches(['-', '+']).trim_end().strip_suffix(':')?.trim_end();
-    let start = name.rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).map_or(0, |i| i + 1);
-    let field = &name[start..];
+    let value_start = line_before.trim_end_matches(['-', '+']).trim_end();
+    let value_start = value_start.strip_suffix("Some(").unwrap_or(value_start).trim_end();
+    let name = value_start.strip_suffix(':')?.trim_end();
+    let field = name.rsplit(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).next()?;
     field.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_').then_some(field)
 }
 
@@ -537,6 +539,13 @@ mod tests {
         // Not at a value: nothing added.
         assert!(said("(width: 6.0, cont: 4)").starts_with("1:14: Unexpected field named `cont`"));
         assert_eq!(field_of_value("  goal: "), Some("goal"));
+        assert_eq!(field_of_value("(noise: Some("), Some("noise"));
+        // RON takes marks such as U+200E as white space: several bytes.
+        assert_eq!(field_of_value("(\u{200E}width: "), Some("width"));
+        assert_eq!(
+            said("(\u{200E}width: -3.0, count: 1)"),
+            "1:10: width: -3 is out of range: must be from 0.01 to 10000 m"
+        );
         assert_eq!(field_of_value("(x: 1, \"a:\" "), None);
         assert_eq!(field_of_value("  9lives: "), None);
     }
