@@ -156,13 +156,19 @@ fn a_damaged_log_is_refused_or_read_as_far_as_it_goes_never_a_crash() {
     }
 }
 
-/// A source that yields `bytes`, then fails as a disk does.
+/// A source that yields `bytes`, interrupted by a signal on every other
+/// read, then fails as a disk does.
 struct FailingAfter<'a> {
     bytes: &'a [u8],
+    interrupted: bool,
 }
 
 impl std::io::Read for FailingAfter<'_> {
     fn read(&mut self, into: &mut [u8]) -> std::io::Result<usize> {
+        self.interrupted = !self.interrupted;
+        if self.interrupted {
+            return Err(std::io::ErrorKind::Interrupted.into());
+        }
         if self.bytes.is_empty() {
             return Err(std::io::Error::other("input/output error on the disk"));
         }
@@ -183,8 +189,10 @@ fn a_log_whose_disk_fails_is_an_error_not_a_log_cut_short() {
     // The same half of a log: ended there, it is a log cut short ...
     let ended = ubf::replay::read_from(half, name).unwrap();
     assert!(ended.cut_short.is_some() && !ended.timeline.time.is_empty());
-    // ... failing there, it is the disk's error, said as such.
-    let failed = ubf::replay::read_from(FailingAfter { bytes: half }, name).unwrap_err().to_string();
+    // ... failing there, it is the disk's error, said as such (and reads
+    // a signal interrupted on the way are tried again, not taken as its end).
+    let failed =
+        ubf::replay::read_from(FailingAfter { bytes: half, interrupted: false }, name).unwrap_err().to_string();
     assert!(failed.contains("run.mcap") && failed.contains("input/output error on the disk"), "{failed}");
 }
 

@@ -68,10 +68,10 @@ pub fn read(path: &Path) -> Result<ReplayedRun, LogError> {
 }
 
 /// Reads a log back from `source` as [`read`] does, its errors naming
-/// `path`. A read that fails (the disk, the network) is an error; a log
+/// it `name`. A read that fails (the disk, the network) is an error; a log
 /// that ends early is read up to its last whole chunk.
-pub fn read_from(mut source: impl Read, path: &Path) -> Result<ReplayedRun, LogError> {
-    let fail = |message: String| LogError::reading(path, message);
+pub fn read_from(mut source: impl Read, name: &Path) -> Result<ReplayedRun, LogError> {
+    let fail = |message: String| LogError::reading(name, message);
     // A record's length comes from the file: one corrupted length must be
     // an error, not an attempt to allocate exabytes.
     let options = mcap::sans_io::LinearReaderOptions::default()
@@ -81,11 +81,21 @@ pub fn read_from(mut source: impl Read, path: &Path) -> Result<ReplayedRun, LogE
     let stream = std::iter::from_fn(|| loop {
         match reader.next_event()? {
             // Read as the parser asks, not whole: a log may be gigabytes.
-            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => match source.read(reader.insert(need)) {
-                Ok(n) => reader.notify_read(n),
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => reader.notify_read(0),
-                Err(e) => return Some(Err(mcap::McapError::from(e))),
-            },
+            Ok(mcap::sans_io::MessageReadEvent::ReadRequest(need)) => {
+                let into = reader.insert(need);
+                // A read a signal interrupted is tried again: the parser
+                // takes 0 bytes read as the log's end.
+                let read = loop {
+                    match source.read(into) {
+                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                        read => break read,
+                    }
+                };
+                match read {
+                    Ok(n) => reader.notify_read(n),
+                    Err(e) => return Some(Err(mcap::McapError::from(e))),
+                }
+            }
             Ok(mcap::sans_io::MessageReadEvent::Message(message)) => return Some(Ok(message)),
             Err(e) => return Some(Err(e)),
         }
