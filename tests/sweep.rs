@@ -598,5 +598,10 @@ fn a_warning_every_run_gives_is_said_once_a_sweep() {
     assert!(run.status.success(), "{}", text(&run.stderr));
     let said = text(&run.stderr);
     assert_eq!(said.matches("no stereo frame").count(), 1, "{said}");
-    assert!(said.contains("held back 4 repeats of 1 warning above"), "{said}");
+    assert!(said.contains("held back 4 warnings said already"), "{said}");
+    // Asked for more, every one.
+    let verbose =
+        ubf(&["-v", "sweep", file.to_str().unwrap(), "--seeds", "1..6", "--out", out.to_str().unwrap(), "--overwrite"]);
+    assert!(verbose.status.success(), "{}", text(&verbose.stderr));
+    assert_eq!(text(&verbose.stderr).matches("no stereo frame").count(), 5);
 }

@@ -13,10 +13,8 @@ use ubf_perception::error_model::ErrorModelKind;
 /// Runs one experiment and prints its table (or JSON). Its many runs say
 /// each warning once.
 pub(super) fn command(registry: &Registry, which: ExperimentCommand) -> Outcome {
-    super::repeated_warnings::say_once();
-    let outcome = experiment(registry, which);
-    super::repeated_warnings::say_held_back();
-    outcome
+    let _once = super::repeated_warnings::say_once();
+    experiment(registry, which)
 }
 
 fn experiment(registry: &Registry, which: ExperimentCommand) -> Outcome {

@@ -823,7 +823,8 @@ fn parse_png_path(text: &str) -> Result<PathBuf, String> {
 }
 
 /// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by
-/// default).
+/// default), with the live view's clients' lines budgeted and, by
+/// default, a sweep's repeated warnings held back.
 fn init_tracing(verbose: u8, quiet: bool) {
     use tracing_subscriber::EnvFilter;
     let level = match (quiet, verbose) {
@@ -842,9 +843,9 @@ fn init_tracing(verbose: u8, quiet: bool) {
     // line (a plain `FilterFn` is asked once a call site).
     let budget = DynFilterFn::new(|metadata, _| viewer_log::admit(metadata.target()))
         .with_callsite_filter(|metadata| viewer_log::interest(metadata.target()));
-    let once = DynFilterFn::new(|metadata, _| repeated_warnings::admit(metadata))
-        .with_callsite_filter(repeated_warnings::interest);
-    let filter = filter.and(budget).and(once);
+    // Asked for more, or for what RUST_LOG says, the log holds nothing back.
+    let plain = verbose == 0 && std::env::var_os("RUST_LOG").is_none();
+    let filter = filter.and(budget).and(plain.then_some(repeated_warnings::RepeatedWarnings));
     use std::io::IsTerminal;
     let layer = tracing_subscriber::fmt::layer()
         .event_format(viewer_log::OneLineForViewers(tracing_subscriber::fmt::format()))

@@ -2,32 +2,51 @@
 //! scenario, so a warning one run gives (an aid with no camera to aid
 //! with, a writer that fell behind) the others give too: two thousand
 //! seeds wrote it two thousand times, burying whatever else was said.
-//! While a sweep runs, a warning from a place in the code already heard
-//! from is held back and counted, and the sweep says how many at its end.
+//! While a sweep runs, a warning already said (the same words from the
+//! same place in the code) is held back and counted, and the sweep says
+//! how many at its end.
 
-use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, PoisonError};
 use tracing::callsite::Identifier;
-use tracing::{Level, Metadata};
+use tracing::field::{Field, Visit};
+use tracing::{Event, Level, Metadata};
+use tracing_subscriber::layer::{Context, Filter};
 
 /// Whether warnings are being said once (a sweep is running).
 static ONCE: AtomicBool = AtomicBool::new(false);
 
-/// How often each place has warned while [`ONCE`] held.
-static HEARD: Mutex<Option<HashMap<Identifier, u64>>> = Mutex::new(None);
+/// The warnings said while [`ONCE`] held: where from, and their words.
+static SAID: Mutex<Option<HashSet<(Identifier, String)>>> = Mutex::new(None);
 
-/// From now on, each place's first warning only is let through.
-pub(super) fn say_once() {
-    ONCE.store(true, Ordering::SeqCst);
-}
+/// Warnings held back.
+static HELD_BACK: AtomicU64 = AtomicU64::new(0);
 
-/// How often [`admit`] must be asked about events from `metadata`'s call
-/// site: event by event for warnings, never for the rest.
-pub(super) fn interest(metadata: &Metadata<'_>) -> tracing::subscriber::Interest {
-    match is_warning(metadata) {
-        true => tracing::subscriber::Interest::sometimes(),
-        false => tracing::subscriber::Interest::always(),
+/// The most different warnings remembered; beyond them a new one is held
+/// back too, so that a warning whose words change every run (a time in
+/// it) cannot fill the memory.
+const MOST_REMEMBERED: usize = 10_000;
+
+/// The log filter that holds repeated warnings back while [`say_once`]
+/// is in force; it lets everything through otherwise.
+pub(super) struct RepeatedWarnings;
+
+impl<S> Filter<S> for RepeatedWarnings {
+    fn enabled(&self, _: &Metadata<'_>, _: &Context<'_, S>) -> bool {
+        true
+    }
+
+    /// Event by event for warnings, never for the rest.
+    fn callsite_enabled(&self, metadata: &'static Metadata<'static>) -> tracing::subscriber::Interest {
+        match is_warning(metadata) {
+            true => tracing::subscriber::Interest::sometimes(),
+            false => tracing::subscriber::Interest::always(),
+        }
+    }
+
+    fn event_enabled(&self, event: &Event<'_>, _: &Context<'_, S>) -> bool {
+        admit(event)
     }
 }
 
@@ -35,36 +54,57 @@ fn is_warning(metadata: &Metadata<'_>) -> bool {
     metadata.is_event() && *metadata.level() == Level::WARN
 }
 
-/// Whether an event may be logged now: anything but a warning, any
-/// warning outside a sweep, and a sweep's first warning from each place.
-pub(super) fn admit(metadata: &Metadata<'_>) -> bool {
+/// Holds repeated warnings back until dropped, then says how many were.
+pub(super) struct SayingOnce(());
+
+impl Drop for SayingOnce {
+    fn drop(&mut self) {
+        ONCE.store(false, Ordering::SeqCst);
+        *SAID.lock().unwrap_or_else(PoisonError::into_inner) = None;
+        let held_back = HELD_BACK.swap(0, Ordering::SeqCst);
+        if held_back > 0 {
+            let plural = if held_back == 1 { "" } else { "s" };
+            eprintln!("held back {held_back} warning{plural} said already: many runs say each warning once");
+        }
+    }
+}
+
+/// From now until the guard is dropped, a warning already said is held
+/// back and counted (if the log has [`RepeatedWarnings`]).
+pub(super) fn say_once() -> SayingOnce {
+    ONCE.store(true, Ordering::SeqCst);
+    SayingOnce(())
+}
+
+/// Whether `event` may be logged now: anything but a warning, any warning
+/// outside a sweep, and a sweep's warnings the first time they are said.
+fn admit(event: &Event<'_>) -> bool {
+    let metadata = event.metadata();
     if !is_warning(metadata) || !ONCE.load(Ordering::SeqCst) {
         return true;
     }
-    let mut heard = HEARD.lock().unwrap_or_else(PoisonError::into_inner);
-    let count = heard.get_or_insert_with(HashMap::new).entry(metadata.callsite()).or_insert(0);
-    *count += 1;
-    *count == 1
-}
-
-/// Says how many warnings were held back as repeats, if any were.
-pub(super) fn say_held_back() {
-    let (repeats, places) = held_back();
-    let plural = |n: u64, noun: &str| format!("{n} {noun}{}", if n == 1 { "" } else { "s" });
-    if repeats > 0 {
-        eprintln!(
-            "held back {} of {} above: many runs say each warning once",
-            plural(repeats, "repeat"),
-            plural(places as u64, "warning")
-        );
+    let mut words = Words(String::new());
+    event.record(&mut words);
+    let mut said = SAID.lock().unwrap_or_else(PoisonError::into_inner);
+    let said = said.get_or_insert_with(HashSet::new);
+    // Messages from the `log` crate share one call site: their words and
+    // target tell them apart.
+    let key = (metadata.callsite(), format!("{}: {}", metadata.target(), words.0));
+    let new = said.len() < MOST_REMEMBERED && said.insert(key);
+    if !new {
+        HELD_BACK.fetch_add(1, Ordering::SeqCst);
     }
+    new
 }
 
-/// How many warnings were held back as repeats, and from how many places.
-fn held_back() -> (u64, usize) {
-    let heard = HEARD.lock().unwrap_or_else(PoisonError::into_inner);
-    let repeated = heard.iter().flat_map(HashMap::values).filter(|&&n| n > 1);
-    repeated.fold((0, 0), |(repeats, places), n| (repeats + n - 1, places + 1))
+/// An event's fields, written out.
+struct Words(String);
+
+impl Visit for Words {
+    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        use std::fmt::Write;
+        let _ = write!(self.0, "{}={value:?} ", field.name());
+    }
 }
 
 #[cfg(test)]
@@ -73,37 +113,40 @@ mod tests {
     use super::*;
 
     #[test]
-    fn in_a_sweep_each_place_warns_once_and_its_repeats_are_counted() {
+    fn in_a_sweep_each_warning_is_said_once_and_its_repeats_are_counted() {
         let said = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
         let sink = std::sync::Arc::clone(&said);
         use tracing_subscriber::layer::SubscriberExt;
         use tracing_subscriber::Layer;
-        let once =
-            tracing_subscriber::filter::DynFilterFn::new(|metadata, _| admit(metadata)).with_callsite_filter(interest);
         let layer = tracing_subscriber::fmt::layer()
             .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
             .with_ansi(false)
             .without_time()
-            .with_filter(once);
+            .with_filter(RepeatedWarnings);
         let warn_in_runs = |runs: u64| {
             for run in 0..runs {
-                tracing::warn!("the aid has no camera (run {run})");
-                tracing::warn!("another place");
+                tracing::warn!("the aid has no camera");
+                tracing::warn!("the writer fell behind in run {}", run % 2);
                 tracing::error!("an error is always said");
             }
         };
         tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), || {
             // Before a sweep, every warning.
             warn_in_runs(2);
-            say_once();
+            let sweep = say_once();
             warn_in_runs(5);
+            assert_eq!(HELD_BACK.load(Ordering::SeqCst), 4 + 3);
+            drop(sweep);
+            // After it, every warning again.
+            warn_in_runs(1);
         });
         let text = String::from_utf8(said.lock().unwrap().clone()).unwrap();
         let count = |what: &str| text.lines().filter(|l| l.contains(what)).count();
-        assert_eq!(count("the aid has no camera"), 3, "{text}");
-        assert_eq!(count("another place"), 3, "{text}");
-        assert_eq!(count("an error is always said"), 7, "{text}");
-        assert!(text.contains("the aid has no camera (run 0)"), "the first run's is the one said: {text}");
-        assert_eq!(held_back(), (8, 2));
+        assert_eq!(count("the aid has no camera"), 2 + 1 + 1, "{text}");
+        // Words that differ are said, each once.
+        assert_eq!(count("the writer fell behind in run 0"), 1 + 1 + 1, "{text}");
+        assert_eq!(count("the writer fell behind in run 1"), 1 + 1, "{text}");
+        assert_eq!(count("an error is always said"), 2 + 5 + 1, "{text}");
+        assert_eq!(HELD_BACK.load(Ordering::SeqCst), 0, "the guard said the count and cleared it");
     }
 }

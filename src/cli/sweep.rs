@@ -75,7 +75,7 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
     }
     let jobs = jobs.unwrap_or_else(super::cores);
     let stop = crate::drive::install_stop_flag();
-    super::repeated_warnings::say_once();
+    let _once = super::repeated_warnings::say_once();
     let settings = SweepSettings { jobs, full_outputs: trajectories, stop: &stop, resume, identity: &identity };
     let stopwatch = ubf_core::Stopwatch::start();
     let refused = |e: SweepError| match e {
@@ -129,7 +129,6 @@ pub(super) fn command(registry: &Registry, request: SweepRequest) -> Outcome {
                 .collect()
         }
     };
-    super::repeated_warnings::say_held_back();
     for (label, seed, error) in &failed {
         eprintln!("error: {label} seed {seed}: {error}");
     }
