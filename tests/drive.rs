@@ -860,6 +860,60 @@ fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
     assert!(log.lines().skip(1).any(read), "{log}");
 }
 
+/// A TCP address in front of `upstream` whose answers each come `delay`
+/// late, for one client.
+fn slow_answers(upstream: &str, delay: Duration) -> String {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = format!("tcp://{}", listener.local_addr().unwrap());
+    let upstream = upstream.trim_start_matches("tcp://").to_owned();
+    std::thread::spawn(move || {
+        let (client, _) = listener.accept().unwrap();
+        let head = std::net::TcpStream::connect(upstream).unwrap();
+        let (mut asked, mut to_head) = (client.try_clone().unwrap(), head.try_clone().unwrap());
+        std::thread::spawn(move || std::io::copy(&mut asked, &mut to_head));
+        let (mut answers, mut to_client, mut chunk) = (head, client, [0u8; 256]);
+        use std::io::{Read, Write};
+        while let Ok(n @ 1..) = answers.read(&mut chunk) {
+            std::thread::sleep(delay);
+            if to_client.write_all(&chunk[..n]).is_err() {
+                return;
+            }
+        }
+    });
+    address
+}
+
+#[test]
+fn a_signal_while_the_head_connects_ends_the_drive_before_the_motors_go_on() {
+    let dir = tempfile::tempdir().unwrap();
+    record_frames(dir.path(), 2);
+    let (mut emulator, address, _) = emulator();
+    let (_head, head_address, _) = ptu_emulator();
+    // The handshake's dozen answers take 2 s.
+    let slow_head = slow_answers(&head_address, Duration::from_millis(150));
+    let extra = format!(
+        r#"camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{slow_head}")),"#
+    );
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), &extra)).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(700));
+    assert!(Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap().success());
+    let status = wait_for(&mut drive, 10.0).expect("the drive ends");
+    emulator.kill().unwrap();
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut drive.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(
+        !stderr.contains("connected to"),
+        "the robot was connected (and its motors enabled) after the signal: {stderr}"
+    );
+}
+
 #[test]
 fn impossible_robot_files_are_refused_with_their_place() {
     // Each of these used to pass `ubf check` and then panic, hang, or

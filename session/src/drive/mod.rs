@@ -252,6 +252,11 @@ fn drive_sessions(
             return Ok(DriveEnd::Stopped);
         }
         let camera = config.open_camera()?;
+        // Opening the camera (its pan-tilt head's handshake) takes time: a
+        // signal that came meanwhile must not be followed by the motors on.
+        if stop.load(Ordering::SeqCst) {
+            return Ok(DriveEnd::Interrupted);
+        }
         let Connected { robot, name, emergency } = match connect_driving(config, model, pose) {
             Ok(connected) => connected,
             Err(e) => {
