@@ -20,6 +20,7 @@ pub mod camera;
 pub mod egomotion;
 pub mod emergency;
 pub mod model;
+mod printable;
 pub mod ptu;
 pub mod ros2;
 pub mod sim;

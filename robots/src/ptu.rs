@@ -21,6 +21,7 @@
 use crate::arcos::emulator::client_left_terminal;
 use crate::arcos::link::{self, Link};
 use serde::Deserialize;
+use std::f64::consts::TAU;
 use std::io::{self, Read, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -88,8 +89,24 @@ impl PtuConfig {
 
 /// Longest wait for the answer to one command or query.
 const ANSWER_WAIT: Duration = Duration::from_millis(1000);
+/// Longest wait for the whole handshake and the first reading: a dozen
+/// exchanges, a few milliseconds each at 9 600 baud.
+const HANDSHAKE_WAIT: Duration = Duration::from_secs(3);
 /// Pause between two rounds of reading the encoders.
 const POLL_PERIOD: Duration = Duration::from_millis(20);
+/// The coarsest step a PTU has, arc-seconds: a PTU-D46's is 185″, and
+/// finer with micro-stepping.
+const MOST_STEP_ARC_S: f64 = 3600.0;
+/// How far beyond its limits a reading may lie, steps (an axis stopped
+/// at a limit may overshoot it a little).
+const LIMIT_SLACK_STEPS: f64 = 10.0;
+/// How much faster than its set speed the pan may seem to move between
+/// two readings, whose times are known only to within a query's length.
+const RATE_SLACK: f64 = 1.5;
+/// And by how much more, °.
+const READING_SLACK_DEG: f64 = 2.0;
+/// The most of a line from the unit an error quotes, characters.
+const MOST_QUOTED_CHARS: usize = 80;
 
 /// What went wrong with the head: the fault a [`RobotError::PanTilt`]
 /// carries, behind the head's connection.
@@ -148,12 +165,38 @@ pub enum PtuError {
         /// Its answer.
         answer: String,
     },
-    /// The unit reported a resolution no angle can be computed with.
-    #[error("unusable resolution: {0:?}")]
+    /// The unit reported a resolution no PTU has: angles computed with it
+    /// would be nonsense.
+    #[error("unusable resolution: {0:?} (a PTU's step is {MOST_STEP_ARC_S}\" at most, and more than 0)")]
     UnusableResolution(PtuAxes),
     /// The unit reported a minimum above a maximum.
     #[error("limits out of order (minimum above maximum): {0:?}")]
     LimitsOutOfOrder(PtuAxes),
+    /// The unit reported limits beyond a full turn either way.
+    #[error("limits beyond a full turn either way: {0:?}")]
+    LimitsBeyondATurn(PtuAxes),
+    /// A reading no head can give: outside the unit's own limits, or a pan
+    /// that moved faster than the speed it was set to. Steered by, it
+    /// would point the camera's views anywhere.
+    #[error("`{query}` read {reading}: {why}")]
+    Implausible {
+        /// The query.
+        query: &'static str,
+        /// What it read, steps.
+        reading: String,
+        /// Why no head reads that.
+        why: String,
+    },
+    /// An answer came that nothing asked for: something else is on the
+    /// line, or the unit answered one query twice, and answers can no
+    /// longer be told apart.
+    #[error("an answer nobody asked for came before `{command}`: `{answer}`; is something else on the line?")]
+    Unasked {
+        /// The command or query about to be sent.
+        command: String,
+        /// What came.
+        answer: String,
+    },
     /// The newest reading is too old to trust: the head may have stopped
     /// answering, which must not pass for holding still.
     #[error("no reading for {for_s:.2} s (stale after {after_s} s)")]
@@ -202,21 +245,55 @@ fn first_number(text: &str) -> Option<f64> {
     text[start..end].parse().ok()
 }
 
+/// Refuses `steps` read by `query` if it lies outside `limits`.
+fn within_limits(query: &'static str, steps: f64, limits: [i64; 2]) -> Result<(), PtuError> {
+    let (low, high) = (limits[0] as f64 - LIMIT_SLACK_STEPS, limits[1] as f64 + LIMIT_SLACK_STEPS);
+    match (low..=high).contains(&steps) {
+        true => Ok(()),
+        false => Err(PtuError::Implausible {
+            query,
+            reading: ubf_core::config::shown(steps),
+            why: format!("outside the limits the unit reported, {} to {} steps", limits[0], limits[1]),
+        }),
+    }
+}
+
+/// What the unit said, as it is shown in an error: control characters
+/// escaped (a terminal would obey them), and cut short.
+fn printable(bytes: &[u8]) -> String {
+    let text = crate::printable::text(bytes.trim_ascii());
+    match text.char_indices().nth(MOST_QUOTED_CHARS) {
+        Some((cut, _)) => format!("{}…", &text[..cut]),
+        None => text.to_owned(),
+    }
+}
+
 /// The unit's side of the conversation: one command at a time, each
 /// waited on.
 struct Conversation {
     link: Box<dyn Link>,
     /// Bytes read and not yet a whole line.
     pending: Vec<u8>,
+    /// When every answer must have come by (the handshake's), if ever.
+    until: Option<Instant>,
 }
 
 impl Conversation {
     /// Sends `text` and a delimiter, and waits for the answer.
     fn ask(&mut self, text: &str) -> Result<Answer, PtuError> {
+        // Whole lines already read are not this query's answer: were one
+        // of them an answer, the next would be taken for this one's.
+        while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
+            let line: Vec<u8> = self.pending.drain(..=end).collect();
+            if parse_line(&String::from_utf8_lossy(&line)).is_some() {
+                return Err(PtuError::Unasked { command: text.to_owned(), answer: printable(&line) });
+            }
+        }
         let written = |source| PtuError::Write { command: text.to_owned(), source };
         self.link.write_all(format!("{text} ").as_bytes()).map_err(written)?;
         self.link.flush().map_err(written)?;
-        let deadline = Instant::now() + ANSWER_WAIT;
+        let started = Instant::now();
+        let deadline = self.until.map_or(started + ANSWER_WAIT, |until| until.min(started + ANSWER_WAIT));
         loop {
             while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
                 let line: Vec<u8> = self.pending.drain(..=end).collect();
@@ -228,7 +305,8 @@ impl Conversation {
                 return Err(PtuError::NoLineEnd { command: text.to_owned(), bytes: self.pending.len() });
             }
             if Instant::now() > deadline {
-                return Err(PtuError::NoAnswer { command: text.to_owned(), within_ms: ANSWER_WAIT.as_millis() });
+                let within_ms = (deadline - started).as_millis();
+                return Err(PtuError::NoAnswer { command: text.to_owned(), within_ms });
             }
             let mut buffer = [0u8; 256];
             match self.link.read(&mut buffer) {
@@ -244,7 +322,9 @@ impl Conversation {
     fn command(&mut self, text: &str) -> Result<(), PtuError> {
         match self.ask(text)? {
             Answer::Done(_) => Ok(()),
-            Answer::Refused(message) => Err(PtuError::Refused { command: text.to_owned(), message }),
+            Answer::Refused(message) => {
+                Err(PtuError::Refused { command: text.to_owned(), message: printable(message.as_bytes()) })
+            }
         }
     }
 
@@ -252,8 +332,11 @@ impl Conversation {
     fn number(&mut self, text: &str) -> Result<f64, PtuError> {
         match self.ask(text)? {
             Answer::Done(answer) => first_number(&answer)
-                .ok_or_else(|| PtuError::NotANumber { query: text.to_owned(), answer: answer.clone() }),
-            Answer::Refused(message) => Err(PtuError::Refused { command: text.to_owned(), message }),
+                .filter(|n| n.is_finite())
+                .ok_or_else(|| PtuError::NotANumber { query: text.to_owned(), answer: printable(answer.as_bytes()) }),
+            Answer::Refused(message) => {
+                Err(PtuError::Refused { command: text.to_owned(), message: printable(message.as_bytes()) })
+            }
         }
     }
 }
@@ -299,9 +382,14 @@ impl Ptu {
     pub fn connect(config: PtuConfig) -> Result<Ptu, RobotError> {
         let failed = |fault: PtuError| RobotError::PanTilt { unit: config.connection.clone(), fault: Box::new(fault) };
         let link = link::open(&config.connection, config.baud).map_err(|e| failed(PtuError::Open(e)))?;
-        let mut talk = Conversation { link, pending: Vec::new() };
+        // Bounded as a whole, not only answer by answer: a head that
+        // answers each query just in time must not hold the drive (deaf to
+        // Ctrl-C until it has connected) for a dozen seconds.
+        let until = Some(Instant::now() + HANDSHAKE_WAIT);
+        let mut talk = Conversation { link, pending: Vec::new(), until };
         let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
-        let first = Self::read(&mut talk, &axes, &config).map_err(failed)?;
+        let first = Self::read(&mut talk, &axes, &config, None).map_err(failed)?;
+        talk.until = None;
         let shared = Arc::new(Mutex::new(Shared { reading: Some(first), ..Shared::default() }));
         let stop = Arc::new(AtomicBool::new(false));
         let (for_thread, flag, settings) = (Arc::clone(&shared), Arc::clone(&stop), config.clone());
@@ -339,11 +427,16 @@ impl Ptu {
             pan_limits: [whole(talk.number("PN")?), whole(talk.number("PX")?)],
             tilt_limits: [whole(talk.number("TN")?), whole(talk.number("TX")?)],
         };
-        if !(axes.pan_step > 0.0 && axes.tilt_step > 0.0 && axes.pan_step.is_finite() && axes.tilt_step.is_finite()) {
+        let usable = |step: f64| step > 0.0 && step <= arc_seconds(MOST_STEP_ARC_S);
+        if !(usable(axes.pan_step) && usable(axes.tilt_step)) {
             return Err(PtuError::UnusableResolution(axes));
         }
         if axes.pan_limits[0] > axes.pan_limits[1] || axes.tilt_limits[0] > axes.tilt_limits[1] {
             return Err(PtuError::LimitsOutOfOrder(axes));
+        }
+        let within_a_turn = |limits: [i64; 2], step: f64| limits.iter().all(|&l| (l as f64 * step).abs() <= TAU);
+        if !(within_a_turn(axes.pan_limits, axes.pan_step) && within_a_turn(axes.tilt_limits, axes.tilt_step)) {
+            return Err(PtuError::LimitsBeyondATurn(axes));
         }
         let speed = (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0);
         talk.command(&format!("PS{speed}"))?;
@@ -368,26 +461,54 @@ impl Ptu {
 
     /// The head's angles, and when the pan was read: halfway through its
     /// query, the best guess at when the unit answered.
-    fn read(talk: &mut Conversation, axes: &PtuAxes, config: &PtuConfig) -> Result<(Instant, Aim), PtuError> {
+    /// A reading outside the unit's limits, or a pan that moved faster
+    /// than it was set to since the `last` reading, is refused.
+    fn read(
+        talk: &mut Conversation,
+        axes: &PtuAxes,
+        config: &PtuConfig,
+        last: Option<(Instant, Aim)>,
+    ) -> Result<(Instant, Aim), PtuError> {
         let asked = Instant::now();
-        let pan = talk.number("PP")? * axes.pan_step * Self::pan_sign(config);
+        let pan_steps = talk.number("PP")?;
         let read_at = asked + asked.elapsed() / 2;
-        let tilt = talk.number("TP")? * axes.tilt_step;
-        Ok((read_at, Aim { pan, tilt }))
+        let tilt_steps = talk.number("TP")?;
+        within_limits("PP", pan_steps, axes.pan_limits)?;
+        within_limits("TP", tilt_steps, axes.tilt_limits)?;
+        let aim = Aim { pan: pan_steps * axes.pan_step * Self::pan_sign(config), tilt: tilt_steps * axes.tilt_step };
+        if let Some((then, before)) = last {
+            let seconds = read_at.saturating_duration_since(then).as_secs_f64();
+            let most = RATE_SLACK * config.max_rate_deg_s.to_radians() * seconds + READING_SLACK_DEG.to_radians();
+            let moved = (aim.pan - before.pan).abs();
+            if moved > most {
+                let why = format!(
+                    "the pan moved {:.1}° in {seconds:.2} s, faster than the {}°/s it was set to",
+                    moved.to_degrees(),
+                    config.max_rate_deg_s
+                );
+                let reading = ubf_core::config::shown(pan_steps);
+                return Err(PtuError::Implausible { query: "PP", reading, why });
+            }
+        }
+        Ok((read_at, aim))
     }
 
     /// The unit's thread: sends the newest target, reads the encoders,
     /// again, until stopped or the unit fails; then halts the head.
     fn run(mut talk: Conversation, axes: PtuAxes, config: PtuConfig, shared: &Mutex<Shared>, stop: &AtomicBool) {
         let lock = || shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut last = lock().reading;
         while !stop.load(Ordering::Relaxed) {
             let target = lock().target.take();
             let sent = target.map_or(Ok(()), |aim| {
                 let pan = Self::steps(aim.pan * Self::pan_sign(&config), axes.pan_step, axes.pan_limits);
                 talk.command(&format!("PP{pan}"))
             });
-            match sent.and_then(|()| Self::read(&mut talk, &axes, &config)) {
-                Ok(reading) => lock().reading = Some(reading),
+            match sent.and_then(|()| Self::read(&mut talk, &axes, &config, last)) {
+                Ok(reading) => {
+                    last = Some(reading);
+                    lock().reading = Some(reading);
+                }
                 Err(e) => {
                     lock().failure = Some(Arc::new(e));
                     return;

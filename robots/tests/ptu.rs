@@ -309,3 +309,105 @@ fn a_frame_carries_the_angles_the_head_had_when_the_pair_was_taken() {
     assert_eq!(seen, 2, "two frames came");
     robot.shutdown().unwrap();
 }
+
+/// A head that answers as a PTU-D46 in terse mode, holding still at 0,
+/// except where `fault` answers a query (its text and how many of that
+/// query came before it) in its own way: for faults the emulator does not
+/// make.
+fn faulty_head(mut fault: impl FnMut(&str, usize) -> Option<String> + Send + 'static) -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let connection = format!("tcp://{}", listener.local_addr().unwrap());
+    std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().unwrap();
+        let mut asked = std::collections::HashMap::<String, usize>::new();
+        let mut query = Vec::new();
+        let mut byte = [0u8; 1];
+        use std::io::{Read, Write};
+        while stream.read(&mut byte).is_ok_and(|n| n == 1) {
+            if !(byte[0] == b' ' || byte[0] == b'\r') {
+                query.push(byte[0]);
+                continue;
+            }
+            let text = String::from_utf8_lossy(&std::mem::take(&mut query)).into_owned();
+            let count = asked.entry(text.clone()).or_default();
+            let answer = fault(&text, *count).unwrap_or_else(|| match text.as_str() {
+                "PR" | "TR" => "* 185.1428".into(),
+                "PN" => "* -3090".into(),
+                "PX" => "* 3090".into(),
+                "TN" => "* -907".into(),
+                "TX" => "* 604".into(),
+                "PP" | "TP" => "* 0".into(),
+                _ => "*".into(),
+            });
+            *count += 1;
+            if stream.write_all(format!("{answer}\r\n").as_bytes()).is_err() {
+                return;
+            }
+        }
+    });
+    connection
+}
+
+/// What the head's driver fails with, waited for up to 3 s.
+fn failure_of(connection: &str) -> String {
+    let mut ptu = match Ptu::connect(PtuConfig::new(connection)) {
+        Ok(ptu) => ptu,
+        Err(e) => return e.to_string(),
+    };
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while Instant::now() < deadline {
+        if let Err(e) = ptu.measured() {
+            return e.to_string();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    panic!("the head's driver took its readings")
+}
+
+#[test]
+fn a_reading_no_head_can_give_is_refused() {
+    // Beyond the unit's own limits (±3090 steps), a hundred digits long.
+    let far = faulty_head(|query, n| (query == "PP" && n == 5).then(|| format!("* 1{}", "0".repeat(100))));
+    let error = failure_of(&far);
+    assert!(error.contains("`PP` read 1e100: outside the limits the unit reported, -3090 to 3090 steps"), "{error}");
+    // Turned 154° between two readings 20 ms apart, at 60°/s.
+    let jumping = faulty_head(|query, n| (query == "PP" && n == 5).then(|| "* 3000".into()));
+    let error = failure_of(&jumping);
+    assert!(error.contains("the pan moved 154.3°") && error.contains("faster than the 60°/s"), "{error}");
+}
+
+#[test]
+fn an_answer_nobody_asked_for_is_refused_not_taken_for_the_next() {
+    // One reading answered twice: every answer after it would be the
+    // answer to the query before.
+    let twice = faulty_head(|query, n| (query == "PP" && n == 3).then(|| "* 0\r\n* 0".into()));
+    let error = failure_of(&twice);
+    assert!(error.contains("an answer nobody asked for came before `TP`: `* 0`"), "{error}");
+}
+
+#[test]
+fn a_head_describing_itself_as_no_ptu_is_refused() {
+    let coarse = faulty_head(|query, _| (query == "PR").then(|| "* 7200".into()));
+    assert!(failure_of(&coarse).contains("unusable resolution"), "{}", failure_of(&coarse));
+    let endless = faulty_head(|query, _| (query == "PN").then(|| "* -99999999".into()));
+    assert!(failure_of(&endless).contains("limits beyond a full turn"));
+    // Its words are shown, never obeyed by the terminal.
+    let escaping = faulty_head(|query, _| (query == "FT").then(|| format!("! \x1b[2J{}", "x".repeat(500))));
+    let error = failure_of(&escaping);
+    assert!(error.contains("`FT` refused: \\u{1b}[2Jxxx") && !error.contains('\x1b'), "{error}");
+    assert!(error.len() < 200, "cut short: {error}");
+}
+
+#[test]
+fn a_head_that_answers_each_query_just_in_time_does_not_hold_the_drive_for_long() {
+    // Each answer 0.9 s late, within the wait for one (1 s): a dozen of
+    // them took 11 s, deaf to Ctrl-C.
+    let slow = faulty_head(|_, _| {
+        std::thread::sleep(Duration::from_millis(900));
+        None
+    });
+    let started = Instant::now();
+    let error = Ptu::connect(PtuConfig::new(&slow)).err().expect("refused").to_string();
+    assert!(error.contains("no answer to"), "{error}");
+    assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+}

@@ -73,7 +73,7 @@ impl<'a> Reader<'a> {
         let rest = &self.bytes[self.at.min(self.bytes.len())..];
         let end = rest.iter().position(|&b| b == 0).ok_or(DecodeError::Truncated { what, needed: 1, got: 0 })?;
         self.at += end + 1;
-        Ok(text(&rest[..end]))
+        Ok(crate::printable::text(&rest[..end]))
     }
     pub(super) fn remaining(&self) -> usize {
         self.bytes.len().saturating_sub(self.at)
@@ -90,18 +90,4 @@ impl<'a> Reader<'a> {
             None
         }
     }
-}
-
-/// A string from the robot, as it is shown on a terminal and in logs:
-/// lossy UTF-8, with control characters escaped (`\u{1b}`), which a
-/// terminal would obey and a log would take for a line of its own.
-pub(super) fn text(bytes: &[u8]) -> String {
-    let mut text = String::new();
-    for c in String::from_utf8_lossy(bytes).chars() {
-        match c.is_control() {
-            true => text.extend(c.escape_default()),
-            false => text.push(c),
-        }
-    }
-    text
 }

@@ -197,7 +197,7 @@ impl Identity {
     /// strings (a missing terminator ends at the body's end).
     pub fn parse(body: &[u8]) -> Result<Identity, DecodeError> {
         let rest = body.strip_prefix(&[2]).ok_or(DecodeError::Truncated { what: "SYNC2 echo", needed: 1, got: 0 })?;
-        let mut parts = rest.split(|&b| b == 0).map(super::decode::text);
+        let mut parts = rest.split(|&b| b == 0).map(crate::printable::text);
         let mut next = |what| parts.next().ok_or(DecodeError::Truncated { what, needed: 1, got: 0 });
         Ok(Identity { name: next("name")?, class: next("class")?, subclass: next("subclass")? })
     }
