@@ -195,12 +195,14 @@ impl ImageDirectory {
     }
 }
 
-/// A reader of the image at `path`, its format told by its first bytes. A
-/// FIFO or a device in the image's place is refused rather than waited on.
+/// A reader of the image at `path`, its format told by its name. A FIFO
+/// or a device in the image's place is refused rather than waited on.
 pub fn open_image(path: &Path) -> Result<image::ImageReader<io::BufReader<fs::File>>, SourceError> {
-    let io_error = |source| SourceError::Io { path: path.to_owned(), source };
-    let file = ubf_core::config::open_regular(path).map_err(io_error)?;
-    image::ImageReader::new(io::BufReader::new(file)).with_guessed_format().map_err(io_error)
+    let file =
+        ubf_core::config::open_regular(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
+    let format = image::ImageFormat::from_path(path)
+        .map_err(|e| SourceError::Image { path: path.to_owned(), message: e.to_string() })?;
+    Ok(image::ImageReader::with_format(io::BufReader::new(file), format))
 }
 
 /// The image at `path` in grey levels.

@@ -175,7 +175,7 @@ impl Pose {
         }
         if ![x, y, z].iter().all(|v| v.abs() <= MOST_POSITION_M) {
             return Some(format!(
-                "its position ({}, {}, {}) lies further than {} km from odometry's origin, which no robot drives",
+                "its position ({}, {}, {}) has a coordinate beyond ±{} km, further than any robot drives",
                 shown(x),
                 shown(y),
                 shown(z),
@@ -478,7 +478,7 @@ mod tests {
         let huge = Pose { position: Point { y: -1e300, ..good.position }, ..good };
         assert_eq!(
             huge.why_unusable().unwrap(),
-            "its position (1, -1e300, 0) lies further than 1000000 km from odometry's origin, which no robot drives"
+            "its position (1, -1e300, 0) has a coordinate beyond ±1000000 km, further than any robot drives"
         );
         let far_but_counted = Pose { position: Point { x: 9e8, ..good.position }, ..good };
         assert_eq!(far_but_counted.why_unusable(), None);

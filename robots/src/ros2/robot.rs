@@ -258,15 +258,18 @@ fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
     ranges.clear();
     let max_range = f64::from(scan.range_max);
     let echo = |range: f32| (range.is_finite() && range >= scan.range_min && range < scan.range_max).then_some(range);
-    let run = scan.ranges.len().div_ceil(MOST_READINGS).max(1);
-    for (k, beams) in scan.ranges.chunks(run).enumerate() {
+    let (beams, readings) = (scan.ranges.len(), scan.ranges.len().min(MOST_READINGS));
+    for k in 0..readings {
+        // Runs as even as whole beams allow: 4097 beams are 4096 readings.
+        let first = k * beams / readings;
+        let run = &scan.ranges[first..(k + 1) * beams / readings];
         let nearest =
-            beams.iter().enumerate().filter_map(|(i, &r)| Some((i, echo(r)?))).min_by(|a, b| a.1.total_cmp(&b.1));
+            run.iter().enumerate().filter_map(|(i, &r)| Some((i, echo(r)?))).min_by(|a, b| a.1.total_cmp(&b.1));
         let (i, range) = match nearest {
             Some((i, range)) => (i, Some(f64::from(range))),
-            None => (beams.len() / 2, None),
+            None => (run.len() / 2, None),
         };
-        let bearing = f64::from(scan.angle_min) + (k * run + i) as f64 * f64::from(scan.angle_increment);
+        let bearing = f64::from(scan.angle_min) + (first + i) as f64 * f64::from(scan.angle_increment);
         ranges.push(RangeReading { pose_robot_sensor: Pose2::new(0.0, 0.0, bearing), range, max_range });
     }
 }
@@ -397,13 +400,22 @@ mod tests {
     }
 
     #[test]
+    fn a_scan_of_more_beams_than_the_most_readings_is_taken_as_that_many() {
+        let mut ranges = Vec::new();
+        for beams in [MOST_READINGS, MOST_READINGS + 1, 2 * MOST_READINGS - 1] {
+            ranges_of(&scan(vec![5.0; beams]), &mut ranges);
+            assert_eq!(ranges.len(), MOST_READINGS, "{beams} beams");
+        }
+    }
+
+    #[test]
     fn a_scan_of_a_million_beams_keeps_each_run_s_nearest_echo() {
         let mut beams = vec![5.0; 1_000_000];
         beams[123_456] = 0.7;
-        beams[600_000..600_300].fill(f32::INFINITY);
+        beams[600_000..600_600].fill(f32::INFINITY);
         let (scan, mut ranges) = (scan(beams), Vec::new());
         ranges_of(&scan, &mut ranges);
-        assert!(ranges.len() <= MOST_READINGS, "{}", ranges.len());
+        assert_eq!(ranges.len(), MOST_READINGS);
         let nearest = ranges.iter().min_by(|a, b| a.range.unwrap_or(99.0).total_cmp(&b.range.unwrap_or(99.0))).unwrap();
         assert_eq!(nearest.range, Some(f64::from(0.7f32)));
         // Where that beam points, not the middle of its run.
