@@ -824,23 +824,27 @@ fn a_log_that_cannot_be_written_stops_the_drive() {
     assert!(line.contains("closed true"), "the robot was stopped and closed: {line}");
 }
 
+/// `ubf drive` of an emulated robot with a camera of recorded frames in
+/// `dir` on the head at `head`, its stderr piped; and the robot.
+fn drive_with_head(dir: &std::path::Path, head: &str, extra: &str) -> (std::process::Child, Killed) {
+    record_frames(dir, 2);
+    let (emulator, address, _) = emulator();
+    let extra = format!(
+        r#"{extra}
+            camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{head}")),"#
+    );
+    let file = dir.join("robot.ron");
+    std::fs::write(&file, config(&address, &dir.join("l.csv"), &extra)).unwrap();
+    let drive =
+        Command::new(env!("CARGO_BIN_EXE_ubf")).args(["drive", file.to_str().unwrap()]).stderr(Stdio::piped()).spawn();
+    (drive.unwrap(), emulator)
+}
+
 #[test]
 fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
     let dir = tempfile::tempdir().unwrap();
-    record_frames(dir.path(), 2);
-    let (mut emulator, address, _) = emulator();
     let (mut head, head_address, _) = ptu_emulator();
-    let extra = format!(
-        r#"max_time_s: 20.0,
-            camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{head_address}")),"#
-    );
-    let file = dir.path().join("robot.ron");
-    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), &extra)).unwrap();
-    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["drive", file.to_str().unwrap()])
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (mut drive, mut emulator) = drive_with_head(dir.path(), &head_address, "max_time_s: 20.0,");
     std::thread::sleep(Duration::from_secs(3));
     head.kill().unwrap();
     let status = wait_for(&mut drive, 10.0).expect("the drive ends once the head is gone");
@@ -886,21 +890,10 @@ fn slow_answers(upstream: &str, delay: Duration) -> String {
 #[test]
 fn a_signal_while_the_head_connects_ends_the_drive_before_the_motors_go_on() {
     let dir = tempfile::tempdir().unwrap();
-    record_frames(dir.path(), 2);
-    let (mut emulator, address, _) = emulator();
     let (_head, head_address, _) = ptu_emulator();
     // The handshake's dozen answers take 2 s.
     let slow_head = slow_answers(&head_address, Duration::from_millis(150));
-    let extra = format!(
-        r#"camera: (source: Directory("frames"), stereo: (focal_px: 554.3), pan_tilt: (connection: "{slow_head}")),"#
-    );
-    let file = dir.path().join("robot.ron");
-    std::fs::write(&file, config(&address, &dir.path().join("l.csv"), &extra)).unwrap();
-    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
-        .args(["drive", file.to_str().unwrap()])
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (mut drive, mut emulator) = drive_with_head(dir.path(), &slow_head, "");
     std::thread::sleep(Duration::from_millis(700));
     assert!(Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap().success());
     let status = wait_for(&mut drive, 10.0).expect("the drive ends");
