@@ -290,6 +290,33 @@ fn a_second_odometry_publisher_stops_the_robot() {
 }
 
 #[test]
+fn a_stranger_s_unreadable_odometry_is_skipped_and_the_robot_drives_on() {
+    // A message named odometry that holds a header only, from another
+    // participant: one of them used to end the drive.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--short-odom-after 0.5", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(said.contains("at the goal"), "{said}");
+    assert_eq!(said.matches("could not be read as nav_msgs/msg/Odometry").count(), 1, "said once: {said}");
+}
+
+#[test]
+fn odometry_that_cannot_be_read_stops_the_robot_and_says_why() {
+    // The robot's own odometry stops and only unreadable messages come.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let args = "--stop-odom-after 1 --short-odom-after 0.5";
+    let Some(session) = drive_beside_robot(dir.path(), args, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(said.contains("a message on /odom: it could not be read as nav_msgs/msg/Odometry"), "{said}");
+    assert!(said.contains("no odometry on /odom"), "{said}");
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
+#[test]
 fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
     // Taken as open space, it let the robot drive through a wall. It is
     // taken as no scan, so the robot stops as for a silent scanner.

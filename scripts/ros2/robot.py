@@ -27,7 +27,7 @@ import os
 import signal
 import sys
 import time
-from dataclasses import asdict
+from dataclasses import asdict, dataclass, field
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import script_env  # noqa: E402
@@ -36,6 +36,7 @@ script_env.ensure(".venv-ros2", ["cyclonedds==11.0.1"], ["cyclonedds"])
 
 from cyclonedds.core import ReadCondition, SampleState, ViewState, InstanceState, WaitSet  # noqa: E402
 from cyclonedds.domain import DomainParticipant  # noqa: E402
+from cyclonedds.idl import IdlStruct  # noqa: E402
 from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
@@ -46,6 +47,12 @@ from ros2_types import (Header, LaserScan, Odometry, Quaternion, Time, Twist,  #
 COMMAND_TIMEOUT = 0.5
 BEAMS = 360
 RANGE_MIN, RANGE_MAX = 0.1, 10.0
+
+
+@dataclass
+class ShortOdometry(IdlStruct, typename=Odometry.__idl_typename__):
+    """What a stranger might publish under odometry's name: a header and nothing else."""
+    header: Header = field(default_factory=Header)
 
 
 def stamp():
@@ -78,6 +85,10 @@ def main():
     parser.add_argument("--second-odom-after", type=float, metavar="S",
                         help="S seconds after the robot first moved, publish a second odometry on /odom from "
                              "another writer, at x = -10 m, as a stray driver would")
+    parser.add_argument("--short-odom-after", type=float, metavar="S",
+                        help="S seconds after the robot first moved, a stranger on the domain (a participant of "
+                             "its own) also publishes on /odom messages named nav_msgs/msg/Odometry that hold a "
+                             "header only, which cannot be read as odometry")
     parser.add_argument("--scan-nan-after", type=float, metavar="S",
                         help="S seconds after the robot first moved, publish scans whose every beam is NaN")
     parser.add_argument("--odom-best-effort", action="store_true",
@@ -95,6 +106,10 @@ def main():
                              qos(sensor_data=args.odom_best_effort))
     second_odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
                                     qos()) if args.second_odom_after is not None else None
+    stranger = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0"))) \
+        if args.short_odom_after is not None else None
+    short_odom_writer = DataWriter(stranger, Topic(stranger, ros_topic("odom", args.namespace), ShortOdometry),
+                                   qos()) if stranger else None
     scan_writer = DataWriter(participant, Topic(participant, ros_topic("scan", args.namespace), LaserScan),
                              qos(sensor_data=True)) if args.scan else None
     waitset = WaitSet(participant)
@@ -149,6 +164,8 @@ def main():
             stray.pose.pose.position.x = -10.0
             stray.pose.pose.orientation = Quaternion(z=0.0, w=1.0)
             second_odom_writer.write(stray)
+        if short_odom_writer and moved_at is not None and now - moved_at >= args.short_odom_after:
+            short_odom_writer.write(ShortOdometry(header=header))
         if scan_writer:
             scan_writer.write(LaserScan(
                 header=Header(stamp=header.stamp, frame_id="base_link"),

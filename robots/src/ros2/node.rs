@@ -88,7 +88,15 @@ pub struct Subscription<M: RosMessage> {
     /// The writer of the last message taken, and when it was taken, where
     /// the topic must have one writer only ([`Subscription::single_writer`]).
     last_writer: Option<Option<(rustdds::GUID, std::time::Instant)>>,
+    /// Why the last message since the last readable one could not be
+    /// read, if one could not.
+    unreadable: Option<String>,
+    /// When an unreadable message was last said on the log.
+    unreadable_said_at: Option<std::time::Instant>,
 }
+
+/// How often skipped unreadable messages are said on the log, at most.
+const UNREADABLE_SAID_EVERY: std::time::Duration = std::time::Duration::from_secs(10);
 
 /// How long after a writer's last message another writer's is taken as a
 /// second source, not as the first one's successor (a driver restarted).
@@ -110,8 +118,19 @@ impl<M: RosMessage> Subscription<M> {
         &self.name
     }
 
+    /// Why the messages on the topic since the last readable one could
+    /// not be read as `M`, if one could not: what to say when the topic
+    /// seems silent.
+    pub fn unreadable(&self) -> Option<String> {
+        self.unreadable.as_ref().map(|why| format!("a message on {}: {why}", self.name))
+    }
+
     /// The newest message that came since the last call, if any (older
-    /// ones are taken and dropped: a controller wants the latest).
+    /// ones are taken and dropped: a controller wants the latest). A
+    /// message that cannot be read as `M` is skipped, as a ROS 2 node
+    /// skips it, and said on the log (at most every 10 s): a stranger on
+    /// the domain must not stop the robot, and a robot whose own messages
+    /// cannot be read falls silent, which its user hears about.
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
         let mut latest = None;
         loop {
@@ -128,35 +147,34 @@ impl<M: RosMessage> Subscription<M> {
                         }
                         *last_writer = Some((writer, now));
                     }
+                    self.unreadable = None;
                     latest = Some(sample.into_value());
                 }
                 Ok(None) => return Ok(latest),
+                Err(rustdds::dds::ReadError::Deserialization { reason }) => {
+                    let why = unreadable::<M>(&reason);
+                    let now = std::time::Instant::now();
+                    if self.unreadable_said_at.is_none_or(|at| now - at >= UNREADABLE_SAID_EVERY) {
+                        tracing::warn!("a message on {}: {why}; skipped", self.name);
+                        self.unreadable_said_at = Some(now);
+                    }
+                    self.unreadable = Some(why);
+                }
                 Err(e) => {
-                    return Err(RobotError::Protocol {
-                        what: format!("a message on {}", self.name),
-                        source: unreadable::<M>(e).into(),
-                    })
+                    return Err(RobotError::Protocol { what: format!("a message on {}", self.name), source: e.into() })
                 }
             }
         }
     }
 }
 
-/// What a message that could not be taken as `M` was, as a sentence: the
-/// middleware's own text names the topic twice and the type as a Rust
-/// value, and hides the one reason it gives in the middle.
-fn unreadable<M: RosMessage>(error: rustdds::dds::ReadError) -> String {
-    match error {
-        rustdds::dds::ReadError::Deserialization { reason } => {
-            let reason = reason.strip_prefix("Failed to deserialize sample bytes: ").unwrap_or(&reason);
-            let reason = reason.split(", ").next().unwrap_or(reason);
-            format!(
-                "it could not be read as {} ({reason}): something on the domain publishes another message there",
-                M::NAME
-            )
-        }
-        other => other.to_string(),
-    }
+/// Why a message could not be taken as `M`, as a sentence, from the
+/// middleware's `reason`: its own text names the topic twice and the
+/// type as a Rust value, and hides the one reason it gives in the middle.
+fn unreadable<M: RosMessage>(reason: &str) -> String {
+    let reason = reason.strip_prefix("Failed to deserialize sample bytes: ").unwrap_or(reason);
+    let reason = reason.split(", ").next().unwrap_or(reason);
+    format!("it could not be read as {} ({reason}): something on the domain publishes another message there", M::NAME)
 }
 
 /// A ROS 2 participant in one DDS domain, under one namespace.
@@ -258,7 +276,9 @@ impl Node {
         let topic = self.topic::<M>(name, qos)?;
         let name = self.resolve(name);
         match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies())) {
-            Ok(reader) => Ok(Subscription { reader, name, last_writer: None }),
+            Ok(reader) => {
+                Ok(Subscription { reader, name, last_writer: None, unreadable: None, unreadable_said_at: None })
+            }
             Err(e) => Err(setup(format!("subscribing {name}"), e)),
         }
     }
@@ -329,9 +349,7 @@ mod tests {
         // As the middleware said it for a short Odometry from a stranger.
         let reason = "Failed to deserialize sample bytes: unexpected end of input, , Topic = rt/odom, Type = \
                       TypeDesc { my_name: \"nav_msgs::msg::dds_::Odometry_\" }";
-        let said = unreadable::<super::super::msg::Odometry>(rustdds::dds::ReadError::Deserialization {
-            reason: reason.into(),
-        });
+        let said = unreadable::<super::super::msg::Odometry>(reason);
         assert_eq!(
             said,
             "it could not be read as nav_msgs/msg/Odometry (unexpected end of input): something on the domain \

@@ -114,8 +114,9 @@ impl Ros2Robot {
             }
             if Instant::now() >= deadline {
                 let topic = node.resolve(&config.odom);
-                let diagnosis = node
-                    .why_unheard::<Odometry>(&config.odom, config.odom_qos)
+                let diagnosis = odom
+                    .unreadable()
+                    .or_else(|| node.why_unheard::<Odometry>(&config.odom, config.odom_qos))
                     .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
                     .unwrap_or_else(|| {
                         format!(
@@ -294,6 +295,9 @@ impl Robot for Ros2Robot {
         }
         let age = now - self.latest_odom.1;
         if age > self.stale_after {
+            if let Some(why) = self.odom.unreadable() {
+                tracing::warn!("{why}");
+            }
             let topic = self.config.odom.clone();
             return Err(self.lost("odometry", &topic, age));
         }
@@ -319,7 +323,12 @@ impl Robot for Ros2Robot {
                     tracing::warn!("the scan on {}: {why}", self.scan.topic());
                     "usable scan"
                 }
-                None => "scan",
+                None => {
+                    if let Some(why) = self.scan.unreadable() {
+                        tracing::warn!("{why}");
+                    }
+                    "scan"
+                }
             };
             return Err(self.lost(what, &topic, now - since));
         }
