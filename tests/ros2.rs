@@ -517,6 +517,20 @@ fn a_run_logged_for_ros2_decodes_with_the_standard_readers_and_repeats_its_bytes
 }
 
 #[test]
+fn a_simulator_served_on_ros2_and_heard_writes_nothing_on_stderr_in_normal_use() {
+    // Its scan, 1548 bytes, drew a warning from the DDS library each tick.
+    install_cyclone();
+    let dir = tempfile::tempdir().unwrap();
+    let script = r#""$UBF" simulate "$ROOT/scenarios/corridor-box.ron" --ros2 --max-time 60 2>"$OUT/sim.err" & sim=$!
+python3 "$ROOT/scripts/ros2/listen.py" /scan=sensor_msgs/msg/LaserScan:best_effort --min 10 --duration 20 >/dev/null
+code=$?; kill -TERM $sim; wait $sim; exit $code"#;
+    let Some(out) = in_namespace(script, &[("OUT", dir.path().as_os_str())]) else { return };
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = std::fs::read_to_string(dir.path().join("sim.err")).unwrap();
+    assert!(!said.contains("WARN") && !said.contains("ERROR"), "{said}");
+}
+
+#[test]
 fn a_cyclone_teleop_drives_the_simulator_served_on_ros2() {
     // `ubf simulate --ros2` is a ROS 2 robot: a controller nobody here
     // wrote (Cyclone DDS, scripts/ros2/teleop.py) drives it forward at

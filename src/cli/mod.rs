@@ -838,7 +838,11 @@ fn init_tracing(verbose: u8, quiet: bool) {
     use tracing_subscriber::layer::SubscriberExt;
     use tracing_subscriber::util::SubscriberInitExt;
     use tracing_subscriber::Layer;
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
+    // The DDS library warns of every datagram over 1500 bytes it sends,
+    // which a scan served on ROS 2 is, ten times a second: 87 MB of
+    // stderr a day, of nothing wrong. Asked for debug, it is said.
+    let quiet_dds = if verbose < 2 { ",rustdds::network::udp_sender=error" } else { "" };
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(format!("{level}{quiet_dds}")));
     // Counted only once the level lets a line through, and asked line by
     // line (a plain `FilterFn` is asked once a call site).
     let budget = DynFilterFn::new(|metadata, _| viewer_log::admit(metadata.target()))

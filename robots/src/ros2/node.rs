@@ -5,7 +5,7 @@
 
 use super::msg::RosMessage;
 use rustdds::no_key::{DataReaderCdr, DataWriterCdr};
-use rustdds::policy::{Durability, History, Reliability};
+use rustdds::policy::{Durability, History, Reliability, ResourceLimits};
 use rustdds::{
     DomainParticipant, DomainParticipantStatusEvent, QosPolicies, QosPolicyBuilder, StatusEvented, TopicKind,
 };
@@ -29,18 +29,21 @@ pub enum Qos {
 
 impl Qos {
     fn policies(self) -> QosPolicies {
-        let builder = QosPolicyBuilder::new().durability(Durability::Volatile);
-        match self {
-            Qos::Reliable => builder
-                .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) })
-                .history(History::KeepLast { depth: 10 }),
-            Qos::SensorData => builder.reliability(Reliability::BestEffort).history(History::KeepLast { depth: 5 }),
-            Qos::Latched => builder
-                .durability(Durability::TransientLocal)
-                .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) })
-                .history(History::KeepLast { depth: 1 }),
-        }
-        .build()
+        let reliable = Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) };
+        let (durability, reliability, depth) = match self {
+            Qos::Reliable => (Durability::Volatile, reliable, 10),
+            Qos::SensorData => (Durability::Volatile, Reliability::BestEffort, 5),
+            Qos::Latched => (Durability::TransientLocal, reliable, 1),
+        };
+        QosPolicyBuilder::new()
+            .durability(durability)
+            .reliability(reliability)
+            .history(History::KeepLast { depth })
+            // Without a limit the middleware keeps 64 messages a topic,
+            // whatever the history says: 4 GB of a stranger's 64 MB
+            // messages. A topic keeps what its history asks for.
+            .resource_limits(ResourceLimits { max_samples: depth, max_instances: 1, max_samples_per_instance: depth })
+            .build()
     }
 }
 
@@ -343,6 +346,16 @@ impl Node {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_topic_keeps_no_more_messages_than_its_history_asks_for() {
+        for (qos, depth) in [(Qos::Reliable, 10), (Qos::SensorData, 5), (Qos::Latched, 1)] {
+            let policies = qos.policies();
+            assert_eq!(policies.history(), Some(History::KeepLast { depth }));
+            let limits = policies.resource_limits().expect("a limit");
+            assert_eq!((limits.max_samples, limits.max_samples_per_instance), (depth, depth));
+        }
+    }
 
     #[test]
     fn an_unreadable_message_is_said_in_a_sentence() {
