@@ -15,6 +15,7 @@ mod bug_report;
 mod experiment;
 mod images;
 mod inspect;
+mod network_log;
 mod new;
 mod out_dir;
 mod repeated_warnings;
@@ -22,7 +23,6 @@ mod robot;
 mod run;
 mod shard;
 mod sweep;
-mod viewer_log;
 
 use crate::ros2_log::LogFormat;
 use clap::{Parser, Subcommand};
@@ -845,14 +845,14 @@ fn init_tracing(verbose: u8, quiet: bool) {
     let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(format!("{level}{quiet_dds}")));
     // Counted only once the level lets a line through, and asked line by
     // line (a plain `FilterFn` is asked once a call site).
-    let budget = DynFilterFn::new(|metadata, _| viewer_log::admit(metadata.target()))
-        .with_callsite_filter(|metadata| viewer_log::interest(metadata.target()));
+    let budget = DynFilterFn::new(|metadata, _| network_log::admit(metadata.target()))
+        .with_callsite_filter(|metadata| network_log::interest(metadata.target()));
     // Asked for more, or for what RUST_LOG says, the log holds nothing back.
     let plain = verbose == 0 && std::env::var_os("RUST_LOG").is_none();
     let filter = filter.and(budget).and(plain.then_some(repeated_warnings::RepeatedWarnings));
     use std::io::IsTerminal;
     let layer = tracing_subscriber::fmt::layer()
-        .event_format(viewer_log::OneLineForViewers(tracing_subscriber::fmt::format()))
+        .event_format(network_log::OneLineFromNetwork(tracing_subscriber::fmt::format()))
         .with_writer(std::io::stderr)
         .with_ansi(std::io::stderr().is_terminal())
         .with_filter(filter);

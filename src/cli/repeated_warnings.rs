@@ -109,7 +109,7 @@ impl Visit for Words {
 
 #[cfg(test)]
 mod tests {
-    use super::super::viewer_log::tests::Sink;
+    use super::super::network_log::tests::Sink;
     use super::*;
 
     #[test]

@@ -1,45 +1,49 @@
-//! A budget on the log lines the live view's clients can cause, each kept
-//! to one line. The Foxglove server library logs an ERROR line for every
-//! malformed message a client sends, and anyone who can reach the view's
-//! port is a client: one of them wrote 12 MB of stderr a second, enough to
-//! fill a journal or a redirected log, and to bury what the robot said.
+//! A budget on the log lines that others on the network can cause, each
+//! kept to one line. The Foxglove server library logs an ERROR line for
+//! every malformed message a live view's client sends, and the DDS library
+//! one for many a malformed or outsized message a peer on the domain
+//! sends; anyone who can reach the port or the domain can send them. One
+//! live-view client wrote 12 MB of stderr a second, enough to fill a
+//! journal or a redirected log and to bury what the robot said; a DDS
+//! peer's 64 MB messages, 10 kB a second.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::LazyLock;
 use std::time::Instant;
 
-/// The most lines a second the live view's library may log.
+/// The most lines a second those libraries may log, together.
 const MOST_LINES_PER_S: u64 = 10;
 
 /// How often [`admit`] must be asked about events from `target`: line by
-/// line for the live view's library, never for the rest.
+/// line for those libraries, never for the rest.
 pub(super) fn interest(target: &str) -> tracing::subscriber::Interest {
-    match is_viewers(target) {
+    match is_from_network(target) {
         true => tracing::subscriber::Interest::sometimes(),
         false => tracing::subscriber::Interest::always(),
     }
 }
 
-fn is_viewers(target: &str) -> bool {
-    target.starts_with("foxglove")
+/// Whether `target` is a library that logs what others on the network
+/// send it: the live view's server or the DDS library.
+fn is_from_network(target: &str) -> bool {
+    target.starts_with("foxglove") || target.starts_with("rustdds")
 }
 
 /// Whether an event from `target` may be logged now: any event not from
-/// the live view's library, and that library's first
-/// [`MOST_LINES_PER_S`] each second.
+/// those libraries, and their first [`MOST_LINES_PER_S`] each second.
 pub(super) fn admit(target: &str) -> bool {
     static START: LazyLock<Instant> = LazyLock::new(Instant::now);
     static BUDGET: Budget = Budget::new();
-    !is_viewers(target) || BUDGET.admit(START.elapsed().as_secs())
+    !is_from_network(target) || BUDGET.admit(START.elapsed().as_secs())
 }
 
-/// A line format that keeps each of the live view's library's lines one
-/// line: its messages quote what a client sent, and a newline in that
-/// would start a line of the client's own making (`… ERROR ubf: the robot
-/// has reached its goal`). Every other line is formatted by `F` as it is.
-pub(super) struct OneLineForViewers<F>(pub(super) F);
+/// A line format that keeps each of those libraries' lines one line:
+/// their messages quote what a client or peer sent, and a newline in that
+/// would start a line of its own making (`… ERROR ubf: the robot has
+/// reached its goal`). Every other line is formatted by `F` as it is.
+pub(super) struct OneLineFromNetwork<F>(pub(super) F);
 
-impl<S, N, F> tracing_subscriber::fmt::FormatEvent<S, N> for OneLineForViewers<F>
+impl<S, N, F> tracing_subscriber::fmt::FormatEvent<S, N> for OneLineFromNetwork<F>
 where
     S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
     N: for<'a> tracing_subscriber::fmt::FormatFields<'a> + 'static,
@@ -51,7 +55,7 @@ where
         mut writer: tracing_subscriber::fmt::format::Writer<'_>,
         event: &tracing::Event<'_>,
     ) -> std::fmt::Result {
-        if !is_viewers(event.metadata().target()) {
+        if !is_from_network(event.metadata().target()) {
             return self.0.format_event(context, writer, event);
         }
         let mut line = String::new();
@@ -102,7 +106,7 @@ pub(super) mod tests {
         let subscriber = tracing_subscriber::fmt()
             .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
             .with_ansi(false)
-            .event_format(OneLineForViewers(tracing_subscriber::fmt::format()))
+            .event_format(OneLineFromNetwork(tracing_subscriber::fmt::format()))
             .finish();
         tracing::subscriber::with_default(subscriber, || {
             tracing::error!(target: "foxglove::websocket", "Invalid message: `x\nERROR ubf: forged`");
@@ -126,6 +130,13 @@ pub(super) mod tests {
         fn flush(&mut self) -> std::io::Result<()> {
             Ok(())
         }
+    }
+
+    #[test]
+    fn the_live_view_s_and_the_dds_library_s_lines_are_budgeted() {
+        assert!(is_from_network("foxglove::websocket::server"));
+        assert!(is_from_network("rustdds::structure::sequence_number"));
+        assert!(!is_from_network("ubf_robots::ros2::node"));
     }
 
     #[test]
