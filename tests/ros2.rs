@@ -290,6 +290,20 @@ fn a_second_odometry_publisher_stops_the_robot() {
 }
 
 #[test]
+fn a_reader_of_the_commands_that_stops_acknowledging_does_not_stop_the_drive() {
+    // A `ros2 topic echo /cmd_vel` stopped (Ctrl-Z) while the robot drives:
+    // with the writer's send window as small as its history (10), the
+    // commands blocked after a second and the drive ended as a lost link.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let stall = "(sleep 0.5; kill -STOP $listener; sleep 8; kill -CONT $listener) & true";
+    let listen = "/cmd_vel=geometry_msgs/msg/Twist --duration 12";
+    let Some(session) = drive_and_listen(dir.path(), "", &file, Some(stall), Some(listen)) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    assert!(stderr(&session).contains("at the goal"), "{}", stderr(&session));
+}
+
+#[test]
 fn a_stranger_s_unreadable_odometry_is_skipped_and_the_robot_drives_on() {
     // A message named odometry that holds a header only, from another
     // participant: one of them used to end the drive.

@@ -28,24 +28,55 @@ pub enum Qos {
 }
 
 impl Qos {
+    /// A topic's and its readers' policies. The middleware keeps 64
+    /// messages a topic whatever the history says unless limited (4 GB of
+    /// a stranger's 64 MB messages): a topic keeps what its history asks
+    /// for.
     fn policies(self) -> QosPolicies {
+        let depth = self.depth();
+        self.builder()
+            .resource_limits(ResourceLimits { max_samples: depth, max_instances: 1, max_samples_per_instance: depth })
+            .build()
+    }
+
+    /// A writer's policies. Its limit is its reliable send window (how many
+    /// messages may await acknowledgement), not what it keeps: limited to
+    /// the history's depth, one reader that stopped acknowledging (a
+    /// stalled `ros2 topic echo`) would block the robot's commands, its
+    /// stops included, after a second. It keeps the middleware's own
+    /// window.
+    fn writer_policies(self) -> QosPolicies {
+        let window = WRITER_WINDOW;
+        self.builder()
+            .resource_limits(ResourceLimits { max_samples: window, max_instances: 1, max_samples_per_instance: window })
+            .build()
+    }
+
+    fn depth(self) -> i32 {
+        match self {
+            Qos::Reliable => 10,
+            Qos::SensorData => 5,
+            Qos::Latched => 1,
+        }
+    }
+
+    fn builder(self) -> QosPolicyBuilder {
         let reliable = Reliability::Reliable { max_blocking_time: rustdds::Duration::from_millis(100) };
-        let (durability, reliability, depth) = match self {
-            Qos::Reliable => (Durability::Volatile, reliable, 10),
-            Qos::SensorData => (Durability::Volatile, Reliability::BestEffort, 5),
-            Qos::Latched => (Durability::TransientLocal, reliable, 1),
+        let (durability, reliability) = match self {
+            Qos::Reliable => (Durability::Volatile, reliable),
+            Qos::SensorData => (Durability::Volatile, Reliability::BestEffort),
+            Qos::Latched => (Durability::TransientLocal, reliable),
         };
         QosPolicyBuilder::new()
             .durability(durability)
             .reliability(reliability)
-            .history(History::KeepLast { depth })
-            // Without a limit the middleware keeps 64 messages a topic,
-            // whatever the history says: 4 GB of a stranger's 64 MB
-            // messages. A topic keeps what its history asks for.
-            .resource_limits(ResourceLimits { max_samples: depth, max_instances: 1, max_samples_per_instance: depth })
-            .build()
+            .history(History::KeepLast { depth: self.depth() })
     }
 }
+
+/// The middleware's reliable send window when none is set (RustDDS's
+/// `DEFAULT_WRITER_MAX_SAMPLES`).
+const WRITER_WINDOW: i32 = 8192;
 
 /// What discovery saw of another participant's endpoint on a topic.
 #[derive(Clone, Debug)]
@@ -268,7 +299,7 @@ impl Node {
     pub fn writer<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<Publisher<M>, RobotError> {
         let topic = self.topic::<M>(name, qos)?;
         let name = self.resolve(name);
-        match self.publisher.create_datawriter_no_key_cdr::<M>(&topic, Some(qos.policies())) {
+        match self.publisher.create_datawriter_no_key_cdr::<M>(&topic, Some(qos.writer_policies())) {
             Ok(writer) => Ok(Publisher { writer, name }),
             Err(e) => Err(setup(format!("publishing {name}"), e)),
         }
@@ -348,12 +379,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_topic_keeps_no_more_messages_than_its_history_asks_for() {
+    fn a_topic_keeps_no_more_messages_than_its_history_asks_for_and_a_writer_keeps_its_window() {
         for (qos, depth) in [(Qos::Reliable, 10), (Qos::SensorData, 5), (Qos::Latched, 1)] {
             let policies = qos.policies();
             assert_eq!(policies.history(), Some(History::KeepLast { depth }));
             let limits = policies.resource_limits().expect("a limit");
             assert_eq!((limits.max_samples, limits.max_samples_per_instance), (depth, depth));
+            let writer = qos.writer_policies();
+            assert_eq!(writer.history(), Some(History::KeepLast { depth }));
+            assert_eq!(writer.resource_limits().expect("a window").max_samples, WRITER_WINDOW);
         }
     }
 
