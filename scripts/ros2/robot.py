@@ -55,6 +55,12 @@ class ShortOdometry(IdlStruct, typename=Odometry.__idl_typename__):
     header: Header = field(default_factory=Header)
 
 
+@dataclass
+class ShortLaserScan(IdlStruct, typename=LaserScan.__idl_typename__):
+    """Likewise under the scan's name."""
+    header: Header = field(default_factory=Header)
+
+
 def stamp():
     ns = time.time_ns()
     return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
@@ -89,6 +95,8 @@ def main():
                         help="S seconds after the robot first moved, a stranger on the domain (a participant of "
                              "its own) also publishes on /odom messages named nav_msgs/msg/Odometry that hold a "
                              "header only, which cannot be read as odometry")
+    parser.add_argument("--short-scan-after", type=float, metavar="S",
+                        help="likewise on /scan: messages named sensor_msgs/msg/LaserScan that hold a header only")
     parser.add_argument("--scan-nan-after", type=float, metavar="S",
                         help="S seconds after the robot first moved, publish scans whose every beam is NaN")
     parser.add_argument("--odom-best-effort", action="store_true",
@@ -107,9 +115,11 @@ def main():
     second_odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
                                     qos()) if args.second_odom_after is not None else None
     stranger = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0"))) \
-        if args.short_odom_after is not None else None
+        if args.short_odom_after is not None or args.short_scan_after is not None else None
     short_odom_writer = DataWriter(stranger, Topic(stranger, ros_topic("odom", args.namespace), ShortOdometry),
-                                   qos()) if stranger else None
+                                   qos()) if args.short_odom_after is not None else None
+    short_scan_writer = DataWriter(stranger, Topic(stranger, ros_topic("scan", args.namespace), ShortLaserScan),
+                                   qos(sensor_data=True)) if args.short_scan_after is not None else None
     scan_writer = DataWriter(participant, Topic(participant, ros_topic("scan", args.namespace), LaserScan),
                              qos(sensor_data=True)) if args.scan else None
     waitset = WaitSet(participant)
@@ -166,6 +176,8 @@ def main():
             second_odom_writer.write(stray)
         if short_odom_writer and moved_at is not None and now - moved_at >= args.short_odom_after:
             short_odom_writer.write(ShortOdometry(header=header))
+        if short_scan_writer and moved_at is not None and now - moved_at >= args.short_scan_after:
+            short_scan_writer.write(ShortLaserScan(header=header))
         if scan_writer:
             scan_writer.write(LaserScan(
                 header=Header(stamp=header.stamp, frame_id="base_link"),

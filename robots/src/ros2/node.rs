@@ -122,12 +122,16 @@ pub struct Subscription<M: RosMessage> {
     /// The writer of the last message taken, and when it was taken, where
     /// the topic must have one writer only ([`Subscription::single_writer`]).
     last_writer: Option<Option<(rustdds::GUID, std::time::Instant)>>,
-    /// Why the last message since the last readable one could not be
-    /// read, if one could not.
+    /// The middleware's reason the last message since the last readable
+    /// one could not be read, if one could not.
     unreadable: Option<String>,
     /// When an unreadable message was last said on the log.
     unreadable_said_at: Option<std::time::Instant>,
 }
+
+/// The most messages [`Subscription::take_latest`] takes in one call: far
+/// beyond what a topic keeps (its history's depth).
+const MOST_TAKEN: usize = 1000;
 
 /// How often skipped unreadable messages are said on the log, at most.
 const UNREADABLE_SAID_EVERY: std::time::Duration = std::time::Duration::from_secs(10);
@@ -153,10 +157,10 @@ impl<M: RosMessage> Subscription<M> {
     }
 
     /// Why the messages on the topic since the last readable one could
-    /// not be read as `M`, if one could not: what to say when the topic
-    /// seems silent.
+    /// not be read as `M`, if one could not (`it could not be read as …`):
+    /// what to say when the topic seems silent.
     pub fn unreadable(&self) -> Option<String> {
-        self.unreadable.as_ref().map(|why| format!("a message on {}: {why}", self.name))
+        self.unreadable.as_deref().map(unreadable::<M>)
     }
 
     /// The newest message that came since the last call, if any (older
@@ -167,7 +171,8 @@ impl<M: RosMessage> Subscription<M> {
     /// cannot be read falls silent, which its user hears about.
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
         let mut latest = None;
-        loop {
+        // At most a cache's worth a call, so that a flood cannot hold a tick.
+        for _ in 0..MOST_TAKEN {
             match self.reader.take_next_sample() {
                 Ok(Some(sample)) => {
                     if let Some(last_writer) = &mut self.last_writer {
@@ -186,19 +191,19 @@ impl<M: RosMessage> Subscription<M> {
                 }
                 Ok(None) => return Ok(latest),
                 Err(rustdds::dds::ReadError::Deserialization { reason }) => {
-                    let why = unreadable::<M>(&reason);
                     let now = std::time::Instant::now();
                     if self.unreadable_said_at.is_none_or(|at| now - at >= UNREADABLE_SAID_EVERY) {
-                        tracing::warn!("a message on {}: {why}; skipped", self.name);
+                        tracing::warn!("a message on {}: {}; skipped", self.name, unreadable::<M>(&reason));
                         self.unreadable_said_at = Some(now);
                     }
-                    self.unreadable = Some(why);
+                    self.unreadable = Some(reason);
                 }
                 Err(e) => {
                     return Err(RobotError::Protocol { what: format!("a message on {}", self.name), source: e.into() })
                 }
             }
         }
+        Ok(latest)
     }
 }
 

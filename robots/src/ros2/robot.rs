@@ -116,6 +116,7 @@ impl Ros2Robot {
                 let topic = node.resolve(&config.odom);
                 let diagnosis = odom
                     .unreadable()
+                    .map(|why| format!("what came on {topic} {}", why.trim_start_matches("it ")))
                     .or_else(|| node.why_unheard::<Odometry>(&config.odom, config.odom_qos))
                     .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
                     .unwrap_or_else(|| {
@@ -296,22 +297,29 @@ impl Robot for Ros2Robot {
         let age = now - self.latest_odom.1;
         if age > self.stale_after {
             if let Some(why) = self.odom.unreadable() {
-                tracing::warn!("{why}");
+                tracing::warn!("the odometry on {}: {why}", self.odom.topic());
             }
             let topic = self.config.odom.clone();
             return Err(self.lost("odometry", &topic, age));
         }
-        if let Some(scan) = self.scan.take_latest()? {
-            match scan.why_unusable() {
-                Some(why) => {
-                    let since = self.unusable_scans.take().map_or(now, |(_, since)| since);
-                    self.unusable_scans = Some((why, since));
-                }
-                None => {
-                    self.unusable_scans = None;
-                    self.latest_scan = Some((scan, now));
-                }
+        // A scan that cannot be read, like one that says nothing of
+        // obstacles, is taken as no scan: the robot stops as for a silent
+        // scanner if no usable one follows.
+        let scan = self.scan.take_latest()?;
+        let why_unusable = match &scan {
+            Some(scan) => scan.why_unusable(),
+            None => self.scan.unreadable(),
+        };
+        match (scan, why_unusable) {
+            (_, Some(why)) => {
+                let since = self.unusable_scans.take().map_or(now, |(_, since)| since);
+                self.unusable_scans = Some((why, since));
             }
+            (Some(scan), None) => {
+                self.unusable_scans = None;
+                self.latest_scan = Some((scan, now));
+            }
+            (None, None) => {}
         }
         // Since the last usable scan, or the first scan if none was.
         let usable_since = self.latest_scan.as_ref().map(|(_, at)| *at);
@@ -323,12 +331,7 @@ impl Robot for Ros2Robot {
                     tracing::warn!("the scan on {}: {why}", self.scan.topic());
                     "usable scan"
                 }
-                None => {
-                    if let Some(why) = self.scan.unreadable() {
-                        tracing::warn!("{why}");
-                    }
-                    "scan"
-                }
+                None => "scan",
             };
             return Err(self.lost(what, &topic, now - since));
         }
