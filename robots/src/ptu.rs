@@ -92,6 +92,8 @@ const ANSWER_WAIT: Duration = Duration::from_millis(1000);
 /// Longest wait for the whole handshake and the first reading: a dozen
 /// exchanges, a few milliseconds each at 9 600 baud.
 const HANDSHAKE_WAIT: Duration = Duration::from_secs(3);
+/// How long the unit must have been silent before the driver talks.
+const QUIET_BEFORE_TALKING: Duration = Duration::from_millis(100);
 /// Pause between two rounds of reading the encoders.
 const POLL_PERIOD: Duration = Duration::from_millis(20);
 /// The coarsest step a PTU has, arc-seconds: a PTU-D46's is 185″, and
@@ -100,10 +102,9 @@ const MOST_STEP_ARC_S: f64 = 3600.0;
 /// How far beyond its limits a reading may lie, steps (an axis stopped
 /// at a limit may overshoot it a little).
 const LIMIT_SLACK_STEPS: f64 = 10.0;
-/// How much faster than its set speed the pan may seem to move between
-/// two readings, whose times are known only to within a query's length.
-const RATE_SLACK: f64 = 1.5;
-/// And by how much more, °.
+/// How much further than its set speed allows the pan may seem to move
+/// between two readings, °: an encoder step or two, and the rounding of
+/// a reading taken as the axis moves.
 const READING_SLACK_DEG: f64 = 2.0;
 /// The most of a line from the unit an error quotes, characters.
 const MOST_QUOTED_CHARS: usize = 80;
@@ -205,6 +206,12 @@ pub enum PtuError {
         for_s: f64,
         /// The age a reading is refused at, s.
         after_s: f64,
+    },
+    /// The unit kept sending before any command was sent to it.
+    #[error("it kept sending for {within_ms} ms before anything was asked of it: is this a PTU?")]
+    NeverQuiet {
+        /// How long it was given, ms.
+        within_ms: u128,
     },
     /// No reading has come yet.
     #[error("no reading yet")]
@@ -354,6 +361,14 @@ pub struct PtuAxes {
     pub tilt_limits: [i64; 2],
 }
 
+/// A pan read, and when it was asked for: the earliest the unit can have
+/// measured it.
+#[derive(Clone, Copy, Debug)]
+struct PanRead {
+    asked: Instant,
+    pan: f64,
+}
+
 /// Readings and targets shared with the unit's thread.
 #[derive(Debug, Default)]
 struct Shared {
@@ -388,14 +403,14 @@ impl Ptu {
         let until = Some(Instant::now() + HANDSHAKE_WAIT);
         let mut talk = Conversation { link, pending: Vec::new(), until };
         let axes = Self::handshake(&mut talk, &config).map_err(failed)?;
-        let first = Self::read(&mut talk, &axes, &config, None).map_err(failed)?;
+        let (first, pan_read) = Self::read(&mut talk, &axes, &config, None).map_err(failed)?;
         talk.until = None;
         let shared = Arc::new(Mutex::new(Shared { reading: Some(first), ..Shared::default() }));
         let stop = Arc::new(AtomicBool::new(false));
         let (for_thread, flag, settings) = (Arc::clone(&shared), Arc::clone(&stop), config.clone());
         let thread = std::thread::Builder::new()
             .name("pan-tilt".into())
-            .spawn(move || Self::run(talk, axes, settings, &for_thread, &flag))
+            .spawn(move || Self::run(talk, axes, settings, pan_read, &for_thread, &flag))
             .map_err(|e| failed(PtuError::Thread(e)))?;
         Ok(Ptu { config, axes, shared, stop, thread: Some(thread) })
     }
@@ -406,19 +421,30 @@ impl Ptu {
     }
 
     fn handshake(talk: &mut Conversation, config: &PtuConfig) -> Result<PtuAxes, PtuError> {
-        // Whatever the unit said before (a power-up banner) is not ours.
+        // Whatever the unit says before it falls quiet (a power-up banner,
+        // a reset's limit notices, at 9 600 baud longer than a moment) is
+        // not ours.
         let mut scratch = [0u8; 256];
-        let quiet_until = Instant::now() + Duration::from_millis(100);
+        let mut quiet_until = Instant::now() + QUIET_BEFORE_TALKING;
         while Instant::now() < quiet_until {
+            if talk.until.is_some_and(|until| Instant::now() > until) {
+                return Err(PtuError::NeverQuiet { within_ms: HANDSHAKE_WAIT.as_millis() });
+            }
             match talk.link.read(&mut scratch) {
                 Ok(0) => return Err(PtuError::Closed),
-                Ok(_) => {}
+                Ok(_) => quiet_until = Instant::now() + QUIET_BEFORE_TALKING,
                 Err(e) if link::is_timeout(&e) => {}
                 Err(e) => return Err(PtuError::Read(e)),
             }
         }
         talk.command("ED")?;
         talk.command("FT")?;
+        // Positions run as sent (a unit saved in slaved mode waits for an
+        // `A` before moving), each axis under position control (one saved
+        // in velocity mode would take a position for a speed). A unit too
+        // old to know `CI` has no other mode.
+        talk.command("I")?;
+        let _ = talk.ask("CI")?;
         let arc_seconds = |s: f64| (s / 3600.0).to_radians();
         let whole = |v: f64| v.round() as i64;
         let axes = PtuAxes {
@@ -438,8 +464,7 @@ impl Ptu {
         if !(within_a_turn(axes.pan_limits, axes.pan_step) && within_a_turn(axes.tilt_limits, axes.tilt_step)) {
             return Err(PtuError::LimitsBeyondATurn(axes));
         }
-        let speed = (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0);
-        talk.command(&format!("PS{speed}"))?;
+        talk.command(&format!("PS{}", Self::pan_speed_steps(config, &axes)))?;
         let tilt = Self::steps(config.tilt_deg.to_radians(), axes.tilt_step, axes.tilt_limits);
         talk.command(&format!("TP{tilt}"))?;
         Ok(axes)
@@ -460,53 +485,69 @@ impl Ptu {
     }
 
     /// The head's angles, and when the pan was read: halfway through its
-    /// query, the best guess at when the unit answered.
-    /// A reading outside the unit's limits, or a pan that moved faster
-    /// than it was set to since the `last` reading, is refused.
+    /// query, the best guess at when the unit answered; and that pan, with
+    /// when it was asked for, for the next reading's check.
+    ///
+    /// A reading outside the unit's limits, or a pan that moved further
+    /// since the `last` than the speed sent allows between that query's
+    /// asking and this one's answer (and 2°), is refused.
     fn read(
         talk: &mut Conversation,
         axes: &PtuAxes,
         config: &PtuConfig,
-        last: Option<(Instant, Aim)>,
-    ) -> Result<(Instant, Aim), PtuError> {
+        last: Option<PanRead>,
+    ) -> Result<((Instant, Aim), PanRead), PtuError> {
         let asked = Instant::now();
         let pan_steps = talk.number("PP")?;
-        let read_at = asked + asked.elapsed() / 2;
+        let answered = Instant::now();
+        let read_at = asked + (answered - asked) / 2;
         let tilt_steps = talk.number("TP")?;
         within_limits("PP", pan_steps, axes.pan_limits)?;
         within_limits("TP", tilt_steps, axes.tilt_limits)?;
         let aim = Aim { pan: pan_steps * axes.pan_step * Self::pan_sign(config), tilt: tilt_steps * axes.tilt_step };
-        if let Some((then, before)) = last {
-            let seconds = read_at.saturating_duration_since(then).as_secs_f64();
-            let most = RATE_SLACK * config.max_rate_deg_s.to_radians() * seconds + READING_SLACK_DEG.to_radians();
-            let moved = (aim.pan - before.pan).abs();
-            if moved > most {
+        if let Some(last) = last {
+            let seconds = (answered - last.asked).as_secs_f64();
+            let speed = Self::pan_speed_steps(config, axes) * axes.pan_step;
+            let moved = (aim.pan - last.pan).abs();
+            if moved > speed * seconds + READING_SLACK_DEG.to_radians() {
                 let why = format!(
-                    "the pan moved {:.1}° in {seconds:.2} s, faster than the {}°/s it was set to",
+                    "the pan moved {:.1}° in {seconds:.2} s, faster than the {:.1}°/s it was set to",
                     moved.to_degrees(),
-                    config.max_rate_deg_s
+                    speed.to_degrees()
                 );
                 let reading = ubf_core::config::shown(pan_steps);
                 return Err(PtuError::Implausible { query: "PP", reading, why });
             }
         }
-        Ok((read_at, aim))
+        Ok(((read_at, aim), PanRead { asked, pan: aim.pan }))
+    }
+
+    /// The pan speed sent to the unit, steps a second: the fastest set,
+    /// in whole steps.
+    fn pan_speed_steps(config: &PtuConfig, axes: &PtuAxes) -> f64 {
+        (config.max_rate_deg_s.to_radians() / axes.pan_step).round().max(1.0)
     }
 
     /// The unit's thread: sends the newest target, reads the encoders,
     /// again, until stopped or the unit fails; then halts the head.
-    fn run(mut talk: Conversation, axes: PtuAxes, config: PtuConfig, shared: &Mutex<Shared>, stop: &AtomicBool) {
+    fn run(
+        mut talk: Conversation,
+        axes: PtuAxes,
+        config: PtuConfig,
+        mut last: PanRead,
+        shared: &Mutex<Shared>,
+        stop: &AtomicBool,
+    ) {
         let lock = || shared.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        let mut last = lock().reading;
         while !stop.load(Ordering::Relaxed) {
             let target = lock().target.take();
             let sent = target.map_or(Ok(()), |aim| {
                 let pan = Self::steps(aim.pan * Self::pan_sign(&config), axes.pan_step, axes.pan_limits);
                 talk.command(&format!("PP{pan}"))
             });
-            match sent.and_then(|()| Self::read(&mut talk, &axes, &config, last)) {
-                Ok(reading) => {
-                    last = Some(reading);
+            match sent.and_then(|()| Self::read(&mut talk, &axes, &config, Some(last))) {
+                Ok((reading, pan_read)) => {
+                    last = pan_read;
                     lock().reading = Some(reading);
                 }
                 Err(e) => {
@@ -737,6 +778,9 @@ fn answer(
             *verbose = true;
             "*".into()
         }
+        // Immediate execution and independent position control: the only
+        // modes emulated.
+        ("I" | "CI", None) => "*".into(),
         ("PR" | "TR", None) => say(
             *verbose,
             format!("{} seconds arc per {axis_name} position", config.arc_seconds_per_step),

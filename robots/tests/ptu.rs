@@ -373,7 +373,7 @@ fn a_reading_no_head_can_give_is_refused() {
     // Turned 154° between two readings 20 ms apart, at 60°/s.
     let jumping = faulty_head(|query, n| (query == "PP" && n == 5).then(|| "* 3000".into()));
     let error = failure_of(&jumping);
-    assert!(error.contains("the pan moved 154.3°") && error.contains("faster than the 60°/s"), "{error}");
+    assert!(error.contains("the pan moved 154.3°") && error.contains("faster than the 60.0°/s"), "{error}");
 }
 
 #[test]
@@ -387,10 +387,10 @@ fn an_answer_nobody_asked_for_is_refused_not_taken_for_the_next() {
 
 #[test]
 fn a_head_describing_itself_as_no_ptu_is_refused() {
-    let coarse = faulty_head(|query, _| (query == "PR").then(|| "* 7200".into()));
-    assert!(failure_of(&coarse).contains("unusable resolution"), "{}", failure_of(&coarse));
-    let endless = faulty_head(|query, _| (query == "PN").then(|| "* -99999999".into()));
-    assert!(failure_of(&endless).contains("limits beyond a full turn"));
+    let coarse = failure_of(&faulty_head(|query, _| (query == "PR").then(|| "* 7200".into())));
+    assert!(coarse.contains("unusable resolution"), "{coarse}");
+    let endless = failure_of(&faulty_head(|query, _| (query == "PN").then(|| "* -99999999".into())));
+    assert!(endless.contains("limits beyond a full turn"), "{endless}");
     // Its words are shown, never obeyed by the terminal.
     let escaping = faulty_head(|query, _| (query == "FT").then(|| format!("! \x1b[2J{}", "x".repeat(500))));
     let error = failure_of(&escaping);
@@ -410,4 +410,42 @@ fn a_head_that_answers_each_query_just_in_time_does_not_hold_the_drive_for_long(
     let error = Ptu::connect(PtuConfig::new(&slow)).err().expect("refused").to_string();
     assert!(error.contains("no answer to"), "{error}");
     assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+}
+
+#[test]
+fn a_head_that_talks_before_it_is_asked_and_answers_late_at_times_is_taken() {
+    // A reset's limit notices and its end, trickling in before the first
+    // command; then a pan turning at the speed set (1167 steps/s), whose
+    // every other reading is answered 0.3 s late.
+    let started = Instant::now();
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let turning = format!("tcp://{}", listener.local_addr().unwrap());
+    let upstream = faulty_head(move |query, n| match query {
+        "PP" => {
+            if n % 2 == 1 {
+                std::thread::sleep(Duration::from_millis(300));
+            }
+            Some(format!("* {}", (1167.0 * started.elapsed().as_secs_f64()).min(3090.0).round()))
+        }
+        _ => None,
+    });
+    std::thread::spawn(move || {
+        let (mut client, _) = listener.accept().unwrap();
+        use std::io::Write;
+        for notice in ["!T", "!T", "!P", "!P*"] {
+            client.write_all(format!("{notice}\r\n").as_bytes()).unwrap();
+            std::thread::sleep(Duration::from_millis(80));
+        }
+        let mut head = std::net::TcpStream::connect(upstream.trim_start_matches("tcp://")).unwrap();
+        let (mut to_head, mut from_head) = (client.try_clone().unwrap(), head.try_clone().unwrap());
+        std::thread::spawn(move || std::io::copy(&mut to_head, &mut head));
+        let _ = std::io::copy(&mut from_head, &mut client);
+    });
+    let mut ptu = Ptu::connect(PtuConfig::new(&turning)).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(3);
+    while Instant::now() < deadline {
+        ptu.measured().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(ptu.measured().unwrap().pan.to_degrees() > 100.0, "it turned");
 }
