@@ -823,8 +823,8 @@ fn parse_png_path(text: &str) -> Result<PathBuf, String> {
 }
 
 /// Log to stderr at the level RUST_LOG sets, or else `-v`/`-q` (warnings by
-/// default), with the live view's clients' lines budgeted and, by
-/// default, a sweep's repeated warnings held back.
+/// default), with the warnings others on the network can cause budgeted
+/// and, by default, a sweep's repeated warnings held back.
 fn init_tracing(verbose: u8, quiet: bool) {
     use tracing_subscriber::EnvFilter;
     let level = match (quiet, verbose) {
@@ -834,22 +834,16 @@ fn init_tracing(verbose: u8, quiet: bool) {
         (false, 2) => "debug",
         (false, _) => "trace",
     };
-    use tracing_subscriber::filter::{DynFilterFn, FilterExt};
+    use tracing_subscriber::filter::FilterExt;
     use tracing_subscriber::layer::SubscriberExt;
     use tracing_subscriber::util::SubscriberInitExt;
     use tracing_subscriber::Layer;
-    // The DDS library warns of every datagram over 1500 bytes it sends,
-    // which a scan served on ROS 2 is, ten times a second: 87 MB of
-    // stderr a day, of nothing wrong. Asked for debug, it is said.
-    let quiet_dds = if verbose < 2 { ",rustdds::network::udp_sender=error" } else { "" };
-    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(format!("{level}{quiet_dds}")));
-    // Counted only once the level lets a line through, and asked line by
-    // line (a plain `FilterFn` is asked once a call site).
-    let budget = DynFilterFn::new(|metadata, _| network_log::admit(metadata.target()))
-        .with_callsite_filter(|metadata| network_log::interest(metadata.target()));
-    // Asked for more, or for what RUST_LOG says, the log holds nothing back.
+    let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
+    // Counted only once the level lets a line through.
+    let network = network_log::NetworkLines { datagram_sizes: verbose >= 2 };
+    // Asked for more, or for what RUST_LOG says, the log holds no repeat back.
     let plain = verbose == 0 && std::env::var_os("RUST_LOG").is_none();
-    let filter = filter.and(budget).and(plain.then_some(repeated_warnings::RepeatedWarnings));
+    let filter = filter.and(network).and(plain.then_some(repeated_warnings::RepeatedWarnings));
     use std::io::IsTerminal;
     let layer = tracing_subscriber::fmt::layer()
         .event_format(network_log::OneLineFromNetwork(tracing_subscriber::fmt::format()))

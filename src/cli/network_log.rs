@@ -10,31 +10,87 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::LazyLock;
 use std::time::Instant;
+use tracing::field::{Field, Visit};
+use tracing::{Event, Level, Metadata};
+use tracing_subscriber::layer::{Context, Filter};
 
-/// The most lines a second those libraries may log, together.
+/// The most warnings and errors a second each of those libraries may log.
 const MOST_LINES_PER_S: u64 = 10;
 
-/// How often [`admit`] must be asked about events from `target`: line by
-/// line for those libraries, never for the rest.
-pub(super) fn interest(target: &str) -> tracing::subscriber::Interest {
-    match is_from_network(target) {
-        true => tracing::subscriber::Interest::sometimes(),
-        false => tracing::subscriber::Interest::always(),
+/// The libraries that log what others on the network send them, by the
+/// start of their targets: the live view's server and the DDS library.
+const FROM_NETWORK: [&str; 2] = ["foxglove", "rustdds"];
+
+/// What the DDS library says of every datagram over 1500 bytes it sends
+/// (a scan served on ROS 2, ten times a second: 87 MB of stderr a day, of
+/// nothing wrong).
+const DATAGRAM_SIZE_NOTICE: &str = "send_to_locator: Message size";
+
+/// The log filter for those libraries: their warnings and errors held to
+/// [`MOST_LINES_PER_S`] a second each (what they say at the levels `-v`
+/// asks for is not held back), and, unless asked for, without the DDS
+/// library's datagram-size notices.
+pub(super) struct NetworkLines {
+    /// Whether the datagram-size notices are said (`-vv`).
+    pub(super) datagram_sizes: bool,
+}
+
+impl<S> Filter<S> for NetworkLines {
+    fn enabled(&self, _: &Metadata<'_>, _: &Context<'_, S>) -> bool {
+        true
+    }
+
+    /// Event by event for those libraries' warnings and errors (and the
+    /// `log` crate's, which may be theirs), never for the rest.
+    fn callsite_enabled(&self, metadata: &'static Metadata<'static>) -> tracing::subscriber::Interest {
+        match library_of(metadata).is_some() || metadata.target() == "log" {
+            true => tracing::subscriber::Interest::sometimes(),
+            false => tracing::subscriber::Interest::always(),
+        }
+    }
+
+    fn event_enabled(&self, event: &Event<'_>, _: &Context<'_, S>) -> bool {
+        // A line from the `log` crate (the DDS library's) carries its
+        // target in a field; its call site is one for all of them.
+        use tracing_log::NormalizeEvent;
+        let metadata = event.normalized_metadata();
+        let Some(library) = library_of(metadata.as_ref().unwrap_or(event.metadata())) else { return true };
+        if !self.datagram_sizes && message_of(event).contains(DATAGRAM_SIZE_NOTICE) {
+            return false;
+        }
+        static START: LazyLock<Instant> = LazyLock::new(Instant::now);
+        static BUDGETS: [Budget; FROM_NETWORK.len()] = [Budget::new(), Budget::new()];
+        BUDGETS[library].admit(START.elapsed().as_secs())
     }
 }
 
-/// Whether `target` is a library that logs what others on the network
-/// send it: the live view's server or the DDS library.
-fn is_from_network(target: &str) -> bool {
-    target.starts_with("foxglove") || target.starts_with("rustdds")
+/// Which of [`FROM_NETWORK`] a warning or error comes from, if one does.
+fn library_of(metadata: &Metadata<'_>) -> Option<usize> {
+    let budgeted = metadata.is_event() && *metadata.level() <= Level::WARN;
+    FROM_NETWORK.iter().position(|library| budgeted && is_from(metadata.target(), library))
 }
 
-/// Whether an event from `target` may be logged now: any event not from
-/// those libraries, and their first [`MOST_LINES_PER_S`] each second.
-pub(super) fn admit(target: &str) -> bool {
-    static START: LazyLock<Instant> = LazyLock::new(Instant::now);
-    static BUDGET: Budget = Budget::new();
-    !is_from_network(target) || BUDGET.admit(START.elapsed().as_secs())
+fn is_from(target: &str, library: &str) -> bool {
+    target.starts_with(library)
+}
+
+fn is_from_network(target: &str) -> bool {
+    FROM_NETWORK.iter().any(|library| is_from(target, library))
+}
+
+/// An event's message, as written.
+pub(super) fn message_of(event: &Event<'_>) -> String {
+    struct Message(String);
+    impl Visit for Message {
+        fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+            if field.name() == "message" {
+                self.0 = format!("{value:?}");
+            }
+        }
+    }
+    let mut message = Message(String::new());
+    event.record(&mut message);
+    message.0
 }
 
 /// A line format that keeps each of those libraries' lines one line:
@@ -133,16 +189,32 @@ pub(super) mod tests {
     }
 
     #[test]
-    fn the_live_view_s_and_the_dds_library_s_lines_are_budgeted() {
-        assert!(is_from_network("foxglove::websocket::server"));
-        assert!(is_from_network("rustdds::structure::sequence_number"));
-        assert!(!is_from_network("ubf_robots::ros2::node"));
-    }
-
-    #[test]
-    fn the_rest_of_the_log_is_never_held_back() {
-        for _ in 0..1000 {
-            assert!(admit("ubf_session::drive"));
-        }
+    fn each_library_s_warnings_have_a_budget_and_the_rest_of_the_log_none() {
+        let said = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let sink = std::sync::Arc::clone(&said);
+        use tracing_subscriber::layer::SubscriberExt;
+        use tracing_subscriber::Layer;
+        let layer = tracing_subscriber::fmt::layer()
+            .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
+            .with_ansi(false)
+            .without_time()
+            .with_filter(NetworkLines { datagram_sizes: false });
+        tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), || {
+            for _ in 0..100 {
+                tracing::error!(target: "foxglove::websocket", "a client's garbage");
+                tracing::warn!(target: "rustdds::structure", "a peer's garbage");
+                tracing::warn!(target: "rustdds::network::udp_sender", "try_send_to_locator: Message size = 1548");
+                tracing::warn!(target: "ubf_session::drive", "ours");
+                tracing::info!(target: "rustdds::discovery", "asked for with -v");
+            }
+        });
+        let text = String::from_utf8(said.lock().unwrap().clone()).unwrap();
+        let count = |what: &str| text.lines().filter(|l| l.contains(what)).count();
+        // Within one second or two of the clock's.
+        assert!((10..=20).contains(&count("a client's garbage")), "{text}");
+        assert!((10..=20).contains(&count("a peer's garbage")), "{text}");
+        assert_eq!(count("Message size"), 0, "{text}");
+        assert_eq!((count("ours"), count("asked for with -v")), (100, 100), "{text}");
+        assert!(is_from_network("rustdds::network") && !is_from_network("ubf_robots::ros2::node"));
     }
 }

@@ -10,7 +10,6 @@ use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, PoisonError};
 use tracing::callsite::Identifier;
-use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Metadata};
 use tracing_subscriber::layer::{Context, Filter};
 
@@ -83,28 +82,16 @@ fn admit(event: &Event<'_>) -> bool {
     if !is_warning(metadata) || !ONCE.load(Ordering::SeqCst) {
         return true;
     }
-    let mut words = Words(String::new());
-    event.record(&mut words);
     let mut said = SAID.lock().unwrap_or_else(PoisonError::into_inner);
     let said = said.get_or_insert_with(HashSet::new);
     // Messages from the `log` crate share one call site: their words and
     // target tell them apart.
-    let key = (metadata.callsite(), format!("{}: {}", metadata.target(), words.0));
+    let key = (metadata.callsite(), format!("{}: {}", metadata.target(), super::network_log::message_of(event)));
     let new = said.len() < MOST_REMEMBERED && said.insert(key);
     if !new {
         HELD_BACK.fetch_add(1, Ordering::SeqCst);
     }
     new
-}
-
-/// An event's fields, written out.
-struct Words(String);
-
-impl Visit for Words {
-    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
-        use std::fmt::Write;
-        let _ = write!(self.0, "{}={value:?} ", field.name());
-    }
 }
 
 #[cfg(test)]
