@@ -865,11 +865,12 @@ fn a_pan_tilt_head_that_goes_silent_stops_the_drive_without_reconnecting() {
 }
 
 /// A TCP address in front of `upstream` whose answers each come `delay`
-/// late, for one client.
-fn slow_answers(upstream: &str, delay: Duration) -> String {
+/// late, for one client; and word of the first answer passed on.
+fn slow_answers(upstream: &str, delay: Duration) -> (String, std::sync::mpsc::Receiver<()>) {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let address = format!("tcp://{}", listener.local_addr().unwrap());
     let upstream = upstream.trim_start_matches("tcp://").to_owned();
+    let (answered, first_answer) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         let (client, _) = listener.accept().unwrap();
         let head = std::net::TcpStream::connect(upstream).unwrap();
@@ -882,19 +883,21 @@ fn slow_answers(upstream: &str, delay: Duration) -> String {
             if to_client.write_all(&chunk[..n]).is_err() {
                 return;
             }
+            let _ = answered.send(());
         }
     });
-    address
+    (address, first_answer)
 }
 
 #[test]
 fn a_signal_while_the_head_connects_ends_the_drive_before_the_motors_go_on() {
     let dir = tempfile::tempdir().unwrap();
     let (_head, head_address, _) = ptu_emulator();
-    // The handshake's dozen answers take 2 s.
-    let slow_head = slow_answers(&head_address, Duration::from_millis(150));
+    // The handshake's dozen answers take 2 s: the signal comes after the
+    // first.
+    let (slow_head, first_answer) = slow_answers(&head_address, Duration::from_millis(150));
     let (mut drive, mut emulator) = drive_with_head(dir.path(), &slow_head, "");
-    std::thread::sleep(Duration::from_millis(700));
+    first_answer.recv_timeout(Duration::from_secs(30)).expect("the head was asked something");
     assert!(Command::new("kill").args(["-TERM", &drive.id().to_string()]).status().unwrap().success());
     let status = wait_for(&mut drive, 10.0).expect("the drive ends");
     emulator.kill().unwrap();

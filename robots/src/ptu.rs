@@ -271,7 +271,7 @@ fn printable(bytes: &[u8]) -> String {
     let text = crate::printable::text(bytes.trim_ascii());
     match text.char_indices().nth(MOST_QUOTED_CHARS) {
         Some((cut, _)) => format!("{}…", &text[..cut]),
-        None => text.to_owned(),
+        None => text,
     }
 }
 
