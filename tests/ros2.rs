@@ -493,6 +493,36 @@ fn a_scan_wall_ahead_turns_the_robot_away() {
     assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
 }
 
+#[test]
+fn a_scanner_mounted_backwards_behind_the_centre_is_read_from_where_it_sits() {
+    // Its angle 0 points backwards: read as if at the centre facing ahead,
+    // the wall ahead would be behind the robot, which would drive into it.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(
+        &file,
+        r#"RobotConfig(
+    name: "ros2-robot",
+    connection: "ros2",
+    model: Powerbot,
+    ros2: (scan_mount: (x: -0.3, heading_deg: 180.0)),
+    max_time_s: 12.0,
+    goal: (x: 4.0, y: 0.0, tolerance: 0.2),
+    root: Composite(arbiter: CommandFusion, children: [
+        (behavior: Stop(), weight: 1.0),
+        (behavior: AvoidCollision(), weight: 3.0),
+        (behavior: GoTo(cruise_speed: 0.3)),
+    ]),
+)"#,
+    )
+    .unwrap();
+    let args = "--scan --wall-x 1.5 --laser-mount -0.3 180";
+    let Some(session) = drive_beside_robot(dir.path(), args, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let (x, _, _) = pose(&session.summary);
+    assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
+}
+
 /// Runs `scripts/ros2-bag-check.py` (mcap-ros2-support and rosbags, which
 /// nobody here wrote) on a bag's MCAP; its JSON verdict.
 fn check_bag(mcap: &Path, topics: &[&str]) -> Value {

@@ -83,6 +83,9 @@ def main():
     parser.add_argument("--rate", type=float, default=20.0, help="odometry rate, Hz")
     parser.add_argument("--scan", action="store_true", help="also publish /scan")
     parser.add_argument("--wall-x", type=float, help="x of a wall (odom frame) that the scan sees")
+    parser.add_argument("--laser-mount", type=float, nargs=2, metavar=("X", "HEADING_DEG"), default=(0.0, 0.0),
+                        help="the scanner X m ahead of the robot's centre, its angle 0 HEADING_DEG "
+                             "counter-clockwise from the robot's heading (frame \"laser\")")
     parser.add_argument("--stop-odom-after", type=float, metavar="S",
                         help="stop publishing odometry S seconds after the robot first moved")
     parser.add_argument("--odom-jump-after", type=float, metavar="S",
@@ -179,13 +182,16 @@ def main():
         if short_scan_writer and moved_at is not None and now - moved_at >= args.short_scan_after:
             short_scan_writer.write(ShortLaserScan(header=header))
         if scan_writer:
+            mount_x, mount_heading_deg = args.laser_mount
             scan_writer.write(LaserScan(
-                header=Header(stamp=header.stamp, frame_id="base_link"),
+                header=Header(stamp=header.stamp, frame_id="laser" if any(args.laser_mount) else "base_link"),
                 angle_min=-math.pi, angle_max=math.pi - 2 * math.pi / BEAMS,
                 angle_increment=2 * math.pi / BEAMS, scan_time=period,
                 range_min=RANGE_MIN, range_max=RANGE_MAX,
                 ranges=[math.nan] * BEAMS if args.scan_nan_after is not None and moved_at is not None
-                and now - moved_at >= args.scan_nan_after else scan_ranges(x, y, theta, args.wall_x)))
+                and now - moved_at >= args.scan_nan_after else scan_ranges(
+                    x + mount_x * math.cos(theta), y + mount_x * math.sin(theta),
+                    theta + math.radians(mount_heading_deg), args.wall_x)))
 
     if record:
         summary = {"pose": {"x": x, "y": y, "theta": theta},

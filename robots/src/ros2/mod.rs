@@ -12,4 +12,4 @@ pub mod node;
 pub mod robot;
 
 pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
-pub use robot::{Ros2Config, Ros2EmergencyStop, Ros2Robot};
+pub use robot::{Ros2Config, Ros2EmergencyStop, Ros2Robot, ScanMount};

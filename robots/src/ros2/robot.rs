@@ -34,6 +34,43 @@ pub struct Ros2Config {
     pub scan_qos: Qos,
     /// How long to wait for the first odometry message, s.
     pub connect_timeout_s: f64,
+    /// Where the scanner sits on the robot (`/tf` is not looked up).
+    pub scan_mount: ScanMount,
+}
+
+/// Where a scanner sits on the robot, as `ros2 run tf2_ros tf2_echo
+/// base_link <the scan's frame>` gives it: `scan_mount: (x: 0.2, y: 0.0,
+/// heading_deg: 0.0)`, and `upside_down: true` for one mounted under a
+/// plate (rolled half a turn, so that its angles run clockwise).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScanMount {
+    /// Metres ahead of the robot's centre (`base_link`).
+    #[serde(default, deserialize_with = "mount_m")]
+    pub x: f64,
+    /// Metres to its left.
+    #[serde(default, deserialize_with = "mount_m")]
+    pub y: f64,
+    /// Where the scan's angle 0 points, degrees counter-clockwise from
+    /// the robot's heading.
+    #[serde(default, deserialize_with = "ubf_core::config::angle_deg")]
+    pub heading_deg: f64,
+    /// Whether the scanner is upside down.
+    #[serde(default)]
+    pub upside_down: bool,
+}
+
+fn mount_m<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    ubf_core::config::number_in(d, -10.0..=10.0, "from -10 to 10 m")
+}
+
+impl ScanMount {
+    /// The pose, in the robot's frame, of the beam at `angle` in the
+    /// scan's.
+    fn beam(&self, angle: f64) -> Pose2 {
+        let angle = if self.upside_down { -angle } else { angle };
+        Pose2::new(self.x, self.y, self.heading_deg.to_radians() + angle)
+    }
 }
 
 impl Default for Ros2Config {
@@ -47,6 +84,7 @@ impl Default for Ros2Config {
             odom_qos: Qos::Reliable,
             scan_qos: Qos::SensorData,
             connect_timeout_s: 5.0,
+            scan_mount: ScanMount::default(),
         }
     }
 }
@@ -251,12 +289,12 @@ fn usable_odometry(odometry: &Odometry, topic: &str) -> Result<(), RobotError> {
 /// Hokuyo's 270° at 0.25°, 3600 a full turn at 0.1°).
 const MOST_READINGS: usize = 4096;
 
-/// A scan's beams as range readings from the robot's centre (the scanner's
-/// offset from `base_link` is not looked up). A scan of more beams than
+/// A scan's beams as range readings from the scanner at `mount`. A scan
+/// of more beams than
 /// [`MOST_READINGS`] is taken in runs of neighbouring beams, one reading
 /// a run: its nearest echo, where it was, which is what keeps the robot
 /// off obstacles.
-fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
+fn ranges_of(scan: &LaserScan, mount: &ScanMount, ranges: &mut Vec<RangeReading>) {
     ranges.clear();
     let max_range = f64::from(scan.range_max);
     let echo = |range: f32| (range.is_finite() && range >= scan.range_min && range < scan.range_max).then_some(range);
@@ -271,8 +309,8 @@ fn ranges_of(scan: &LaserScan, ranges: &mut Vec<RangeReading>) {
             Some((i, range)) => (i, Some(f64::from(range))),
             None => (run.len() / 2, None),
         };
-        let bearing = f64::from(scan.angle_min) + (first + i) as f64 * f64::from(scan.angle_increment);
-        ranges.push(RangeReading { pose_robot_sensor: Pose2::new(0.0, 0.0, bearing), range, max_range });
+        let angle = f64::from(scan.angle_min) + (first + i) as f64 * f64::from(scan.angle_increment);
+        ranges.push(RangeReading { pose_robot_sensor: mount.beam(angle), range, max_range });
     }
 }
 
@@ -336,7 +374,7 @@ impl Robot for Ros2Robot {
             return Err(self.lost(what, &topic, now - since));
         }
         match &self.latest_scan {
-            Some((scan, _)) => ranges_of(scan, &mut state.ranges),
+            Some((scan, _)) => ranges_of(scan, &self.config.scan_mount, &mut state.ranges),
             None => state.ranges.clear(),
         }
         let odometry = &self.latest_odom.0;
@@ -404,7 +442,7 @@ mod tests {
         let mut beams = vec![5.0; 1081];
         (beams[3], beams[4]) = (f32::NAN, 0.05);
         let (scan, mut ranges) = (scan(beams), Vec::new());
-        ranges_of(&scan, &mut ranges);
+        ranges_of(&scan, &ScanMount::default(), &mut ranges);
         assert_eq!(ranges.len(), 1081);
         assert_eq!((ranges[2].range, ranges[3].range, ranges[4].range), (Some(5.0), None, None));
         let bearing = -3.0 + 700.0 * f64::from(scan.angle_increment);
@@ -412,10 +450,28 @@ mod tests {
     }
 
     #[test]
+    fn a_scanner_off_the_centre_reads_from_where_it_sits() {
+        // Four beams a quarter turn apart, from angle 0.
+        let mut four = scan(vec![1.0, 2.0, 3.0, 4.0]);
+        four.angle_min = 0.0;
+        let mut ranges = Vec::new();
+        let ahead = ScanMount { x: 0.3, y: -0.1, heading_deg: 90.0, upside_down: false };
+        ranges_of(&four, &ahead, &mut ranges);
+        let quarter = std::f64::consts::FRAC_PI_2;
+        let sensor = ranges[1].pose_robot_sensor;
+        assert_eq!((sensor.x, sensor.y), (0.3, -0.1));
+        assert!((sensor.theta - 2.0 * quarter).abs() < 1e-6, "{sensor:?}");
+        // Upside down, its angles run clockwise.
+        ranges_of(&four, &ScanMount { upside_down: true, ..ScanMount::default() }, &mut ranges);
+        assert!((ranges[1].pose_robot_sensor.theta + quarter).abs() < 1e-6);
+        assert_eq!(ranges[1].range, Some(2.0));
+    }
+
+    #[test]
     fn a_scan_of_more_beams_than_the_most_readings_is_taken_as_that_many() {
         let mut ranges = Vec::new();
         for beams in [MOST_READINGS, MOST_READINGS + 1, 2 * MOST_READINGS - 1] {
-            ranges_of(&scan(vec![5.0; beams]), &mut ranges);
+            ranges_of(&scan(vec![5.0; beams]), &ScanMount::default(), &mut ranges);
             assert_eq!(ranges.len(), MOST_READINGS, "{beams} beams");
         }
     }
@@ -426,7 +482,7 @@ mod tests {
         beams[123_456] = 0.7;
         beams[600_000..600_600].fill(f32::INFINITY);
         let (scan, mut ranges) = (scan(beams), Vec::new());
-        ranges_of(&scan, &mut ranges);
+        ranges_of(&scan, &ScanMount::default(), &mut ranges);
         assert_eq!(ranges.len(), MOST_READINGS);
         let nearest = ranges.iter().min_by(|a, b| a.range.unwrap_or(99.0).total_cmp(&b.range.unwrap_or(99.0))).unwrap();
         assert_eq!(nearest.range, Some(f64::from(0.7f32)));
