@@ -893,8 +893,8 @@ fn slow_answers(upstream: &str, delay: Duration) -> (String, std::sync::mpsc::Re
 fn a_signal_while_the_head_connects_ends_the_drive_before_the_motors_go_on() {
     let dir = tempfile::tempdir().unwrap();
     let (_head, head_address, _) = ptu_emulator();
-    // The handshake's dozen answers take 2 s: the signal comes after the
-    // first.
+    // The handshake's fourteen answers take 2.1 s: the signal comes after
+    // the first.
     let (slow_head, first_answer) = slow_answers(&head_address, Duration::from_millis(150));
     let (mut drive, mut emulator) = drive_with_head(dir.path(), &slow_head, "");
     first_answer.recv_timeout(Duration::from_secs(30)).expect("the head was asked something");

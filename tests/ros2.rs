@@ -519,8 +519,11 @@ fn a_scanner_mounted_backwards_behind_the_centre_is_read_from_where_it_sits() {
     let args = "--scan --wall-x 1.5 --laser-mount -0.3 180";
     let Some(session) = drive_beside_robot(dir.path(), args, &file, None) else { return };
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    // Where the robot with its scanner at the centre stops (0.76 to 0.80
+    // m): the scanner taken 0.3 m ahead instead of behind stopped it at
+    // 1.15 m, read as at the centre facing ahead it ended at 1.83 m.
     let (x, _, _) = pose(&session.summary);
-    assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
+    assert!((0.5..1.0).contains(&x), "the robot's centre came to x = {x:.3}, the wall is at 1.5");
 }
 
 /// Runs `scripts/ros2-bag-check.py` (mcap-ros2-support and rosbags, which

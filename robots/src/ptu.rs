@@ -228,10 +228,12 @@ enum Answer {
 }
 
 /// What a line from the unit says: an answer, or nothing to wait on (an
-/// empty line, a banner, an unasked limit notice `!P` or `!T`).
+/// empty line, a banner, unasked limit notices `!P` and `!T`, as a reset
+/// sends them: `!T!T!P!P*`).
 fn parse_line(line: &str) -> Option<Answer> {
     let line = line.trim();
-    if line == "!P" || line == "!T" {
+    let notices = line.strip_suffix('*').unwrap_or(line);
+    if notices.starts_with('!') && notices.split('!').skip(1).all(|n| n == "P" || n == "T") {
         return None;
     }
     // An echoed command comes before the marker: `PP-500 *`.
@@ -834,6 +836,8 @@ mod tests {
         );
         // Unasked limit notices and banners are not answers.
         assert_eq!(parse_line("!P"), None);
+        assert_eq!(parse_line("!T!T!P!P*"), None);
+        assert_eq!(parse_line("!"), Some(Answer::Refused(String::new())));
         assert_eq!(parse_line("Pan-Tilt Controller v2.14.0"), None);
         assert_eq!(first_number("Current Pan position is -500"), Some(-500.0));
         assert_eq!(first_number("185.1428 seconds arc per Pan position"), Some(185.1428));

@@ -434,8 +434,11 @@ fn a_head_that_talks_before_it_is_asked_and_answers_late_at_times_is_taken() {
         use std::io::Write;
         for notice in ["!T", "!T", "!P", "!P*"] {
             client.write_all(format!("{notice}\r\n").as_bytes()).unwrap();
-            std::thread::sleep(Duration::from_millis(80));
+            std::thread::sleep(Duration::from_millis(30));
         }
+        // And one more after a pause, as an axis reaching its limit late.
+        std::thread::sleep(Duration::from_millis(150));
+        client.write_all(b"!T!T!P!P*\r\n").unwrap();
         let mut head = std::net::TcpStream::connect(upstream.trim_start_matches("tcp://")).unwrap();
         let (mut to_head, mut from_head) = (client.try_clone().unwrap(), head.try_clone().unwrap());
         std::thread::spawn(move || std::io::copy(&mut to_head, &mut head));
