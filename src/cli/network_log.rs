@@ -21,10 +21,10 @@ const MOST_LINES_PER_S: u64 = 10;
 /// start of their targets: the live view's server and the DDS library.
 const FROM_NETWORK: [&str; 2] = ["foxglove", "rustdds"];
 
-/// What the DDS library says of every datagram over 1500 bytes it sends
-/// (a scan served on ROS 2, ten times a second: 87 MB of stderr a day, of
-/// nothing wrong).
-const DATAGRAM_SIZE_NOTICE: &str = "send_to_locator: Message size";
+/// Where and in what words the DDS library notes every datagram over 1500
+/// bytes it sends, to one address or to a multicast group (a scan served
+/// on ROS 2, ten times a second: 87 MB of stderr a day, of nothing wrong).
+const DATAGRAM_SIZE_NOTICE: (&str, &str) = ("rustdds::network::udp_sender", ": Message size = ");
 
 /// The log filter for those libraries: their warnings and errors held to
 /// [`MOST_LINES_PER_S`] a second each (what they say at the levels `-v`
@@ -40,22 +40,24 @@ impl<S> Filter<S> for NetworkLines {
         true
     }
 
-    /// Event by event for those libraries' warnings and errors (and the
-    /// `log` crate's, which may be theirs), never for the rest.
+    /// Event by event for those libraries' warnings and errors, never for
+    /// the rest. (The `log` crate's lines, the DDS library's among them,
+    /// come by call sites never registered, and are asked about each.)
     fn callsite_enabled(&self, metadata: &'static Metadata<'static>) -> tracing::subscriber::Interest {
-        match library_of(metadata).is_some() || metadata.target() == "log" {
+        match is_budgeted(metadata) && is_from_network(metadata.target()) {
             true => tracing::subscriber::Interest::sometimes(),
             false => tracing::subscriber::Interest::always(),
         }
     }
 
     fn event_enabled(&self, event: &Event<'_>, _: &Context<'_, S>) -> bool {
-        // A line from the `log` crate (the DDS library's) carries its
-        // target in a field; its call site is one for all of them.
-        use tracing_log::NormalizeEvent;
-        let metadata = event.normalized_metadata();
-        let Some(library) = library_of(metadata.as_ref().unwrap_or(event.metadata())) else { return true };
-        if !self.datagram_sizes && message_of(event).contains(DATAGRAM_SIZE_NOTICE) {
+        if !is_budgeted(event.metadata()) {
+            return true;
+        }
+        let target = target_of(event);
+        let Some(library) = FROM_NETWORK.iter().position(|library| is_from(&target, library)) else { return true };
+        let (notice_target, notice_words) = DATAGRAM_SIZE_NOTICE;
+        if !self.datagram_sizes && target == notice_target && message_of(event).contains(notice_words) {
             return false;
         }
         static START: LazyLock<Instant> = LazyLock::new(Instant::now);
@@ -64,10 +66,19 @@ impl<S> Filter<S> for NetworkLines {
     }
 }
 
-/// Which of [`FROM_NETWORK`] a warning or error comes from, if one does.
-fn library_of(metadata: &Metadata<'_>) -> Option<usize> {
-    let budgeted = metadata.is_event() && *metadata.level() <= Level::WARN;
-    FROM_NETWORK.iter().position(|library| budgeted && is_from(metadata.target(), library))
+/// Whether `metadata` is of a warning or an error, what the budget holds.
+fn is_budgeted(metadata: &Metadata<'_>) -> bool {
+    metadata.is_event() && *metadata.level() <= Level::WARN
+}
+
+/// An event's target: a `log` crate line's own (its call site's is `log`
+/// for them all).
+pub(super) fn target_of(event: &Event<'_>) -> String {
+    use tracing_log::NormalizeEvent;
+    match event.normalized_metadata() {
+        Some(metadata) => metadata.target().to_owned(),
+        None => event.metadata().target().to_owned(),
+    }
 }
 
 fn is_from(target: &str, library: &str) -> bool {
@@ -111,7 +122,7 @@ where
         mut writer: tracing_subscriber::fmt::format::Writer<'_>,
         event: &tracing::Event<'_>,
     ) -> std::fmt::Result {
-        if !is_from_network(event.metadata().target()) {
+        if !is_from_network(&target_of(event)) {
             return self.0.format_event(context, writer, event);
         }
         let mut line = String::new();
@@ -199,11 +210,20 @@ pub(super) mod tests {
             .with_ansi(false)
             .without_time()
             .with_filter(NetworkLines { datagram_sizes: false });
+        // The DDS library logs through the `log` crate, whose lines come
+        // with a target of `log` and their own in a field.
+        let from_log = |target: &str, text: &str| {
+            use tracing_log::log::{Level, Record};
+            let args = format_args!("{text}");
+            let record = Record::builder().target(target).level(Level::Warn).args(args).build();
+            tracing_log::format_trace(&record).unwrap();
+        };
         tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), || {
             for _ in 0..100 {
                 tracing::error!(target: "foxglove::websocket", "a client's garbage");
-                tracing::warn!(target: "rustdds::structure", "a peer's garbage");
-                tracing::warn!(target: "rustdds::network::udp_sender", "try_send_to_locator: Message size = 1548");
+                from_log("rustdds::structure", "a peer's garbage");
+                from_log("rustdds::network::udp_sender", "try_send_to_locator: Message size = 1548");
+                from_log("rustdds::network::udp_sender", "send_to_multicast_locator_via: Message size = 1548");
                 tracing::warn!(target: "ubf_session::drive", "ours");
                 tracing::info!(target: "rustdds::discovery", "asked for with -v");
             }

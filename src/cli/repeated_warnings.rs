@@ -10,6 +10,7 @@ use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Mutex, PoisonError};
 use tracing::callsite::Identifier;
+use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Metadata};
 use tracing_subscriber::layer::{Context, Filter};
 
@@ -82,16 +83,30 @@ fn admit(event: &Event<'_>) -> bool {
     if !is_warning(metadata) || !ONCE.load(Ordering::SeqCst) {
         return true;
     }
+    // Lines from the `log` crate share one call site: their words and
+    // target tell them apart.
+    let mut words = Words(String::new());
+    event.record(&mut words);
+    let key = (metadata.callsite(), words.0);
     let mut said = SAID.lock().unwrap_or_else(PoisonError::into_inner);
     let said = said.get_or_insert_with(HashSet::new);
-    // Messages from the `log` crate share one call site: their words and
-    // target tell them apart.
-    let key = (metadata.callsite(), format!("{}: {}", metadata.target(), super::network_log::message_of(event)));
     let new = said.len() < MOST_REMEMBERED && said.insert(key);
     if !new {
         HELD_BACK.fetch_add(1, Ordering::SeqCst);
     }
     new
+}
+
+/// An event's fields, written out: its words, and for a line from the
+/// `log` crate (whose call site is one for all of them) its target, file
+/// and line too.
+struct Words(String);
+
+impl Visit for Words {
+    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        use std::fmt::Write;
+        let _ = write!(self.0, "{}={value:?} ", field.name());
+    }
 }
 
 #[cfg(test)]
