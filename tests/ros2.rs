@@ -318,47 +318,48 @@ fn a_stranger_s_unreadable_odometry_is_skipped_and_the_robot_drives_on() {
     assert!((1..=2).contains(&said_times), "{said}");
 }
 
+/// Drives towards a goal 20 m ahead beside the Cyclone robot run with
+/// `robot_args`, and checks that the drive failed, saying each of
+/// `sayings`, and left the robot with a zero twist.
+fn assert_stopped_saying(robot_args: &str, sayings: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 20.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), robot_args, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    for saying in sayings {
+        assert!(said.contains(saying), "{saying:?} not said: {said}");
+    }
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+}
+
 #[test]
 fn odometry_that_cannot_be_read_stops_the_robot_and_says_why() {
     // The robot's own odometry stops and only unreadable messages come.
-    let dir = tempfile::tempdir().unwrap();
-    let file = robot_file(dir.path(), 20.0, "");
-    let args = "--stop-odom-after 1 --short-odom-after 0.5";
-    let Some(session) = drive_beside_robot(dir.path(), args, &file, None) else { return };
-    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
-    let said = stderr(&session);
-    assert!(said.contains("the odometry on /odom: it could not be read as nav_msgs/msg/Odometry"), "{said}");
-    assert!(said.contains("no odometry on /odom"), "{said}");
-    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    assert_stopped_saying(
+        "--stop-odom-after 1 --short-odom-after 0.5",
+        &["the odometry on /odom: it could not be read as nav_msgs/msg/Odometry", "no odometry on /odom"],
+    );
 }
 
 #[test]
 fn a_scan_that_cannot_be_read_stops_the_robot_as_no_scan() {
     // Taken as no message at all, it left the robot driving blind, with
     // nothing to stop it.
-    let dir = tempfile::tempdir().unwrap();
-    let file = robot_file(dir.path(), 20.0, "");
-    let Some(session) = drive_beside_robot(dir.path(), "--short-scan-after 0.5", &file, None) else { return };
-    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
-    let said = stderr(&session);
-    assert!(said.contains("the scan on /scan: it could not be read as sensor_msgs/msg/LaserScan"), "{said}");
-    assert!(said.contains("no usable scan on /scan for"), "{said}");
-    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    assert_stopped_saying(
+        "--short-scan-after 0.5",
+        &["the scan on /scan: it could not be read as sensor_msgs/msg/LaserScan", "no usable scan on /scan for"],
+    );
 }
 
 #[test]
 fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
     // Taken as open space, it let the robot drive through a wall. It is
     // taken as no scan, so the robot stops as for a silent scanner.
-    let dir = tempfile::tempdir().unwrap();
-    let file = robot_file(dir.path(), 20.0, "");
-    let Some(session) = drive_beside_robot(dir.path(), "--scan --wall-x 10 --scan-nan-after 1", &file, None) else {
-        return;
-    };
-    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
-    assert!(stderr(&session).contains("the scan on /scan: all of its"), "{}", stderr(&session));
-    assert!(stderr(&session).contains("no usable scan on /scan for"), "{}", stderr(&session));
-    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    assert_stopped_saying(
+        "--scan --wall-x 10 --scan-nan-after 1",
+        &["the scan on /scan: all of its", "no usable scan on /scan for"],
+    );
 }
 
 #[test]
@@ -465,18 +466,18 @@ fn a_namespaced_robot_is_driven_under_its_namespace() {
     assert_eq!(verdict["ok"], true, "{verdict}");
 }
 
-#[test]
-fn a_scan_wall_ahead_turns_the_robot_away() {
-    // AvoidCollision sees the scan's wall 1.5 m ahead and the goal beyond
-    // it: the robot must not drive into it.
+/// Where the robot's centre ends, driven with AvoidCollision towards a
+/// goal 4 m ahead beside the Cyclone robot run with `robot_args` (a wall
+/// in its scan), with `ros2` the robot file's `ros2:` settings.
+fn where_the_wall_stops_the_robot(robot_args: &str, ros2: &str) -> Option<f64> {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");
-    std::fs::write(
-        &file,
+    let robot = format!(
         r#"RobotConfig(
     name: "ros2-robot",
     connection: "ros2",
     model: Powerbot,
+    ros2: ({ros2}),
     max_time_s: 12.0,
     goal: (x: 4.0, y: 0.0, tolerance: 0.2),
     root: Composite(arbiter: CommandFusion, children: [
@@ -484,12 +485,19 @@ fn a_scan_wall_ahead_turns_the_robot_away() {
         (behavior: AvoidCollision(), weight: 3.0),
         (behavior: GoTo(cruise_speed: 0.3)),
     ]),
-)"#,
-    )
-    .unwrap();
-    let Some(session) = drive_beside_robot(dir.path(), "--scan --wall-x 1.5", &file, None) else { return };
+)"#
+    );
+    std::fs::write(&file, robot).unwrap();
+    let session = drive_beside_robot(dir.path(), robot_args, &file, None)?;
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
-    let (x, _, _) = pose(&session.summary);
+    Some(pose(&session.summary).0)
+}
+
+#[test]
+fn a_scan_wall_ahead_turns_the_robot_away() {
+    // AvoidCollision sees the scan's wall 1.5 m ahead and the goal beyond
+    // it: the robot must not drive into it.
+    let Some(x) = where_the_wall_stops_the_robot("--scan --wall-x 1.5", "") else { return };
     assert!(x < 1.5 - 0.3, "the robot's centre came to x = {x:.3}, the wall is at 1.5");
 }
 
@@ -497,32 +505,11 @@ fn a_scan_wall_ahead_turns_the_robot_away() {
 fn a_scanner_mounted_backwards_behind_the_centre_is_read_from_where_it_sits() {
     // Its angle 0 points backwards: read as if at the centre facing ahead,
     // the wall ahead would be behind the robot, which would drive into it.
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("robot.ron");
-    std::fs::write(
-        &file,
-        r#"RobotConfig(
-    name: "ros2-robot",
-    connection: "ros2",
-    model: Powerbot,
-    ros2: (scan_mount: (x: -0.3, heading_deg: 180.0)),
-    max_time_s: 12.0,
-    goal: (x: 4.0, y: 0.0, tolerance: 0.2),
-    root: Composite(arbiter: CommandFusion, children: [
-        (behavior: Stop(), weight: 1.0),
-        (behavior: AvoidCollision(), weight: 3.0),
-        (behavior: GoTo(cruise_speed: 0.3)),
-    ]),
-)"#,
-    )
-    .unwrap();
-    let args = "--scan --wall-x 1.5 --laser-mount -0.3 180";
-    let Some(session) = drive_beside_robot(dir.path(), args, &file, None) else { return };
-    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let mount = "scan_mount: (x: -0.3, heading_deg: 180.0)";
+    let Some(x) = where_the_wall_stops_the_robot("--scan --wall-x 1.5 --laser-mount -0.3 180", mount) else { return };
     // Where the robot with its scanner at the centre stops (0.76 to 0.80
     // m): the scanner taken 0.3 m ahead instead of behind stopped it at
     // 1.15 m, read as at the centre facing ahead it ended at 1.83 m.
-    let (x, _, _) = pose(&session.summary);
     assert!((0.5..1.0).contains(&x), "the robot's centre came to x = {x:.3}, the wall is at 1.5");
 }
 

@@ -199,8 +199,11 @@ pub(super) mod tests {
         }
     }
 
-    #[test]
-    fn each_library_s_warnings_have_a_budget_and_the_rest_of_the_log_none() {
+    /// What `log` writes through a plain line format behind `filter`.
+    pub(in crate::cli) fn lines_logged<F>(filter: F, log: impl FnOnce()) -> String
+    where
+        F: Filter<tracing_subscriber::Registry> + Send + Sync + 'static,
+    {
         let said = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
         let sink = std::sync::Arc::clone(&said);
         use tracing_subscriber::layer::SubscriberExt;
@@ -209,7 +212,14 @@ pub(super) mod tests {
             .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
             .with_ansi(false)
             .without_time()
-            .with_filter(NetworkLines { datagram_sizes: false });
+            .with_filter(filter);
+        tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), log);
+        let text = String::from_utf8(said.lock().unwrap().clone());
+        text.unwrap()
+    }
+
+    #[test]
+    fn each_library_s_warnings_have_a_budget_and_the_rest_of_the_log_none() {
         // The DDS library logs through the `log` crate, whose lines come
         // with a target of `log` and their own in a field.
         let from_log = |target: &str, text: &str| {
@@ -218,7 +228,7 @@ pub(super) mod tests {
             let record = Record::builder().target(target).level(Level::Warn).args(args).build();
             tracing_log::format_trace(&record).unwrap();
         };
-        tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), || {
+        let text = lines_logged(NetworkLines { datagram_sizes: false }, || {
             for _ in 0..100 {
                 tracing::error!(target: "foxglove::websocket", "a client's garbage");
                 from_log("rustdds::structure", "a peer's garbage");
@@ -228,7 +238,6 @@ pub(super) mod tests {
                 tracing::info!(target: "rustdds::discovery", "asked for with -v");
             }
         });
-        let text = String::from_utf8(said.lock().unwrap().clone()).unwrap();
         let count = |what: &str| text.lines().filter(|l| l.contains(what)).count();
         // Within one second or two of the clock's.
         assert!((10..=20).contains(&count("a client's garbage")), "{text}");

@@ -111,20 +111,11 @@ impl Visit for Words {
 
 #[cfg(test)]
 mod tests {
-    use super::super::network_log::tests::Sink;
+    use super::super::network_log::tests::lines_logged;
     use super::*;
 
     #[test]
     fn in_a_sweep_each_warning_is_said_once_and_its_repeats_are_counted() {
-        let said = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-        let sink = std::sync::Arc::clone(&said);
-        use tracing_subscriber::layer::SubscriberExt;
-        use tracing_subscriber::Layer;
-        let layer = tracing_subscriber::fmt::layer()
-            .with_writer(move || Sink(std::sync::Arc::clone(&sink)))
-            .with_ansi(false)
-            .without_time()
-            .with_filter(RepeatedWarnings);
         let warn_in_runs = |runs: u64| {
             for run in 0..runs {
                 tracing::warn!("the aid has no camera");
@@ -132,7 +123,7 @@ mod tests {
                 tracing::error!("an error is always said");
             }
         };
-        tracing::subscriber::with_default(tracing_subscriber::registry().with(layer), || {
+        let text = lines_logged(RepeatedWarnings, || {
             // Before a sweep, every warning.
             warn_in_runs(2);
             let sweep = say_once();
@@ -142,7 +133,6 @@ mod tests {
             // After it, every warning again.
             warn_in_runs(1);
         });
-        let text = String::from_utf8(said.lock().unwrap().clone()).unwrap();
         let count = |what: &str| text.lines().filter(|l| l.contains(what)).count();
         assert_eq!(count("the aid has no camera"), 2 + 1 + 1, "{text}");
         // Words that differ are said, each once.
