@@ -992,3 +992,15 @@ fn aiding_on_a_robot_without_a_camera_says_so() {
     let out = ubf(&["run", scenario_file(&dir, &with_camera).to_str().unwrap()]);
     assert!(!text(&out.stderr).contains("no stereo frame"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn a_run_without_a_goal_says_so_rather_than_that_it_missed_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let aimless = GOOD.replace("goal: (x: 3.0, y: 0.0),", "").replace("max_time_s: 30.0", "max_time_s: 2.0");
+    let file = scenario_file(&dir, &aimless);
+    let out = ubf(&["run", file.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("goal reached    no goal set"), "{}", text(&out.stdout));
+    let with_goal = ubf(&["run", scenario_file(&dir, GOOD).to_str().unwrap()]);
+    assert!(text(&with_goal.stdout).contains("goal reached    yes"), "{}", text(&with_goal.stdout));
+}

@@ -40,6 +40,10 @@ pub struct RunReport {
     pub distance_m: f64,
     /// Whether the robot's true position ended within the goal's tolerance.
     pub reached_goal: bool,
+    /// Whether the scenario has a goal (the summary says so, not "no"; the
+    /// JSON leaves it out, as its `reached_goal` always said `false`).
+    #[serde(skip)]
+    pub has_goal: bool,
     /// Times the robot came into contact with a wall, a box or a person.
     pub collisions: u32,
     /// Why the run ended.
@@ -131,7 +135,12 @@ impl std::fmt::Display for RunReport {
         if let Some(failure) = &self.failure {
             writeln!(f, "failure         {failure}")?;
         }
-        writeln!(f, "goal reached    {}", if self.reached_goal { "yes" } else { "no" })?;
+        let reached = match (self.has_goal, self.reached_goal) {
+            (false, _) => "no goal set",
+            (true, true) => "yes",
+            (true, false) => "no",
+        };
+        writeln!(f, "goal reached    {reached}")?;
         writeln!(f, "distance        {:.2} m", self.distance_m)?;
         writeln!(f, "collisions      {}", self.collisions)?;
         writeln!(f, "true pose       {}", pose(&self.final_true_pose))?;

@@ -258,6 +258,7 @@ pub fn run_until(
         sim_time_s: sim_time,
         distance_m: distance,
         reached_goal: scenario.goal.is_some_and(|g| g.reached_by(&truth)),
+        has_goal: scenario.goal.is_some(),
         collisions: sim.collisions(),
         end,
         failure: behavior_failure,
