@@ -197,7 +197,7 @@ impl ImageDirectory {
 
 /// A reader of the image at `path`, its format told by its name. A FIFO
 /// or a device in the image's place is refused rather than waited on.
-pub fn open_image(path: &Path) -> Result<image::ImageReader<io::BufReader<fs::File>>, SourceError> {
+pub(crate) fn open_image(path: &Path) -> Result<image::ImageReader<io::BufReader<fs::File>>, SourceError> {
     let file =
         ubf_core::config::open_regular(path).map_err(|source| SourceError::Io { path: path.to_owned(), source })?;
     let format = image::ImageFormat::from_path(path)
@@ -206,7 +206,7 @@ pub fn open_image(path: &Path) -> Result<image::ImageReader<io::BufReader<fs::Fi
 }
 
 /// The image at `path` in grey levels.
-pub fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
+pub(crate) fn read_grey(path: &Path) -> Result<GrayImage, SourceError> {
     let image = open_image(path)?.decode().map_err(|e| match e {
         image::ImageError::IoError(source) => SourceError::Io { path: path.to_owned(), source },
         other => SourceError::Image { path: path.to_owned(), message: other.to_string() },

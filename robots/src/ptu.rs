@@ -292,8 +292,7 @@ impl Conversation {
     fn ask(&mut self, text: &str) -> Result<Answer, PtuError> {
         // Whole lines already read are not this query's answer: were one
         // of them an answer, the next would be taken for this one's.
-        while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
-            let line: Vec<u8> = self.pending.drain(..=end).collect();
+        while let Some(line) = self.next_line() {
             if parse_line(&String::from_utf8_lossy(&line)).is_some() {
                 return Err(PtuError::Unasked { command: text.to_owned(), answer: printable(&line) });
             }
@@ -304,8 +303,7 @@ impl Conversation {
         let started = Instant::now();
         let deadline = self.until.map_or(started + ANSWER_WAIT, |until| until.min(started + ANSWER_WAIT));
         loop {
-            while let Some(end) = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n') {
-                let line: Vec<u8> = self.pending.drain(..=end).collect();
+            while let Some(line) = self.next_line() {
                 if let Some(answer) = parse_line(&String::from_utf8_lossy(&line)) {
                     return Ok(answer);
                 }
@@ -327,13 +325,17 @@ impl Conversation {
         }
     }
 
+    /// The first whole line read and not yet taken, its end included.
+    fn next_line(&mut self) -> Option<Vec<u8>> {
+        let end = self.pending.iter().position(|b| *b == b'\r' || *b == b'\n')?;
+        Some(self.pending.drain(..=end).collect())
+    }
+
     /// A command that must be done.
     fn command(&mut self, text: &str) -> Result<(), PtuError> {
         match self.ask(text)? {
             Answer::Done(_) => Ok(()),
-            Answer::Refused(message) => {
-                Err(PtuError::Refused { command: text.to_owned(), message: printable(message.as_bytes()) })
-            }
+            Answer::Refused(message) => Err(refused(text, &message)),
         }
     }
 
@@ -343,11 +345,14 @@ impl Conversation {
             Answer::Done(answer) => first_number(&answer)
                 .filter(|n| n.is_finite())
                 .ok_or_else(|| PtuError::NotANumber { query: text.to_owned(), answer: printable(answer.as_bytes()) }),
-            Answer::Refused(message) => {
-                Err(PtuError::Refused { command: text.to_owned(), message: printable(message.as_bytes()) })
-            }
+            Answer::Refused(message) => Err(refused(text, &message)),
         }
     }
+}
+
+/// The unit's refusal of `command`, its `message` made fit to show.
+fn refused(command: &str, message: &str) -> PtuError {
+    PtuError::Refused { command: command.to_owned(), message: printable(message.as_bytes()) }
 }
 
 /// What the unit reported of itself on connecting.

@@ -55,7 +55,7 @@ impl<S> Filter<S> for NetworkLines {
             return true;
         }
         let target = target_of(event);
-        let Some(library) = FROM_NETWORK.iter().position(|library| is_from(&target, library)) else { return true };
+        let Some(library) = FROM_NETWORK.iter().position(|library| is_from(target, library)) else { return true };
         let (notice_target, notice_words) = DATAGRAM_SIZE_NOTICE;
         if !self.datagram_sizes && target == notice_target && message_of(event).contains(notice_words) {
             return false;
@@ -73,12 +73,9 @@ fn is_budgeted(metadata: &Metadata<'_>) -> bool {
 
 /// An event's target: a `log` crate line's own (its call site's is `log`
 /// for them all).
-pub(super) fn target_of(event: &Event<'_>) -> String {
+fn target_of<'a>(event: &'a Event<'a>) -> &'a str {
     use tracing_log::NormalizeEvent;
-    match event.normalized_metadata() {
-        Some(metadata) => metadata.target().to_owned(),
-        None => event.metadata().target().to_owned(),
-    }
+    event.normalized_metadata().map_or(event.metadata().target(), |metadata| metadata.target())
 }
 
 fn is_from(target: &str, library: &str) -> bool {
@@ -90,7 +87,7 @@ fn is_from_network(target: &str) -> bool {
 }
 
 /// An event's message, as written.
-pub(super) fn message_of(event: &Event<'_>) -> String {
+fn message_of(event: &Event<'_>) -> String {
     struct Message(String);
     impl Visit for Message {
         fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
@@ -122,7 +119,7 @@ where
         mut writer: tracing_subscriber::fmt::format::Writer<'_>,
         event: &tracing::Event<'_>,
     ) -> std::fmt::Result {
-        if !is_from_network(&target_of(event)) {
+        if !is_from_network(target_of(event)) {
             return self.0.format_event(context, writer, event);
         }
         let mut line = String::new();
@@ -187,7 +184,7 @@ pub(super) mod tests {
     }
 
     /// A writer into a shared buffer.
-    pub(in crate::cli) struct Sink(pub(in crate::cli) std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+    struct Sink(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
 
     impl std::io::Write for Sink {
         fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {

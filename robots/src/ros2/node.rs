@@ -157,7 +157,7 @@ impl<M: RosMessage> Subscription<M> {
     }
 
     /// Why the messages on the topic since the last readable one could
-    /// not be read as `M`, if one could not (`it could not be read as …`):
+    /// not be read as `M`, if one could not (`could not be read as …`):
     /// what to say when the topic seems silent.
     pub fn unreadable(&self) -> Option<String> {
         self.unreadable.as_deref().map(unreadable::<M>)
@@ -193,7 +193,7 @@ impl<M: RosMessage> Subscription<M> {
                 Err(rustdds::dds::ReadError::Deserialization { reason }) => {
                     let now = std::time::Instant::now();
                     if self.unreadable_said_at.is_none_or(|at| now - at >= UNREADABLE_SAID_EVERY) {
-                        tracing::warn!("a message on {}: {}; skipped", self.name, unreadable::<M>(&reason));
+                        tracing::warn!("a message on {}: it {}; skipped", self.name, unreadable::<M>(&reason));
                         self.unreadable_said_at = Some(now);
                     }
                     self.unreadable = Some(reason);
@@ -207,13 +207,13 @@ impl<M: RosMessage> Subscription<M> {
     }
 }
 
-/// Why a message could not be taken as `M`, as a sentence, from the
+/// Why a message could not be taken as `M`, as a clause, from the
 /// middleware's `reason`: its own text names the topic twice and the
 /// type as a Rust value, and hides the one reason it gives in the middle.
 fn unreadable<M: RosMessage>(reason: &str) -> String {
     let reason = reason.strip_prefix("Failed to deserialize sample bytes: ").unwrap_or(reason);
     let reason = reason.split(", ").next().unwrap_or(reason);
-    format!("it could not be read as {} ({reason}): something on the domain publishes another message there", M::NAME)
+    format!("could not be read as {} ({reason}): something on the domain publishes another message there", M::NAME)
 }
 
 /// A ROS 2 participant in one DDS domain, under one namespace.
@@ -404,7 +404,7 @@ mod tests {
         let said = unreadable::<super::super::msg::Odometry>(reason);
         assert_eq!(
             said,
-            "it could not be read as nav_msgs/msg/Odometry (unexpected end of input): something on the domain \
+            "could not be read as nav_msgs/msg/Odometry (unexpected end of input): something on the domain \
              publishes another message there"
         );
     }

@@ -154,7 +154,7 @@ impl Ros2Robot {
                 let topic = node.resolve(&config.odom);
                 let diagnosis = odom
                     .unreadable()
-                    .map(|why| format!("what came on {topic} {}", why.trim_start_matches("it ")))
+                    .map(|why| format!("what came on {topic} {why}"))
                     .or_else(|| node.why_unheard::<Odometry>(&config.odom, config.odom_qos))
                     .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
                     .unwrap_or_else(|| {
@@ -335,7 +335,7 @@ impl Robot for Ros2Robot {
         let age = now - self.latest_odom.1;
         if age > self.stale_after {
             if let Some(why) = self.odom.unreadable() {
-                tracing::warn!("the odometry on {}: {why}", self.odom.topic());
+                tracing::warn!("the odometry on {}: it {why}", self.odom.topic());
             }
             let topic = self.config.odom.clone();
             return Err(self.lost("odometry", &topic, age));
@@ -346,7 +346,9 @@ impl Robot for Ros2Robot {
         let scan = self.scan.take_latest()?;
         let why_unusable = match &scan {
             Some(scan) => scan.why_unusable(),
-            None => self.scan.unreadable(),
+            // Said once: the reason kept stands until a usable scan comes.
+            None if self.unusable_scans.is_some() => None,
+            None => self.scan.unreadable().map(|why| format!("it {why}")),
         };
         match (scan, why_unusable) {
             (_, Some(why)) => {
