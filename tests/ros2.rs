@@ -513,6 +513,33 @@ fn a_scanner_mounted_backwards_behind_the_centre_is_read_from_where_it_sits() {
     assert!((0.5..1.0).contains(&x), "the robot's centre came to x = {x:.3}, the wall is at 1.5");
 }
 
+#[test]
+fn a_scanner_mount_published_on_tf_static_is_read_from_where_it_sits() {
+    // The same scanner, backwards 0.3 m behind the centre, its mount not
+    // written but published as a robot's static broadcasters do: two
+    // Cyclone writers, transient local, down a chain of frames from
+    // base_footprint, before ubf joins.
+    let robot = "--scan --wall-x 1.5 --laser-mount -0.3 180 --tf-static";
+    let Some(x) = where_the_wall_stops_the_robot(robot, "") else { return };
+    assert!((0.5..1.0).contains(&x), "the robot's centre came to x = {x:.3}, the wall is at 1.5");
+}
+
+#[test]
+fn a_scan_from_a_frame_no_transform_places_ends_the_drive_before_the_robot_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "ros2: (connect_timeout_s: 1.0),");
+    let robot = "--scan --wall-x 1.5 --laser-mount -0.3 180";
+    let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(
+        said.contains("the scan on /scan: its scanner's mount was looked up on /tf_static, and nothing has come on it"),
+        "{said}"
+    );
+    assert!(session.twists.iter().all(is_zero), "the robot was moved: {:?}", session.twists);
+    assert_eq!(pose(&session.summary).0, 0.0);
+}
+
 /// Runs `scripts/ros2-bag-check.py` (mcap-ros2-support and rosbags, which
 /// nobody here wrote) on a bag's MCAP; its JSON verdict.
 fn check_bag(mcap: &Path, topics: &[&str]) -> Value {

@@ -10,7 +10,8 @@ command older than 0.5 s counts as zero, as base drivers do), and publishes
 nav_msgs/msg/Odometry on /odom (reliable, keep last 10, frame "odom", child
 "base_link", wall-clock stamps, twist = the command in force). With --scan it
 also publishes sensor_msgs/msg/LaserScan on /scan (sensor data QoS: best
-effort, keep last 5), frame "base_link", 360 beams seeing the wall x = --wall-x
+effort, keep last 5), frame "base_link" ("laser" with --laser-mount or
+--tf-static, which publishes where it sits on /tf_static), 360 beams seeing the wall x = --wall-x
 of the odom frame, or nothing (every beam at range_max).
 
 Prints "robot ready" once its readers and writers exist. On SIGTERM, SIGINT or
@@ -41,8 +42,8 @@ from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
 
-from ros2_types import (Header, LaserScan, Odometry, Quaternion, Time, Twist,  # noqa: E402
-                        qos, ros_topic)
+from ros2_types import (Header, LaserScan, Odometry, Quaternion, TFMessage, Time, Transform,  # noqa: E402
+                        TransformStamped, Twist, Vector3, qos, ros_topic, static_qos)
 
 COMMAND_TIMEOUT = 0.5
 BEAMS = 360
@@ -77,6 +78,27 @@ def scan_ranges(x, y, theta, wall_x):
     return ranges
 
 
+def transform(parent, child, x=0.0, z=0.0, yaw=0.0):
+    """The transform of `child` in `parent`: x ahead, z up, yawed `yaw` rad."""
+    return TransformStamped(header=Header(stamp=stamp(), frame_id=parent), child_frame_id=child,
+                            transform=Transform(translation=Vector3(x=x, z=z),
+                                                rotation=Quaternion(z=math.sin(yaw / 2), w=math.cos(yaw / 2))))
+
+
+def publish_static_transforms(participant, args):
+    """The scanner's mount on /tf_static, from two writers as from two static broadcasters (a robot's description
+    and a mount added later): each writes one message holding all of its transforms, once. Returns the writers."""
+    topic = Topic(participant, ros_topic("tf_static", args.namespace), TFMessage)
+    mount_x, mount_heading_deg = args.laser_mount
+    description = DataWriter(participant, topic, static_qos())
+    description.write(TFMessage(transforms=[
+        transform("base_footprint", "base_link", z=0.1),
+        transform("base_link", "laser_plate", x=mount_x, z=0.3)]))
+    mount = DataWriter(participant, topic, static_qos())
+    mount.write(TFMessage(transforms=[transform("laser_plate", "laser", z=0.05, yaw=math.radians(mount_heading_deg))]))
+    return [description, mount]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--namespace", default="", help="ROS namespace of the topics, e.g. robot1")
@@ -86,6 +108,10 @@ def main():
     parser.add_argument("--laser-mount", type=float, nargs=2, metavar=("X", "HEADING_DEG"), default=(0.0, 0.0),
                         help="the scanner X m ahead of the robot's centre, its angle 0 HEADING_DEG "
                              "counter-clockwise from the robot's heading (frame \"laser\")")
+    parser.add_argument("--tf-static", action="store_true",
+                        help="publish the scanner's mount on /tf_static before starting, as a robot's static "
+                             "broadcasters do: base_footprint > base_link > laser_plate (X ahead, 0.3 m up) from one "
+                             "writer, laser_plate > laser (the heading) from another")
     parser.add_argument("--stop-odom-after", type=float, metavar="S",
                         help="stop publishing odometry S seconds after the robot first moved")
     parser.add_argument("--odom-jump-after", type=float, metavar="S",
@@ -125,6 +151,9 @@ def main():
                                    qos(sensor_data=True)) if args.short_scan_after is not None else None
     scan_writer = DataWriter(participant, Topic(participant, ros_topic("scan", args.namespace), LaserScan),
                              qos(sensor_data=True)) if args.scan else None
+    # Kept alive for the whole run: a static broadcaster's last message
+    # reaches readers that join later (transient local).
+    broadcasters = publish_static_transforms(participant, args) if args.tf_static else []
     waitset = WaitSet(participant)
     waitset.attach(ReadCondition(cmd_reader, SampleState.Any | ViewState.Any | InstanceState.Any))
     record = open(args.record, "w") if args.record else None
@@ -184,7 +213,7 @@ def main():
         if scan_writer:
             mount_x, mount_heading_deg = args.laser_mount
             scan_writer.write(LaserScan(
-                header=Header(stamp=header.stamp, frame_id="laser" if any(args.laser_mount) else "base_link"),
+                header=Header(stamp=header.stamp, frame_id="laser" if any(args.laser_mount) or args.tf_static else "base_link"),
                 angle_min=-math.pi, angle_max=math.pi - 2 * math.pi / BEAMS,
                 angle_increment=2 * math.pi / BEAMS, scan_time=period,
                 range_min=RANGE_MIN, range_max=RANGE_MAX,

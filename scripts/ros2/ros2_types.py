@@ -179,6 +179,13 @@ def ros_topic(name, namespace=""):
     return "rt/" + "/".join(parts)
 
 
+def static_qos():
+    """tf2's static transform QoS: reliable, transient local (a reader that joins late gets the last message), keep
+    last 1."""
+    return Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)),
+               Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
+
+
 def qos(sensor_data=False):
     """ROS 2's default QoS (reliable, volatile, keep last 10), or its sensor data QoS (best effort, keep last 5)."""
     if sensor_data:

@@ -5,11 +5,13 @@
 //!
 //! - [`msg`]: the ROS 2 messages ubf reads and writes;
 //! - [`node`]: a DDS participant with ROS 2's naming and QoS conventions;
-//! - [`robot`]: [`Ros2Robot`], the [`ubf_core::Robot`] it drives.
+//! - [`robot`]: [`Ros2Robot`], the [`ubf_core::Robot`] it drives;
+//! - `transforms`: the static transform tree, where the scanner sits.
 
 pub mod msg;
 pub mod node;
 pub mod robot;
+mod transforms;
 
 pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
 pub use robot::{Ros2Config, Ros2EmergencyStop, Ros2Robot, ScanMount};

@@ -52,6 +52,28 @@ impl Qos {
             .build()
     }
 
+    /// A reader's policies: the topic's, except that a latched reader
+    /// keeps one message for each of up to [`LATCHED_WRITERS`] writers.
+    /// Each latched writer hands a reader that joins late its last
+    /// message, all at once: a robot's static transform broadcasters each
+    /// hand theirs.
+    fn reader_policies(self) -> QosPolicies {
+        match self {
+            Qos::Latched => {
+                let depth = LATCHED_WRITERS;
+                self.builder()
+                    .history(History::KeepLast { depth })
+                    .resource_limits(ResourceLimits {
+                        max_samples: depth,
+                        max_instances: 1,
+                        max_samples_per_instance: depth,
+                    })
+                    .build()
+            }
+            Qos::Reliable | Qos::SensorData => self.policies(),
+        }
+    }
+
     fn depth(self) -> i32 {
         match self {
             Qos::Reliable => 10,
@@ -73,6 +95,9 @@ impl Qos {
             .history(History::KeepLast { depth: self.depth() })
     }
 }
+
+/// How many latched writers' last messages a latched reader keeps.
+const LATCHED_WRITERS: i32 = 100;
 
 /// The middleware's reliable send window when none is set (RustDDS's
 /// `DEFAULT_WRITER_MAX_SAMPLES`).
@@ -171,6 +196,13 @@ impl<M: RosMessage> Subscription<M> {
     /// cannot be read falls silent, which its user hears about.
     pub fn take_latest(&mut self) -> Result<Option<M>, RobotError> {
         let mut latest = None;
+        self.take_each(|message| latest = Some(message))?;
+        Ok(latest)
+    }
+
+    /// Every message that came since the last call, oldest first, given
+    /// to `each`; otherwise as [`Subscription::take_latest`].
+    pub fn take_each(&mut self, mut each: impl FnMut(M)) -> Result<(), RobotError> {
         // At most a cache's worth a call, so that a flood cannot hold a tick.
         for _ in 0..MOST_TAKEN {
             match self.reader.take_next_sample() {
@@ -187,9 +219,9 @@ impl<M: RosMessage> Subscription<M> {
                         *last_writer = Some((writer, now));
                     }
                     self.unreadable = None;
-                    latest = Some(sample.into_value());
+                    each(sample.into_value());
                 }
-                Ok(None) => return Ok(latest),
+                Ok(None) => return Ok(()),
                 Err(rustdds::dds::ReadError::Deserialization { reason }) => {
                     let now = std::time::Instant::now();
                     if self.unreadable_said_at.is_none_or(|at| now - at >= UNREADABLE_SAID_EVERY) {
@@ -203,7 +235,7 @@ impl<M: RosMessage> Subscription<M> {
                 }
             }
         }
-        Ok(latest)
+        Ok(())
     }
 }
 
@@ -314,7 +346,7 @@ impl Node {
     pub fn reader<M: RosMessage>(&self, name: &str, qos: Qos) -> Result<Subscription<M>, RobotError> {
         let topic = self.topic::<M>(name, qos)?;
         let name = self.resolve(name);
-        match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.policies())) {
+        match self.subscriber.create_datareader_no_key_cdr::<M>(&topic, Some(qos.reader_policies())) {
             Ok(reader) => {
                 Ok(Subscription { reader, name, last_writer: None, unreadable: None, unreadable_said_at: None })
             }
@@ -334,6 +366,13 @@ impl Node {
             let reliable = endpoint.qos.is_reliable();
             self.seen.push(Endpoint { writer, topic: endpoint.topic_name, type_name: endpoint.type_name, reliable });
         }
+    }
+
+    /// Whether discovery has seen a writer on topic `name`.
+    pub fn has_writer(&mut self, name: &str) -> bool {
+        self.watch_discovery();
+        let dds_topic = format!("rt{}", self.resolve(name));
+        self.seen.iter().any(|e| e.writer && e.topic == dds_topic)
     }
 
     /// Why a topic this node reads as `M` with `qos` hears nothing from
@@ -384,12 +423,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_topic_keeps_no_more_messages_than_its_history_asks_for_and_a_writer_keeps_its_window() {
+    fn a_topic_keeps_no_more_messages_than_its_history_asks_for_a_latched_reader_one_a_writer_and_a_writer_its_window()
+    {
         for (qos, depth) in [(Qos::Reliable, 10), (Qos::SensorData, 5), (Qos::Latched, 1)] {
             let policies = qos.policies();
             assert_eq!(policies.history(), Some(History::KeepLast { depth }));
             let limits = policies.resource_limits().expect("a limit");
             assert_eq!((limits.max_samples, limits.max_samples_per_instance), (depth, depth));
+            let reader = qos.reader_policies();
+            let kept = if qos == Qos::Latched { LATCHED_WRITERS } else { depth };
+            assert_eq!(reader.history(), Some(History::KeepLast { depth: kept }));
+            assert_eq!(reader.resource_limits().expect("a limit").max_samples, kept);
             let writer = qos.writer_policies();
             assert_eq!(writer.history(), Some(History::KeepLast { depth }));
             assert_eq!(writer.resource_limits().expect("a window").max_samples, WRITER_WINDOW);

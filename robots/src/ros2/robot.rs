@@ -1,8 +1,9 @@
 //! [`Ros2Robot`]: a ROS 2 robot driven through `/cmd_vel`, sensed through
 //! `/odom` and `/scan`.
 
-use super::msg::{LaserScan, Odometry, Twist};
+use super::msg::{LaserScan, Odometry, TFMessage, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
+use super::transforms::StaticTransforms;
 use crate::emergency::EmergencyStop;
 use serde::Deserialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -13,7 +14,8 @@ use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading,
 /// The `ros2: (...)` settings of a robot file. The defaults are ROS 2's
 /// conventions: topics `cmd_vel`, `odom`, `scan` in the root namespace,
 /// reliable keep-last-10 for commands and odometry, sensor data QoS for
-/// the scan, the domain in `ROS_DOMAIN_ID`.
+/// the scan, the domain in `ROS_DOMAIN_ID`, the scanner where the robot's
+/// static transforms put it.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Ros2Config {
@@ -34,8 +36,15 @@ pub struct Ros2Config {
     pub scan_qos: Qos,
     /// How long to wait for the first odometry message, s.
     pub connect_timeout_s: f64,
-    /// Where the scanner sits on the robot (`/tf` is not looked up).
-    pub scan_mount: ScanMount,
+    /// Where the scanner sits on the robot. Unset: where `tf_static` puts
+    /// the frame each scan names, in `base_frame`.
+    pub scan_mount: Option<ScanMount>,
+    /// The robot's body frame, which its scanner's mount is looked up in.
+    pub base_frame: String,
+    /// Where the robot publishes its static transforms (its scanner's
+    /// mount among them): relative, under the namespace, as multi-robot
+    /// setups remap it; `/tf_static` for one that does not.
+    pub tf_static: String,
 }
 
 /// Where a scanner sits on the robot, as `ros2 run tf2_ros tf2_echo
@@ -67,7 +76,7 @@ fn mount_m<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
 impl ScanMount {
     /// The pose, in the robot's frame, of the beam at `angle` in the
     /// scan's.
-    fn beam(&self, angle: f64) -> Pose2 {
+    pub(super) fn beam(&self, angle: f64) -> Pose2 {
         let angle = if self.upside_down { -angle } else { angle };
         Pose2::new(self.x, self.y, self.heading_deg.to_radians() + angle)
     }
@@ -84,7 +93,9 @@ impl Default for Ros2Config {
             odom_qos: Qos::Reliable,
             scan_qos: Qos::SensorData,
             connect_timeout_s: 5.0,
-            scan_mount: ScanMount::default(),
+            scan_mount: None,
+            base_frame: "base_link".into(),
+            tf_static: "tf_static".into(),
         }
     }
 }
@@ -115,13 +126,15 @@ pub struct Ros2Robot {
     cmd_vel: Arc<CmdVel>,
     odom: Subscription<Odometry>,
     scan: Subscription<LaserScan>,
+    mounts: ScanMounts,
     limits: Limits,
     stale_after: Duration,
     /// Odometry's first pose and the world pose it stands for.
     first_odom: Pose2,
     origin: Pose2,
     latest_odom: (Odometry, Instant),
-    latest_scan: Option<(LaserScan, Instant)>,
+    /// The last usable scan, where its scanner sat, and when it came.
+    latest_scan: Option<(LaserScan, ScanMount, Instant)>,
     /// Why the scans have said nothing of obstacles, since when: each is
     /// taken as no scan, so that the robot stops as for a silent scanner
     /// if no usable one follows.
@@ -143,7 +156,8 @@ impl Ros2Robot {
         let mut node = Node::join(domain, &config.namespace)?;
         let cmd_vel = node.writer::<Twist>(&config.cmd_vel, Qos::Reliable)?;
         let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?.single_writer();
-        let scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
+        let mut scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
+        let mut mounts = ScanMounts::new(config, &node)?;
         let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
         let first = loop {
             if let Some(odometry) = odom.take_latest()? {
@@ -173,6 +187,7 @@ impl Ros2Robot {
         if let Some(why) = node.why_unheard::<LaserScan>(&config.scan, config.scan_qos) {
             tracing::warn!("{why}; AvoidCollision sees no scan");
         }
+        let latest_scan = first_scan(&mut node, &mut scan, &mut mounts, config)?;
         let first_odom = first.pose.pose.to_pose2();
         Ok(Ros2Robot {
             node,
@@ -180,12 +195,13 @@ impl Ros2Robot {
             cmd_vel: Arc::new(CmdVel { publisher: Mutex::new(cmd_vel), halted: AtomicBool::new(false) }),
             odom,
             scan,
+            mounts,
             limits,
             stale_after: Duration::from_secs_f64(STALE_PERIODS * period_s),
             first_odom,
             origin,
             latest_odom: (first, Instant::now()),
-            latest_scan: None,
+            latest_scan,
             unusable_scans: None,
             stopped: false,
         })
@@ -283,6 +299,108 @@ fn usable_odometry(odometry: &Odometry, topic: &str) -> Result<(), RobotError> {
     }
 }
 
+/// Where the scanner sits: as the robot file writes it, or where the
+/// robot's static transforms put the frame each scan names.
+enum ScanMounts {
+    Written(ScanMount),
+    Published {
+        /// Boxed: a reader is large beside a written mount.
+        transforms: Box<Subscription<TFMessage>>,
+        tree: StaticTransforms,
+        base_frame: String,
+        /// Whether a transform left out has been said: once is enough.
+        left_out_said: bool,
+    },
+}
+
+impl ScanMounts {
+    fn new(config: &Ros2Config, node: &Node) -> Result<ScanMounts, RobotError> {
+        Ok(match config.scan_mount {
+            Some(mount) => ScanMounts::Written(mount),
+            None => ScanMounts::Published {
+                // tf2's static QoS: reliable, transient local.
+                transforms: Box::new(node.reader::<TFMessage>(&config.tf_static, Qos::Latched)?),
+                tree: StaticTransforms::default(),
+                base_frame: config.base_frame.clone(),
+                left_out_said: false,
+            },
+        })
+    }
+
+    /// Takes in the static transforms published since the last call.
+    fn update(&mut self) -> Result<(), RobotError> {
+        if let ScanMounts::Published { transforms, tree, left_out_said, .. } = self {
+            let mut left_out = None;
+            transforms.take_each(|message| left_out = tree.insert(message).or(left_out.take()))?;
+            if let Some(why) = left_out.filter(|_| !*left_out_said) {
+                tracing::warn!("a transform on {} was left out: {why} (others left out go unsaid)", transforms.topic());
+                *left_out_said = true;
+            }
+        }
+        Ok(())
+    }
+
+    /// Where `scan`'s scanner sits, or why the scan says nothing of
+    /// obstacles: its own fault, or a scanner whose place is not known.
+    fn usable(&self, scan: &LaserScan) -> Result<ScanMount, String> {
+        if let Some(why) = scan.why_unusable() {
+            return Err(why);
+        }
+        match self {
+            ScanMounts::Written(mount) => Ok(*mount),
+            ScanMounts::Published { transforms, tree, base_frame, .. } => {
+                tree.scan_mount(base_frame, &scan.header.frame_id).map_err(|why| {
+                    format!(
+                        "its scanner's mount was looked up on {}, and {why}: publish it there, or write \
+                         `scan_mount` in the robot file's `ros2: (...)`",
+                        transforms.topic()
+                    )
+                })
+            }
+        }
+    }
+}
+
+/// The robot's first scan and where its scanner sits, if discovery has
+/// seen a scanner: waited for, and its mount looked up (within the
+/// connect timeout), so that the robot never moves by a scan read from
+/// the wrong place. A scanner silent for a second, or a first scan that
+/// says nothing of obstacles, is left to [`Robot::sense`].
+fn first_scan(
+    node: &mut Node,
+    scan: &mut Subscription<LaserScan>,
+    mounts: &mut ScanMounts,
+    config: &Ros2Config,
+) -> Result<Option<(LaserScan, ScanMount, Instant)>, RobotError> {
+    if !node.has_writer(&config.scan) {
+        return Ok(None);
+    }
+    let started = Instant::now();
+    let mount_deadline = started + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
+    let mut first = None;
+    loop {
+        mounts.update()?;
+        first = scan.take_latest()?.or(first);
+        let now = Instant::now();
+        match &first {
+            None if now - started >= STALE_SCAN => return Ok(None),
+            None => {}
+            Some(taken) if taken.why_unusable().is_some() => return Ok(None),
+            Some(taken) => match mounts.usable(taken) {
+                Ok(mount) => return Ok(first.map(|scan| (scan, mount, now))),
+                Err(why) if now >= mount_deadline => {
+                    return Err(RobotError::Protocol {
+                        what: format!("the scan on {}", scan.topic()),
+                        source: why.into(),
+                    })
+                }
+                Err(_) => {}
+            },
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 /// The most readings a scan is taken as. Every reading is copied into each
 /// log's buffers every tick: a scan of a million beams once took memory
 /// at 1.5 GB/s. Scanners give a few thousand beams at most (1081 a
@@ -341,28 +459,29 @@ impl Robot for Ros2Robot {
             return Err(self.lost("odometry", &topic, age));
         }
         // A scan that cannot be read, like one that says nothing of
-        // obstacles, is taken as no scan: the robot stops as for a silent
-        // scanner if no usable one follows.
-        let scan = self.scan.take_latest()?;
-        let why_unusable = match &scan {
-            Some(scan) => scan.why_unusable(),
+        // obstacles or whose scanner's place is not known, is taken as no
+        // scan: the robot stops as for a silent scanner if no usable one
+        // follows.
+        self.mounts.update()?;
+        let mounted = match self.scan.take_latest()? {
+            Some(scan) => Some(self.mounts.usable(&scan).map(|mount| (scan, mount))),
             // Said once: the reason kept stands until a usable scan comes.
             None if self.unusable_scans.is_some() => None,
-            None => self.scan.unreadable().map(|why| format!("it {why}")),
+            None => self.scan.unreadable().map(|why| Err(format!("it {why}"))),
         };
-        match (scan, why_unusable) {
-            (_, Some(why)) => {
+        match mounted {
+            Some(Err(why)) => {
                 let since = self.unusable_scans.take().map_or(now, |(_, since)| since);
                 self.unusable_scans = Some((why, since));
             }
-            (Some(scan), None) => {
+            Some(Ok((scan, mount))) => {
                 self.unusable_scans = None;
-                self.latest_scan = Some((scan, now));
+                self.latest_scan = Some((scan, mount, now));
             }
-            (None, None) => {}
+            None => {}
         }
         // Since the last usable scan, or the first scan if none was.
-        let usable_since = self.latest_scan.as_ref().map(|(_, at)| *at);
+        let usable_since = self.latest_scan.as_ref().map(|(_, _, at)| *at);
         let since = usable_since.or(self.unusable_scans.as_ref().map(|(_, since)| *since));
         if let Some(since) = since.filter(|since| now - *since > STALE_SCAN.max(self.stale_after)) {
             let topic = self.config.scan.clone();
@@ -376,7 +495,7 @@ impl Robot for Ros2Robot {
             return Err(self.lost(what, &topic, now - since));
         }
         match &self.latest_scan {
-            Some((scan, _)) => ranges_of(scan, &self.config.scan_mount, &mut state.ranges),
+            Some((scan, mount, _)) => ranges_of(scan, mount, &mut state.ranges),
             None => state.ranges.clear(),
         }
         let odometry = &self.latest_odom.0;
