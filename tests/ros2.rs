@@ -173,7 +173,8 @@ fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
     // the robot stood when the drive began.
     let (x0, y0, theta0): (f64, f64, f64) = (3.0, -1.0, 0.7);
     let args = format!("--start-x {x0} --start-y {y0} --start-theta {theta0}");
-    let listen = "/ubf/tick=ubf_msgs/msg/Tick /ubf/goal=geometry_msgs/msg/PoseStamped --min 3 --duration 30";
+    let listen = "/ubf/tick=ubf_msgs/msg/Tick /ubf/goal=geometry_msgs/msg/PoseStamped \
+                  /tf_static=tf2_msgs/msg/TFMessage:latched --min 3 --duration 30";
     let Some(session) = drive_and_listen(dir.path(), &args, &file, None, Some(listen)) else { return };
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
     assert!(stderr(&session).contains("at the goal"), "{}", stderr(&session));
@@ -192,7 +193,22 @@ fn a_cyclone_robot_reaches_a_goal_2_m_ahead_and_is_left_with_a_zero_twist() {
     assert!(heard["/ubf/tick"]["count"].as_u64().unwrap() >= 3, "{heard}");
     let paths: Vec<&str> = tick["nodes"].as_array().unwrap().iter().map(|n| n["path"].as_str().unwrap()).collect();
     assert_eq!(paths, ["root", "root/Stop", "root/GoTo"], "{tick}");
-    assert_eq!(heard["/ubf/goal"]["last"]["pose"]["position"]["x"], 2.0, "{heard}");
+    let goal = &heard["/ubf/goal"]["last"];
+    assert_eq!(goal["pose"]["position"]["x"], 2.0, "{heard}");
+    // In a frame of the drive's own, which ubf places in the robot's odom
+    // frame for tf: composed as RViz would, the goal is where the robot
+    // drove to by its own odometry.
+    assert_eq!(goal["header"]["frame_id"], "ubf_world", "{goal}");
+    let placed = &heard["/tf_static"]["last"]["transforms"][0];
+    assert_eq!((&placed["header"]["frame_id"], &placed["child_frame_id"]), (&"odom".into(), &"ubf_world".into()));
+    let (t, q) = (&placed["transform"]["translation"], &placed["transform"]["rotation"]);
+    let number = |v: &Value| v.as_f64().unwrap();
+    let yaw = 2.0 * number(&q["z"]).atan2(number(&q["w"]));
+    let (gx, gy) = (number(&goal["pose"]["position"]["x"]), number(&goal["pose"]["position"]["y"]));
+    let in_odom =
+        (number(&t["x"]) + gx * yaw.cos() - gy * yaw.sin(), number(&t["y"]) + gx * yaw.sin() + gy * yaw.cos());
+    let miss = (x - in_odom.0).hypot(y - in_odom.1);
+    assert!(miss <= 0.25, "the goal placed in odom at {in_odom:?}, the robot ended at ({x:.3}, {y:.3})");
 }
 
 #[test]

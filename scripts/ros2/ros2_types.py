@@ -179,11 +179,11 @@ def ros_topic(name, namespace=""):
     return "rt/" + "/".join(parts)
 
 
-def static_qos():
-    """tf2's static transform QoS: reliable, transient local (a reader that joins late gets the last message), keep
-    last 1."""
+def static_qos(reader=False):
+    """tf2's static transform QoS: reliable, transient local (a reader that joins late gets each writer's last
+    message), keep last 1 for a broadcaster, keep all for a listener."""
     return Qos(Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100)),
-               Policy.Durability.TransientLocal, Policy.History.KeepLast(1))
+               Policy.Durability.TransientLocal, Policy.History.KeepAll if reader else Policy.History.KeepLast(1))
 
 
 def qos(sensor_data=False):

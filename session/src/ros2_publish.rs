@@ -56,7 +56,13 @@ impl Ros2Publisher {
         let node = Node::join(domain, namespace)?;
         let epoch_s =
             std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-        Ok(Ros2Publisher { view: Ros2View::new(shown, epoch_s), writers: BTreeMap::new(), warned: false, node })
+        // Beside a ROS 2 robot, whose driver publishes its own `odom`, ubf's
+        // world is the frame the robot places in it.
+        let view = match shown.robot {
+            true => Ros2View::new(shown, epoch_s),
+            false => Ros2View::new(shown, epoch_s).in_world_frame(ubf_robots::ros2::world_frame(namespace)),
+        };
+        Ok(Ros2Publisher { view, writers: BTreeMap::new(), warned: false, node })
     }
 
     fn writer(&mut self, topic: &'static str, message: &Message) -> Result<&Writer, RobotError> {

@@ -5,7 +5,9 @@
 //! Frames follow REP 105: ubf's world frame is `odom`, the robot is
 //! `base_link`, and `odom` → `base_link` is the wheels' own odometry, which
 //! moves continuously. The pose the tree steers by, which the wall compass
-//! and egomotion correct in steps, is a topic of its own.
+//! and egomotion correct in steps, is a topic of its own. Beside a ROS 2
+//! robot, whose driver publishes its own `odom`, ubf's world is a frame of
+//! its own ([`ubf_robots::ros2::world_frame`]), which the robot places.
 
 use ubf_core::{Pose2, StereoImages, TickRecord, TreeLayout};
 use ubf_robots::ros2::msg::{
@@ -117,6 +119,8 @@ pub struct Ros2View {
     /// live messages (tf2 drops transforms far from now).
     epoch_s: f64,
     layout: TreeLayout,
+    /// The frame of ubf's world, which poses and the goal are in.
+    world: String,
     frame: u64,
     goal: Option<[f64; 3]>,
     /// Controller time the goal was last shown.
@@ -133,7 +137,13 @@ impl Ros2View {
     /// A view showing `shown`, stamping with controller time plus
     /// `epoch_s`.
     pub fn new(shown: Shown, epoch_s: f64) -> Ros2View {
-        Ros2View { shown, epoch_s, layout: TreeLayout::default(), frame: 0, goal: None, goal_at: 0.0 }
+        let world = "odom".to_owned();
+        Ros2View { shown, epoch_s, layout: TreeLayout::default(), world, frame: 0, goal: None, goal_at: 0.0 }
+    }
+
+    /// This view, with ubf's world named `frame` instead of `odom`.
+    pub fn in_world_frame(self, frame: String) -> Ros2View {
+        Ros2View { world: frame, ..self }
     }
 
     /// Learns the tree's shape, to name the nodes of each tick.
@@ -151,8 +161,9 @@ impl Ros2View {
         let (state, t) = (&record.state, self.stamp(record.time()));
         if self.shown.robot {
             let wheels = &state.odometry;
-            emit(topics::TF, t, Message::Tf(TFMessage::planar(t, "odom", "base_link", wheels)));
-            emit(topics::ODOM, t, Message::Odometry(Box::new(odometry(t, wheels, state.velocity, state.rot_velocity))));
+            emit(topics::TF, t, Message::Tf(TFMessage::planar(t, &self.world, "base_link", wheels)));
+            let odometry = odometry(Header::new(t, &self.world), wheels, state.velocity, state.rot_velocity);
+            emit(topics::ODOM, t, Message::Odometry(Box::new(odometry)));
             if !state.ranges.is_empty() {
                 emit(topics::SCAN, t, Message::Scan(scan(t, record)));
             }
@@ -164,18 +175,18 @@ impl Ros2View {
             self.goal = goal;
             self.goal_at = record.time();
             if let Some([x, y, _]) = goal {
-                emit(topics::GOAL, t, Message::Pose(pose_stamped(t, &Pose2::new(x, y, 0.0))));
+                emit(topics::GOAL, t, Message::Pose(self.pose_stamped(t, &Pose2::new(x, y, 0.0))));
             }
         }
         if let Some(truth) = &record.truth {
-            emit(topics::TRUE_POSE, t, Message::Pose(pose_stamped(t, &truth.pose)));
+            emit(topics::TRUE_POSE, t, Message::Pose(self.pose_stamped(t, &truth.pose)));
         }
         let frame = &state.stereo;
         if frame.number != self.frame && frame.number != 0 {
             self.frame = frame.number;
             let stamp = self.stamp(frame.time);
             if let Some(pose) = &state.egomotion.pose {
-                emit(topics::EGOMOTION_POSE, stamp, Message::Pose(pose_stamped(stamp, pose)));
+                emit(topics::EGOMOTION_POSE, stamp, Message::Pose(self.pose_stamped(stamp, pose)));
             }
             if let Some(images) = frame.images.as_deref().filter(|_| self.shown.images) {
                 emit(topics::LEFT_IMAGE, stamp, Message::Image(image(stamp, "camera_left", images, &images.left)));
@@ -183,9 +194,13 @@ impl Ros2View {
             }
         }
         if self.shown.tree {
-            emit(topics::STEERED_POSE, t, Message::Pose(pose_stamped(t, &state.pose)));
+            emit(topics::STEERED_POSE, t, Message::Pose(self.pose_stamped(t, &state.pose)));
             emit(topics::TICK, t, Message::Tick(self.tick(t, record)));
         }
+    }
+
+    fn pose_stamped(&self, stamp: f64, pose: &Pose2) -> PoseStamped {
+        PoseStamped { header: Header::new(stamp, &self.world), pose: Pose::planar(pose) }
     }
 
     fn tick(&self, stamp: f64, record: &TickRecord) -> Tick {
@@ -212,13 +227,9 @@ impl Ros2View {
     }
 }
 
-fn pose_stamped(stamp: f64, pose: &Pose2) -> PoseStamped {
-    PoseStamped { header: Header::new(stamp, "odom"), pose: Pose::planar(pose) }
-}
-
-fn odometry(stamp: f64, pose: &Pose2, velocity: f64, rot_velocity: f64) -> Odometry {
+fn odometry(header: Header, pose: &Pose2, velocity: f64, rot_velocity: f64) -> Odometry {
     Odometry {
-        header: Header::new(stamp, "odom"),
+        header,
         child_frame_id: "base_link".into(),
         pose: PoseWithCovariance { pose: Pose::planar(pose), ..PoseWithCovariance::default() },
         twist: TwistWithCovariance { twist: Twist::planar(velocity, rot_velocity), ..TwistWithCovariance::default() },

@@ -14,4 +14,4 @@ pub mod robot;
 mod transforms;
 
 pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
-pub use robot::{Ros2Config, Ros2EmergencyStop, Ros2Robot, ScanMount};
+pub use robot::{world_frame, Ros2Config, Ros2EmergencyStop, Ros2Robot, ScanMount};

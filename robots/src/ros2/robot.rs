@@ -139,6 +139,9 @@ pub struct Ros2Robot {
     /// taken as no scan, so that the robot stops as for a silent scanner
     /// if no usable one follows.
     unusable_scans: Option<(String, Instant)>,
+    /// Publishes where the drive's world frame sits in the robot's
+    /// odometry frame, for as long as the robot is driven.
+    _world_in_odom: Publisher<TFMessage>,
     stopped: bool,
     /// Last, so that it is dropped after its readers and writer.
     node: Node,
@@ -189,6 +192,8 @@ impl Ros2Robot {
         }
         let latest_scan = first_scan(&mut node, &mut scan, &mut mounts, config)?;
         let first_odom = first.pose.pose.to_pose2();
+        let world_in_odom = node.writer::<TFMessage>(&config.tf_static, Qos::Latched)?;
+        world_in_odom.publish(world_in_odom_frame(&first, origin, &config.namespace))?;
         Ok(Ros2Robot {
             node,
             config: config.clone(),
@@ -203,6 +208,7 @@ impl Ros2Robot {
             latest_odom: (first, Instant::now()),
             latest_scan,
             unusable_scans: None,
+            _world_in_odom: world_in_odom,
             stopped: false,
         })
     }
@@ -214,7 +220,13 @@ impl Ros2Robot {
 
     /// The pose odometry gives, in the drive's world frame.
     fn world_pose(&self, odometry: &Odometry) -> Pose2 {
-        self.origin.compose(&odometry.pose.pose.to_pose2().relative_to(&self.first_odom))
+        Ros2Robot::world_pose_of(&odometry.pose.pose.to_pose2(), &self.first_odom, &self.origin)
+    }
+
+    /// The world pose of odometry's `pose`, where odometry read `first`
+    /// at world pose `origin`.
+    fn world_pose_of(pose: &Pose2, first: &Pose2, origin: &Pose2) -> Pose2 {
+        origin.compose(&pose.relative_to(first))
     }
 
     /// A handle that stops the robot from another thread (Ctrl-C) even
@@ -297,6 +309,33 @@ fn usable_odometry(odometry: &Odometry, topic: &str) -> Result<(), RobotError> {
         Some(why) => Err(RobotError::Protocol { what: format!("the odometry on {topic}"), source: why.into() }),
         None => Ok(()),
     }
+}
+
+/// The frame a drive's goal and poses are in (where the robot stood when
+/// the drive began), as ubf names it beside a ROS 2 robot's own `odom`:
+/// `ubf_world`, prefixed by the namespace (`robot1/ubf_world`) as the
+/// frames of several robots are.
+pub fn world_frame(namespace: &str) -> String {
+    match namespace.trim_matches('/') {
+        "" => "ubf_world".into(),
+        namespace => format!("{namespace}/ubf_world"),
+    }
+}
+
+/// Where the drive's world frame sits in the robot's odometry frame, as a
+/// static transform: odometry read `first` where the world pose is
+/// `origin`. With it, RViz and Foxglove draw ubf's goal and poses where
+/// the robot's own transforms put the robot, whatever odometry read when
+/// the drive began.
+fn world_in_odom_frame(first: &Odometry, origin: Pose2, namespace: &str) -> TFMessage {
+    let odom = match first.header.frame_id.as_str() {
+        "" => "odom",
+        frame => frame,
+    };
+    // odometry = first ∘ origin⁻¹ ∘ world, as `Ros2Robot::world_pose` inverted.
+    let world = first.pose.pose.to_pose2().compose(&Pose2::default().relative_to(&origin));
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    TFMessage::planar(now, odom, &world_frame(namespace), &world)
 }
 
 /// Where the scanner sits: as the robot file writes it, or where the
@@ -545,6 +584,39 @@ impl Drop for Ros2Robot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_world_frame_sits_in_odometry_s_frame_where_the_drive_began() {
+        // Odometry read (3, 1) facing +y where the drive's world pose is
+        // (1, 0) facing +x.
+        let mut first = Odometry::default();
+        first.header.frame_id = "robot1/odom".into();
+        first.pose.pose = super::super::msg::Pose::planar(&Pose2::new(3.0, 1.0, std::f64::consts::FRAC_PI_2));
+        let message = world_in_odom_frame(&first, Pose2::new(1.0, 0.0, 0.0), "/robot1/");
+        let transform = &message.transforms[0];
+        assert_eq!(
+            (transform.header.frame_id.as_str(), transform.child_frame_id.as_str()),
+            ("robot1/odom", "robot1/ubf_world")
+        );
+        let world_in_odom = Pose2::new(
+            transform.transform.translation.x,
+            transform.transform.translation.y,
+            transform.transform.rotation.yaw(),
+        );
+        // A goal 2 m ahead of where the robot stood, (3, 0) in the world,
+        // is 2 m along odometry's +y from (3, 1).
+        let goal = world_in_odom.compose(&Pose2::new(3.0, 0.0, 0.0));
+        assert!((goal.x - 3.0).abs() < 1e-9 && (goal.y - 3.0).abs() < 1e-9, "{goal:?}");
+        // And the world pose of any odometry maps back to it.
+        let robot = Ros2Robot::world_pose_of(
+            &Pose2::new(5.0, 2.0, 0.3),
+            &first.pose.pose.to_pose2(),
+            &Pose2::new(1.0, 0.0, 0.0),
+        );
+        let back = world_in_odom.compose(&robot);
+        assert!((back.x - 5.0).abs() < 1e-9 && (back.y - 2.0).abs() < 1e-9 && (back.theta - 0.3).abs() < 1e-9);
+        assert_eq!(world_frame(""), "ubf_world");
+    }
 
     fn scan(ranges: Vec<f32>) -> LaserScan {
         let increment = std::f32::consts::TAU / ranges.len() as f32;
