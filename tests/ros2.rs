@@ -320,6 +320,37 @@ fn a_reader_of_the_commands_that_stops_acknowledging_does_not_stop_the_drive() {
 }
 
 #[test]
+fn a_base_that_reads_stamped_commands_is_sent_them_and_reaches_its_goal() {
+    // As ros2_control's diff drive controller from Jazzy on: TwistStamped
+    // only, read off the base's reader by discovery.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let Some(session) = drive_beside_robot(dir.path(), "--stamped-cmd-vel", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let (x, y, _) = pose(&session.summary);
+    assert!((x - 2.0).hypot(y) <= 0.25, "ended at ({x:.3}, {y:.3})");
+    assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    // In base_link, stamped zero: the base's own clock times them out.
+    for line in &session.twists {
+        let header = &line["header"];
+        assert_eq!(header["frame_id"], "base_link", "{line}");
+        assert_eq!((&header["stamp"]["sec"], &header["stamp"]["nanosec"]), (&0.into(), &0.into()), "{line}");
+    }
+}
+
+#[test]
+fn commands_of_a_type_the_base_does_not_read_end_the_drive_before_it_moves() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "ros2: (cmd_vel_stamped: false),");
+    let Some(session) = drive_beside_robot(dir.path(), "--stamped-cmd-vel", &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(said.contains("/cmd_vel is read as `geometry_msgs::msg::dds_::TwistStamped_`"), "{said}");
+    assert!(said.contains("set `cmd_vel_stamped: true`"), "{said}");
+    assert_eq!(pose(&session.summary).0, 0.0, "{said}");
+}
+
+#[test]
 fn a_stranger_s_unreadable_odometry_is_skipped_and_the_robot_drives_on() {
     // A message named odometry that holds a header only, from another
     // participant: one of them used to end the drive.

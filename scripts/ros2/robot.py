@@ -43,7 +43,7 @@ from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
 
 from ros2_types import (Header, LaserScan, Odometry, Quaternion, TFMessage, Time, Transform,  # noqa: E402
-                        TransformStamped, Twist, Vector3, qos, ros_topic, static_qos)
+                        TransformStamped, Twist, TwistStamped, Vector3, qos, ros_topic, static_qos)
 
 COMMAND_TIMEOUT = 0.5
 BEAMS = 360
@@ -108,6 +108,9 @@ def main():
     parser.add_argument("--laser-mount", type=float, nargs=2, metavar=("X", "HEADING_DEG"), default=(0.0, 0.0),
                         help="the scanner X m ahead of the robot's centre, its angle 0 HEADING_DEG "
                              "counter-clockwise from the robot's heading (frame \"laser\")")
+    parser.add_argument("--stamped-cmd-vel", action="store_true",
+                        help="read geometry_msgs/msg/TwistStamped on /cmd_vel, as ros2_control's diff drive controller "
+                             "does from Jazzy on (recorded lines then also hold the command's header)")
     parser.add_argument("--tf-static", action="store_true",
                         help="publish the scanner's mount on /tf_static before starting, as a robot's static "
                              "broadcasters do: base_footprint > base_link > laser_plate (X ahead, 0.3 m up) from one "
@@ -138,7 +141,8 @@ def main():
     args = parser.parse_args()
 
     participant = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
-    cmd_reader = DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), Twist), qos())
+    cmd_type = TwistStamped if args.stamped_cmd_vel else Twist
+    cmd_reader = DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), cmd_type), qos())
     odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
                              qos(sensor_data=args.odom_best_effort))
     second_odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
@@ -172,10 +176,13 @@ def main():
     next_tick = started + period
     while not stopping and (args.duration is None or time.monotonic() - started < args.duration):
         waitset.wait(int(max(0.0, next_tick - time.monotonic()) * 1e9))
-        for twist in (s for s in cmd_reader.take(N=100) if s.sample_info.valid_data):
+        for command in (s for s in cmd_reader.take(N=100) if s.sample_info.valid_data):
+            twist = command.twist if args.stamped_cmd_vel else command
             last_twist, last_twist_at = twist, time.monotonic()
             if record:
                 line = {"twist": asdict(twist), "t": last_twist_at, "odom_age": last_twist_at - odom_at}
+                if args.stamped_cmd_vel:
+                    line["header"] = asdict(command.header)
                 record.write(json.dumps(line) + "\n")
         now = time.monotonic()
         if now < next_tick:

@@ -48,6 +48,12 @@ class Twist(IdlStruct, typename=_dds("geometry_msgs/msg/Twist")):
 
 
 @dataclass
+class TwistStamped(IdlStruct, typename=_dds("geometry_msgs/msg/TwistStamped")):
+    header: Header = field(default_factory=Header)
+    twist: Twist = field(default_factory=Twist)
+
+
+@dataclass
 class Point(IdlStruct, typename=_dds("geometry_msgs/msg/Point")):
     x: float64 = 0.0
     y: float64 = 0.0
@@ -162,7 +168,7 @@ TYPES = {
     for pkg, classes in {
         "builtin_interfaces": [Time],
         "std_msgs": [Header],
-        "geometry_msgs": [Vector3, Twist, Point, Quaternion, Pose, PoseWithCovariance,
+        "geometry_msgs": [Vector3, Twist, TwistStamped, Point, Quaternion, Pose, PoseWithCovariance,
                           TwistWithCovariance, PoseStamped, Transform, TransformStamped],
         "nav_msgs": [Odometry],
         "sensor_msgs": [LaserScan, Image],

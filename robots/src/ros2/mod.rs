@@ -6,12 +6,15 @@
 //! - [`msg`]: the ROS 2 messages ubf reads and writes;
 //! - [`node`]: a DDS participant with ROS 2's naming and QoS conventions;
 //! - [`robot`]: [`Ros2Robot`], the [`ubf_core::Robot`] it drives;
+//! - `cmd_vel`: the velocity commands, `Twist` or `TwistStamped`;
 //! - `transforms`: the static transform tree, where the scanner sits.
 
+mod cmd_vel;
 pub mod msg;
 pub mod node;
 pub mod robot;
 mod transforms;
 
+pub use cmd_vel::Ros2EmergencyStop;
 pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
-pub use robot::{world_frame, Ros2Config, Ros2EmergencyStop, Ros2Robot, ScanMount};
+pub use robot::{world_frame, Ros2Config, Ros2Robot, ScanMount};

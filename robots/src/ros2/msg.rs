@@ -111,6 +111,16 @@ impl Twist {
     }
 }
 
+/// `geometry_msgs/msg/TwistStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TwistStamped {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The twist.
+    pub twist: Twist,
+}
+ros_message!(TwistStamped, "geometry_msgs/msg/TwistStamped", "geometry_msgs__TwistStamped.msg");
+
 /// `geometry_msgs/msg/Point`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Point {

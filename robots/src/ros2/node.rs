@@ -401,20 +401,16 @@ impl Node {
         None
     }
 
-    /// Why a topic this node writes as `M` reaches none of the readers
-    /// discovery has seen on it, if discovery tells: a reader of another
-    /// type.
-    pub fn why_unread<M: RosMessage>(&mut self, name: &str) -> Option<String> {
+    /// The types (DDS names) of the readers discovery has seen on topic
+    /// `name`, each once.
+    pub fn reader_types(&mut self, name: &str) -> Vec<String> {
         self.watch_discovery();
-        let (ros_name, dds_topic) = (self.resolve(name), format!("rt{}", self.resolve(name)));
-        self.seen.iter().filter(|e| !e.writer && e.topic == dds_topic).find(|e| e.type_name != M::dds_name()).map(|e| {
-            format!(
-                "{ros_name} is read with type `{}`, but ubf publishes `{}` ({})",
-                e.type_name,
-                M::dds_name(),
-                M::NAME
-            )
-        })
+        let dds_topic = format!("rt{}", self.resolve(name));
+        let mut types: Vec<String> =
+            self.seen.iter().filter(|e| !e.writer && e.topic == dds_topic).map(|e| e.type_name.clone()).collect();
+        types.sort();
+        types.dedup();
+        types
     }
 }
 

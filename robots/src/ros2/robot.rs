@@ -1,13 +1,12 @@
 //! [`Ros2Robot`]: a ROS 2 robot driven through `/cmd_vel`, sensed through
 //! `/odom` and `/scan`.
 
+use super::cmd_vel::{self, CmdVel, Ros2EmergencyStop};
 use super::msg::{LaserScan, Odometry, TFMessage, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
 use super::transforms::StaticTransforms;
-use crate::emergency::EmergencyStop;
 use serde::Deserialize;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading, Robot, RobotError, State, Turn};
 
@@ -26,6 +25,10 @@ pub struct Ros2Config {
     pub domain_id: Option<u16>,
     /// Where velocity commands go.
     pub cmd_vel: String,
+    /// Whether they go as `geometry_msgs/msg/TwistStamped` (unset: as the
+    /// robot reads them: stamped if every reader of them discovery has
+    /// seen reads that, else `Twist`).
+    pub cmd_vel_stamped: Option<bool>,
     /// Where odometry comes from.
     pub odom: String,
     /// Where laser scans come from, if the robot publishes them.
@@ -88,6 +91,7 @@ impl Default for Ros2Config {
             namespace: String::new(),
             domain_id: None,
             cmd_vel: "cmd_vel".into(),
+            cmd_vel_stamped: None,
             odom: "odom".into(),
             scan: "scan".into(),
             odom_qos: Qos::Reliable,
@@ -107,10 +111,6 @@ const STALE_PERIODS: f64 = 3.0;
 /// A scan older than this, once scans have come, is a lost sensor: the
 /// robot is stopped rather than steered by what the scanner saw last.
 const STALE_SCAN: Duration = Duration::from_secs(1);
-
-/// How long the final zero twist may take to be acknowledged on the way
-/// out.
-const STOP_ACK_WAIT: Duration = Duration::from_millis(500);
 
 /// Turn rate per radian of heading error for heading commands, 1/s: a ROS
 /// 2 base takes rates only.
@@ -157,7 +157,10 @@ impl Ros2Robot {
             None => domain_from_env()?,
         };
         let mut node = Node::join(domain, &config.namespace)?;
-        let cmd_vel = node.writer::<Twist>(&config.cmd_vel, Qos::Reliable)?;
+        // A type written is sent at once, so that the robot's reader has
+        // matched the writer by the first odometry; one read off the robot
+        // once its odometry (and so its driver) has been heard.
+        let written = config.cmd_vel_stamped.map(|stamped| CmdVel::new(&node, config, stamped)).transpose()?;
         let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?.single_writer();
         let mut scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
         let mut mounts = ScanMounts::new(config, &node)?;
@@ -173,7 +176,7 @@ impl Ros2Robot {
                     .unreadable()
                     .map(|why| format!("what came on {topic} {why}"))
                     .or_else(|| node.why_unheard::<Odometry>(&config.odom, config.odom_qos))
-                    .or_else(|| node.why_unread::<Twist>(&config.cmd_vel))
+                    .or_else(|| cmd_vel::why_unread(&mut node, config, config.cmd_vel_stamped))
                     .unwrap_or_else(|| {
                         format!(
                             "nothing was published on {topic} in domain {domain}: is the robot's driver running, in \
@@ -186,6 +189,16 @@ impl Ros2Robot {
             node.watch_discovery();
             std::thread::sleep(Duration::from_millis(10));
         };
+        let cmd_vel = match written {
+            Some(written) => written,
+            None => {
+                let stamped = cmd_vel::stamped(&mut node, config);
+                CmdVel::new(&node, config, stamped)?
+            }
+        };
+        if let Some(why) = cmd_vel::why_unread(&mut node, config, Some(cmd_vel.stamped())) {
+            return Err(RobotError::Protocol { what: "the velocity commands".into(), source: why.into() });
+        }
         // A scan nobody can hear is said, not left to look like open space.
         if let Some(why) = node.why_unheard::<LaserScan>(&config.scan, config.scan_qos) {
             tracing::warn!("{why}; AvoidCollision sees no scan");
@@ -197,7 +210,7 @@ impl Ros2Robot {
         Ok(Ros2Robot {
             node,
             config: config.clone(),
-            cmd_vel: Arc::new(CmdVel { publisher: Mutex::new(cmd_vel), halted: AtomicBool::new(false) }),
+            cmd_vel: Arc::new(cmd_vel),
             odom,
             scan,
             mounts,
@@ -237,10 +250,8 @@ impl Ros2Robot {
 
     /// Publishes `twist`, or a zero twist once the robot has been halted.
     fn publish(&mut self, twist: Twist) -> Result<(), RobotError> {
-        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
-        let twist = if self.cmd_vel.halted.load(Ordering::SeqCst) { Twist::default() } else { twist };
-        self.stopped = twist == Twist::default();
-        publisher.publish(twist)
+        self.stopped = self.cmd_vel.publish(twist)? == Twist::default();
+        Ok(())
     }
 
     /// Sends a zero twist and says why the link is lost: `topic`, which
@@ -248,57 +259,6 @@ impl Ros2Robot {
     fn lost(&mut self, what: &'static str, topic: &str, silent: Duration) -> RobotError {
         let _ = self.publish(Twist::default());
         LinkLoss::TopicSilent { what, topic: self.node.resolve(topic), for_s: silent.as_secs_f64() }.into()
-    }
-}
-
-/// The robot's velocity commands: the writer, and whether the robot has
-/// been halted from outside the control loop.
-struct CmdVel {
-    publisher: Mutex<Publisher<Twist>>,
-    halted: AtomicBool,
-}
-
-impl CmdVel {
-    /// Waits (briefly) for the robot's driver to acknowledge what was
-    /// published, and says on the log if it did not.
-    fn await_acknowledgement(&self) {
-        let publisher = self.publisher.lock().unwrap_or_else(PoisonError::into_inner);
-        if !publisher.acknowledged_within(STOP_ACK_WAIT) {
-            tracing::warn!(
-                "the zero twist on {} was not acknowledged within {:.1} s",
-                publisher.name(),
-                STOP_ACK_WAIT.as_secs_f64()
-            );
-        }
-    }
-}
-
-/// What a signal handler stops a ROS 2 robot with while the control loop
-/// is busy or stuck: a zero twist on the robot's own writer.
-pub struct Ros2EmergencyStop {
-    cmd_vel: Arc<CmdVel>,
-}
-
-impl EmergencyStop for Ros2EmergencyStop {
-    /// Publishes a zero twist now, and every twist the control loop
-    /// publishes after it is a zero twist too.
-    fn halt(&self) -> Result<(), RobotError> {
-        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
-        self.cmd_vel.halted.store(true, Ordering::SeqCst);
-        publisher.publish(Twist::default())
-    }
-
-    /// Halts, and waits (briefly) for the driver to acknowledge the zero
-    /// twist: a writer that leaves first may take it along.
-    fn stop_now(&self) -> Result<(), RobotError> {
-        self.halt()?;
-        self.cmd_vel.await_acknowledgement();
-        Ok(())
-    }
-
-    fn stop_now_sends(&self) -> String {
-        let publisher = self.cmd_vel.publisher.lock().unwrap_or_else(PoisonError::into_inner);
-        format!("a zero twist on {}", publisher.name())
     }
 }
 
