@@ -572,6 +572,19 @@ fn a_scanner_mount_published_on_tf_static_is_read_from_where_it_sits() {
 }
 
 #[test]
+fn a_scanner_mount_that_moves_on_tf_static_during_the_drive_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 1.0, "");
+    let robot = "--scan --wall-x 10 --laser-mount -0.3 180 --tf-static --tf-static-turn-after 0.3";
+    let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let said = stderr(&session);
+    // Said on the log (with -v, where the mount first found is said too).
+    let moved = r#"the scanner ("laser") moved on /tf_static during the drive, from (-0.30, 0.00) m facing 180° to (-0.30, 0.00) m facing -90°"#;
+    assert!(said.contains(moved), "{said}");
+}
+
+#[test]
 fn a_scan_from_a_frame_no_transform_places_ends_the_drive_before_the_robot_moves() {
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 2.0, "ros2: (connect_timeout_s: 1.0),");

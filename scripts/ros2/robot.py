@@ -108,6 +108,9 @@ def main():
     parser.add_argument("--laser-mount", type=float, nargs=2, metavar=("X", "HEADING_DEG"), default=(0.0, 0.0),
                         help="the scanner X m ahead of the robot's centre, its angle 0 HEADING_DEG "
                              "counter-clockwise from the robot's heading (frame \"laser\")")
+    parser.add_argument("--tf-static-turn-after", type=float, metavar="S",
+                        help="with --tf-static, S seconds after the robot first moved, publish the scanner turned a "
+                             "quarter further, as a second broadcaster of its mount would")
     parser.add_argument("--stamped-cmd-vel", action="store_true",
                         help="read geometry_msgs/msg/TwistStamped on /cmd_vel, as ros2_control's diff drive controller "
                              "does from Jazzy on (recorded lines then also hold the command's header)")
@@ -213,6 +216,11 @@ def main():
             stray.pose.pose.position.x = -10.0
             stray.pose.pose.orientation = Quaternion(z=0.0, w=1.0)
             second_odom_writer.write(stray)
+        if broadcasters and args.tf_static_turn_after is not None and moved_at is not None \
+                and now - moved_at >= args.tf_static_turn_after:
+            turned = math.radians(args.laser_mount[1] + 90.0)
+            broadcasters[1].write(TFMessage(transforms=[transform("laser_plate", "laser", z=0.05, yaw=turned)]))
+            args.tf_static_turn_after = None
         if short_odom_writer and moved_at is not None and now - moved_at >= args.short_odom_after:
             short_odom_writer.write(ShortOdometry(header=header))
         if short_scan_writer and moved_at is not None and now - moved_at >= args.short_scan_after:

@@ -4,7 +4,7 @@
 use super::cmd_vel::{self, CmdVel, Ros2EmergencyStop};
 use super::msg::{LaserScan, Odometry, TFMessage, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
-use super::transforms::StaticTransforms;
+use super::transforms::PublishedMounts;
 use serde::Deserialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -302,60 +302,35 @@ fn world_in_odom_frame(first: &Odometry, origin: Pose2, namespace: &str) -> TFMe
 /// robot's static transforms put the frame each scan names.
 enum ScanMounts {
     Written(ScanMount),
-    Published {
-        /// Boxed: a reader is large beside a written mount.
-        transforms: Box<Subscription<TFMessage>>,
-        tree: StaticTransforms,
-        base_frame: String,
-        /// Whether a transform left out has been said: once is enough.
-        left_out_said: bool,
-    },
+    /// Boxed: a reader is large beside a written mount.
+    Published(Box<PublishedMounts>),
 }
 
 impl ScanMounts {
     fn new(config: &Ros2Config, node: &Node) -> Result<ScanMounts, RobotError> {
         Ok(match config.scan_mount {
             Some(mount) => ScanMounts::Written(mount),
-            None => ScanMounts::Published {
-                // tf2's static QoS: reliable, transient local.
-                transforms: Box::new(node.reader::<TFMessage>(&config.tf_static, Qos::Latched)?),
-                tree: StaticTransforms::default(),
-                base_frame: config.base_frame.clone(),
-                left_out_said: false,
-            },
+            None => ScanMounts::Published(Box::new(PublishedMounts::new(config, node)?)),
         })
     }
 
     /// Takes in the static transforms published since the last call.
     fn update(&mut self) -> Result<(), RobotError> {
-        if let ScanMounts::Published { transforms, tree, left_out_said, .. } = self {
-            let mut left_out = None;
-            transforms.take_each(|message| left_out = tree.insert(message).or(left_out.take()))?;
-            if let Some(why) = left_out.filter(|_| !*left_out_said) {
-                tracing::warn!("a transform on {} was left out: {why} (others left out go unsaid)", transforms.topic());
-                *left_out_said = true;
-            }
+        match self {
+            ScanMounts::Written(_) => Ok(()),
+            ScanMounts::Published(mounts) => mounts.update(),
         }
-        Ok(())
     }
 
     /// Where `scan`'s scanner sits, or why the scan says nothing of
     /// obstacles: its own fault, or a scanner whose place is not known.
-    fn usable(&self, scan: &LaserScan) -> Result<ScanMount, String> {
+    fn usable(&mut self, scan: &LaserScan) -> Result<ScanMount, String> {
         if let Some(why) = scan.why_unusable() {
             return Err(why);
         }
         match self {
             ScanMounts::Written(mount) => Ok(*mount),
-            ScanMounts::Published { transforms, tree, base_frame, .. } => {
-                tree.scan_mount(base_frame, &scan.header.frame_id).map_err(|why| {
-                    format!(
-                        "its scanner's mount was looked up on {}, and {why}: publish it there, or write \
-                         `scan_mount` in the robot file's `ros2: (...)`",
-                        transforms.topic()
-                    )
-                })
-            }
+            ScanMounts::Published(mounts) => mounts.of(&scan.header.frame_id),
         }
     }
 }

@@ -2,13 +2,19 @@
 //! its scanner sits by it: what `tf2_echo base_link laser` would say.
 
 use super::msg::{Point, Pose, TFMessage, Transform};
-use super::robot::ScanMount;
+use super::node::{Node, Qos, Subscription};
+use super::robot::{Ros2Config, ScanMount};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
+use ubf_core::RobotError;
 
 /// The most frames kept. Robots have tens; the bound keeps what a stranger
 /// on the domain can make ubf hold, and walk every tick, small.
 const MOST_FRAMES: usize = 1000;
+
+/// The longest frame name kept, bytes. Real ones are tens; the bound keeps
+/// what walking the tree and saying a name cost small.
+const MOST_NAME_BYTES: usize = 256;
 
 /// How far from level a scanner may tilt and its scan still be read as
 /// lying in the floor's plane, degrees. A scanner tilted further (down, to
@@ -32,6 +38,15 @@ fn frame_name(name: &str) -> &str {
     name.strip_prefix('/').unwrap_or(name)
 }
 
+/// A frame's name as said: quoted, control characters escaped, cut short.
+fn said(name: &str) -> String {
+    let name = crate::printable::text(name.as_bytes());
+    match name.char_indices().nth(60) {
+        Some((cut, _)) => format!("\"{}…\"", &name[..cut]),
+        None => format!("\"{name}\""),
+    }
+}
+
 impl StaticTransforms {
     /// Takes in a message's transforms: a later transform of a frame
     /// replaces the earlier, as in tf2. Why any was left out, if one was.
@@ -39,17 +54,22 @@ impl StaticTransforms {
         let mut left_out = None;
         for stamped in message.transforms {
             let (parent, child) = (frame_name(&stamped.header.frame_id), frame_name(&stamped.child_frame_id));
+            let (said_child, said_parent) = (said(child), said(parent));
             let why = if parent.is_empty() || child.is_empty() || parent == child {
-                Some(format!("a frame {child:?} in a parent {parent:?}: a frame needs a name, and a parent of another"))
+                Some(format!(
+                    "a frame {said_child} in a parent {said_parent}: a frame needs a name, and a parent of another"
+                ))
+            } else if parent.len() > MOST_NAME_BYTES || child.len() > MOST_NAME_BYTES {
+                Some(format!("frame {said_child} in {said_parent}: a name longer than {MOST_NAME_BYTES} bytes"))
             } else if self.parents.len() >= MOST_FRAMES && !self.parents.contains_key(child) {
-                Some(format!("frame {child:?}: more than {MOST_FRAMES} frames were published, and no more are kept"))
+                Some(format!("frame {said_child}: more than {MOST_FRAMES} frames were published, and no more are kept"))
             } else {
                 match isometry(&stamped.transform) {
                     Ok(pose) => {
                         self.parents.insert(child.to_owned(), (parent.to_owned(), pose));
                         None
                     }
-                    Err(why) => Some(format!("frame {child:?} in {parent:?}: {why}")),
+                    Err(why) => Some(format!("frame {said_child} in {said_parent}: {why}")),
                 }
             };
             left_out = left_out.or(why);
@@ -60,17 +80,18 @@ impl StaticTransforms {
     /// `frame`'s pose in the root of its tree, and that root's name.
     fn in_root<'a>(&'a self, frame: &'a str) -> Result<(&'a str, Isometry3<f64>), String> {
         let (mut name, mut pose) = (frame, Isometry3::identity());
-        let mut path = vec![frame];
-        while let Some((parent, in_parent)) = self.parents.get(name) {
+        // A walk longer than there are frames has come round again.
+        for _ in 0..=self.parents.len() {
+            let Some((parent, in_parent)) = self.parents.get(name) else { return Ok((name, pose)) };
             pose = in_parent * pose;
             name = parent;
-            if path.contains(&name) {
-                path.push(name);
-                return Err(format!("its frames loop: {}", path.join(" → ")));
-            }
-            path.push(name);
         }
-        Ok((name, pose))
+        Err(format!("its frames loop above {}, through {}", said(frame), said(name)))
+    }
+
+    /// Whether `frame` is in the tree, as a child or as a parent.
+    fn has(&self, frame: &str) -> bool {
+        self.parents.contains_key(frame) || self.parents.values().any(|(parent, _)| parent == frame)
     }
 
     /// `frame`'s pose in `base`, if the tree joins them.
@@ -81,17 +102,26 @@ impl StaticTransforms {
         let (base_root, base_pose) = self.in_root(base)?;
         let (frame_root, frame_pose) = self.in_root(frame)?;
         if base_root != frame_root {
-            let known = if self.parents.contains_key(frame) { "is joined to other frames" } else { "is not there" };
-            return Err(format!("it does not join {frame:?} to {base:?}: {frame:?} {known}"));
+            let (base_said, frame_said) = (said(base), said(frame));
+            let why = match (self.has(base), self.has(frame)) {
+                (false, _) => format!("{base_said}, the robot's body (`base_frame`), is not there"),
+                (true, false) => format!("{frame_said} is not there"),
+                (true, true) => format!("{frame_said} is joined to other frames"),
+            };
+            return Err(format!("it does not join {frame_said} to {base_said}: {why}"));
         }
         Ok(base_pose.inverse() * frame_pose)
     }
 
     /// Where a scanner whose scans come in `frame` sits on a robot whose
-    /// body is `base`. The frame the robot's body is itself is its centre.
+    /// body is `base`. The frame the robot's body is itself is its centre;
+    /// no frame is nowhere, as tf2 has it.
     pub fn scan_mount(&self, base: &str, frame: &str) -> Result<ScanMount, String> {
         let (base, frame) = (frame_name(base), frame_name(frame));
-        if frame.is_empty() || frame == base {
+        if frame.is_empty() {
+            return Err("the scan names no frame (its header.frame_id is empty) to look up".into());
+        }
+        if frame == base {
             return Ok(ScanMount::default());
         }
         let pose = self.pose_in(base, frame)?;
@@ -99,17 +129,106 @@ impl StaticTransforms {
         let tilt = up.z.abs().clamp(0.0, 1.0).acos().to_degrees();
         if tilt > MOST_TILT_DEG {
             return Err(format!(
-                "it tilts {frame:?} {tilt:.0}° from level in {base:?}: its scan is not in the floor's plane, which \
-                 ubf reads a scan in (at most {MOST_TILT_DEG}° from it)"
+                "it tilts {} {tilt:.0}° from level in {}: its scan is not in the floor's plane, which \
+                 ubf reads a scan in (at most {MOST_TILT_DEG}° from it)",
+                said(frame),
+                said(base)
             ));
         }
         let (x, y) = (pose.translation.x, pose.translation.y);
         if x.hypot(y) > MOST_MOUNT_M {
-            return Err(format!("it puts {frame:?} {:.1} m from {base:?}, further than a scanner sits", x.hypot(y)));
+            let far = x.hypot(y);
+            return Err(format!("it puts {} {far:.1} m from {}, further than a scanner sits", said(frame), said(base)));
         }
         let ahead = pose.rotation * Vector3::x();
         Ok(ScanMount { x, y, heading_deg: ahead.y.atan2(ahead.x).to_degrees(), upside_down: up.z < 0.0 })
     }
+}
+
+/// Where a scanner sits by the robot's static transforms, as they come:
+/// each scan's frame looked up in the robot's body frame.
+pub(super) struct PublishedMounts {
+    transforms: Subscription<TFMessage>,
+    tree: StaticTransforms,
+    base_frame: String,
+    /// Whether a transform left out has been said: once is enough.
+    left_out_said: bool,
+    /// The frame last looked up and what was found, until more
+    /// transforms come: the tree is walked once for them, not every tick.
+    found: Option<(String, Result<ScanMount, String>)>,
+    /// The mount last used and its frame, to say when it moves.
+    used: Option<(String, ScanMount)>,
+}
+
+impl PublishedMounts {
+    /// Reads the robot's static transforms (tf2's static QoS: reliable,
+    /// transient local, so that those published long before come too).
+    pub(super) fn new(config: &Ros2Config, node: &Node) -> Result<PublishedMounts, RobotError> {
+        Ok(PublishedMounts {
+            transforms: node.reader::<TFMessage>(&config.tf_static, Qos::Latched)?,
+            tree: StaticTransforms::default(),
+            base_frame: config.base_frame.clone(),
+            left_out_said: false,
+            found: None,
+            used: None,
+        })
+    }
+
+    /// Takes in the static transforms published since the last call.
+    pub(super) fn update(&mut self) -> Result<(), RobotError> {
+        let (tree, mut came, mut left_out) = (&mut self.tree, false, None);
+        self.transforms.take_each(|message| {
+            came = true;
+            left_out = tree.insert(message).or(left_out.take());
+        })?;
+        if came {
+            self.found = None;
+        }
+        if let Some(why) = left_out.filter(|_| !self.left_out_said) {
+            tracing::warn!(
+                "a transform on {} was left out: {why} (others left out go unsaid)",
+                self.transforms.topic()
+            );
+            self.left_out_said = true;
+        }
+        Ok(())
+    }
+
+    /// Where the scanner of a scan in `frame` sits, or why that is not
+    /// known. Said on the log when first found, and when it moves.
+    pub(super) fn of(&mut self, frame: &str) -> Result<ScanMount, String> {
+        if let Some((_, found)) = self.found.as_ref().filter(|(last, _)| last == frame) {
+            return found.clone();
+        }
+        let topic = self.transforms.topic();
+        let found = self.tree.scan_mount(&self.base_frame, frame).map_err(|why| {
+            format!(
+                "its scanner's mount was looked up on {topic}, and {why}: write `scan_mount` in the robot file's \
+                 `ros2: (...)` to say where it sits"
+            )
+        });
+        if let Ok(mount) = found {
+            let (frame_said, now_at) = (said(frame), placed(&mount));
+            match self.used.as_ref() {
+                Some((used_frame, used)) if used_frame == frame && *used != mount => tracing::warn!(
+                    "the scanner ({frame_said}) moved on {topic} during the drive, from {} to {now_at}: its scans are \
+                     read from there now",
+                    placed(used)
+                ),
+                Some((used_frame, _)) if used_frame == frame => {}
+                _ => tracing::info!("the scanner ({frame_said}) sits at {now_at}, as {topic} places it"),
+            }
+            self.used = Some((frame.to_owned(), mount));
+        }
+        self.found = Some((frame.to_owned(), found.clone()));
+        found
+    }
+}
+
+/// A mount as said: `(0.20, 0.00) m facing 180°, upside down`.
+fn placed(mount: &ScanMount) -> String {
+    let turned = if mount.upside_down { ", upside down" } else { "" };
+    format!("({:.2}, {:.2}) m facing {:.0}°{turned}", mount.x, mount.y, mount.heading_deg)
 }
 
 /// A transform as an isometry, unless it is none (the checks odometry's
@@ -167,7 +286,8 @@ mod tests {
         assert_mount(tree.scan_mount("base_link", "laser").unwrap(), 0.2, 0.1, 270.0, false);
         assert_mount(tree.scan_mount("base_link", "/laser").unwrap(), 0.2, 0.1, 270.0, false);
         assert_mount(tree.scan_mount("base_link", "base_link").unwrap(), 0.0, 0.0, 0.0, false);
-        assert_mount(tree.scan_mount("base_link", "").unwrap(), 0.0, 0.0, 0.0, false);
+        // No frame is nowhere, as in tf2: not the centre.
+        assert!(tree.scan_mount("base_link", "").unwrap_err().contains("names no frame"));
     }
 
     #[test]
@@ -212,6 +332,8 @@ mod tests {
         let tree = tree_of_two_robots();
         let why = tree.scan_mount("base_link", "laser").unwrap_err();
         assert_eq!(why, "it does not join \"laser\" to \"base_link\": \"laser\" is joined to other frames");
+        let why = tree.scan_mount("base_footprint", "laser").unwrap_err();
+        assert!(why.ends_with("\"base_footprint\", the robot's body (`base_frame`), is not there"), "{why}");
     }
 
     fn tree_of_two_robots() -> StaticTransforms {
@@ -238,7 +360,7 @@ mod tests {
             transform("b", "laser", [0.1, 0.0, 0.0], [0.0, 0.0, 0.0]),
         ]);
         let why = tree.scan_mount("base_link", "laser").unwrap_err();
-        assert_eq!(why, "its frames loop: laser → b → a → b");
+        assert!(why.starts_with("its frames loop above \"laser\", through "), "{why}");
     }
 
     #[test]
@@ -259,6 +381,27 @@ mod tests {
         let far = transform("base_link", "laser", [30.0, 0.0, 0.2], [0.0, 0.0, 0.0]);
         assert_eq!(tree.insert(TFMessage { transforms: vec![far] }), None);
         assert!(tree.scan_mount("base_link", "laser").unwrap_err().contains("30.0 m from"));
+    }
+
+    #[test]
+    fn a_long_name_is_left_out_and_a_name_is_said_escaped_and_cut() {
+        let mut tree = StaticTransforms::default();
+        let long = "l".repeat(MOST_NAME_BYTES + 1);
+        let why = tree.insert(TFMessage { transforms: vec![transform("base_link", &long, [0.1; 3], [0.0; 3])] });
+        let why = why.expect("left out");
+        assert!(why.contains("longer than 256 bytes") && why.len() < 200, "{why}");
+        assert_eq!(said("a\u{1b}[2Jb"), "\"a\\u{1b}[2Jb\"");
+    }
+
+    #[test]
+    fn a_long_chain_is_walked_in_as_many_steps_as_there_are_frames() {
+        let frames: Vec<String> = (0..MOST_FRAMES).map(|k| format!("f{k}")).collect();
+        let chain = (1..MOST_FRAMES).map(|k| transform(&frames[k - 1], &frames[k], [0.001, 0.0, 0.0], [0.0; 3]));
+        let mut tree = tree_of(chain.collect());
+        assert!((tree.scan_mount("f0", &frames[MOST_FRAMES - 1]).unwrap().x - 0.999).abs() < 1e-9);
+        // Closed into a ring, the walk ends.
+        tree.parents.insert("f0".into(), (frames[MOST_FRAMES - 1].clone(), Isometry3::identity()));
+        assert!(tree.scan_mount("base_link", "f5").unwrap_err().starts_with("its frames loop"));
     }
 
     #[test]
