@@ -3,9 +3,9 @@
 //! drive controller from Jazzy on, Nav2 from Kilted on), from one writer
 //! that the control loop and an emergency stop share.
 
+use super::config::Ros2Config;
 use super::msg::{Header, RosMessage, Twist, TwistStamped};
 use super::node::{Node, Publisher, Qos};
-use super::robot::Ros2Config;
 use crate::emergency::EmergencyStop;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, PoisonError};

@@ -1,9 +1,9 @@
 //! The static transform tree a robot publishes on `/tf_static`, and where
 //! its scanner sits by it: what `tf2_echo base_link laser` would say.
 
+use super::config::{Ros2Config, ScanMount};
 use super::msg::{Point, Pose, TFMessage, Transform};
 use super::node::{Node, Qos, Subscription};
-use super::robot::{Ros2Config, ScanMount};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use ubf_core::RobotError;
