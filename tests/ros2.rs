@@ -351,6 +351,47 @@ fn commands_of_a_type_the_base_does_not_read_end_the_drive_before_it_moves() {
 }
 
 #[test]
+fn a_base_whose_stamped_reader_comes_after_its_odometry_is_waited_for() {
+    // Its reader of the commands 2 s after its odometry: within the
+    // connect timeout (5 s), so the type is read off it.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let robot = "--stamped-cmd-vel --cmd-vel-reader-after 2";
+    let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
+    let (x, y, _) = pose(&session.summary);
+    assert!((x - 2.0).hypot(y) <= 0.25, "ended at ({x:.3}, {y:.3})");
+}
+
+#[test]
+fn a_stamped_reader_that_comes_after_the_drive_began_ends_it_saying_so() {
+    // After the connect timeout (1 s): commands went as Twist, which the
+    // base does not read, so it would never move while the drive ran on.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "ros2: (connect_timeout_s: 1.0),");
+    let robot = "--stamped-cmd-vel --cmd-vel-reader-after 3";
+    let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(said.contains("nothing reads /cmd_vel yet: commands go as geometry_msgs/msg/Twist"), "{said}");
+    assert!(said.contains("set `cmd_vel_stamped: true`"), "{said}");
+}
+
+#[test]
+fn commands_read_as_both_types_end_the_drive_before_it_moves() {
+    // A base that reads TwistStamped and a node that reads Twist: which
+    // one is the base cannot be told.
+    let dir = tempfile::tempdir().unwrap();
+    let file = robot_file(dir.path(), 2.0, "");
+    let listen = "/cmd_vel=geometry_msgs/msg/Twist --duration 8";
+    let Some(session) = drive_and_listen(dir.path(), "--stamped-cmd-vel", &file, None, Some(listen)) else { return };
+    assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
+    let said = stderr(&session);
+    assert!(said.contains("is read as both"), "{said}");
+    assert_eq!(pose(&session.summary).0, 0.0, "{said}");
+}
+
+#[test]
 fn a_stranger_s_unreadable_odometry_is_skipped_and_the_robot_drives_on() {
     // A message named odometry that holds a header only, from another
     // participant: one of them used to end the drive.

@@ -111,6 +111,9 @@ def main():
     parser.add_argument("--tf-static-turn-after", type=float, metavar="S",
                         help="with --tf-static, S seconds after the robot first moved, publish the scanner turned a "
                              "quarter further, as a second broadcaster of its mount would")
+    parser.add_argument("--cmd-vel-reader-after", type=float, metavar="S",
+                        help="subscribe /cmd_vel only S seconds after starting, odometry flowing meanwhile, as a "
+                             "driver whose controller comes up late")
     parser.add_argument("--stamped-cmd-vel", action="store_true",
                         help="read geometry_msgs/msg/TwistStamped on /cmd_vel, as ros2_control's diff drive controller "
                              "does from Jazzy on (recorded lines then also hold the command's header)")
@@ -145,7 +148,11 @@ def main():
 
     participant = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
     cmd_type = TwistStamped if args.stamped_cmd_vel else Twist
-    cmd_reader = DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), cmd_type), qos())
+
+    def command_reader():
+        return DataReader(participant, Topic(participant, ros_topic("cmd_vel", args.namespace), cmd_type), qos())
+
+    cmd_reader = command_reader() if args.cmd_vel_reader_after is None else None
     odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
                              qos(sensor_data=args.odom_best_effort))
     second_odom_writer = DataWriter(participant, Topic(participant, ros_topic("odom", args.namespace), Odometry),
@@ -162,7 +169,12 @@ def main():
     # reaches readers that join later (transient local).
     broadcasters = publish_static_transforms(participant, args) if args.tf_static else []
     waitset = WaitSet(participant)
-    waitset.attach(ReadCondition(cmd_reader, SampleState.Any | ViewState.Any | InstanceState.Any))
+
+    def listen_for_commands():
+        waitset.attach(ReadCondition(cmd_reader, SampleState.Any | ViewState.Any | InstanceState.Any))
+
+    if cmd_reader is not None:
+        listen_for_commands()
     record = open(args.record, "w") if args.record else None
 
     stopping = []
@@ -178,8 +190,15 @@ def main():
     period = 1.0 / args.rate
     next_tick = started + period
     while not stopping and (args.duration is None or time.monotonic() - started < args.duration):
-        waitset.wait(int(max(0.0, next_tick - time.monotonic()) * 1e9))
-        for command in (s for s in cmd_reader.take(N=100) if s.sample_info.valid_data):
+        if cmd_reader is None and time.monotonic() - started >= args.cmd_vel_reader_after:
+            cmd_reader = command_reader()
+            listen_for_commands()
+        if cmd_reader is None:
+            time.sleep(max(0.0, next_tick - time.monotonic()))
+        else:
+            waitset.wait(int(max(0.0, next_tick - time.monotonic()) * 1e9))
+        commands = cmd_reader.take(N=100) if cmd_reader is not None else []
+        for command in (s for s in commands if s.sample_info.valid_data):
             twist = command.twist if args.stamped_cmd_vel else command
             last_twist, last_twist_at = twist, time.monotonic()
             if record:

@@ -16,10 +16,6 @@ use ubf_core::RobotError;
 /// twist on the way out.
 const STOP_ACK_WAIT: Duration = Duration::from_millis(500);
 
-/// How long discovery may take to show the robot's reader of the commands,
-/// once its odometry has come, when their type is read off it.
-const READER_WAIT: Duration = Duration::from_secs(1);
-
 /// One writer of the commands, of the type the robot reads.
 enum Writer {
     Twist(Publisher<Twist>),
@@ -101,23 +97,41 @@ impl Writer {
 }
 
 /// Whether to send `TwistStamped`: as the robot file says, else as the
-/// robot reads its commands, which discovery shows once its odometry has
-/// come: `TwistStamped` if every reader of them reads that, else `Twist`.
-pub(super) fn stamped(node: &mut Node, config: &Ros2Config) -> bool {
+/// robot reads its commands, which discovery shows (waiting up to the
+/// connect timeout for a reader): `TwistStamped` if that is what they are
+/// read as, else `Twist`. Read as both, which is the base cannot be told.
+pub(super) fn stamped(node: &mut Node, config: &Ros2Config) -> Result<bool, RobotError> {
     if let Some(stamped) = config.cmd_vel_stamped {
-        return stamped;
+        return Ok(stamped);
     }
-    let deadline = Instant::now() + READER_WAIT;
+    let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
     let mut readers = node.reader_types(&config.cmd_vel);
     while readers.is_empty() && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(10));
         readers = node.reader_types(&config.cmd_vel);
     }
-    let stamped = !readers.is_empty() && readers.iter().all(|t| *t == TwistStamped::dds_name());
-    if stamped {
-        tracing::info!("commands go as {}, which the robot reads", TwistStamped::NAME);
+    let topic = node.resolve(&config.cmd_vel);
+    let (twist, twist_stamped) = (Twist::dds_name(), TwistStamped::dds_name());
+    match (readers.contains(&twist), readers.contains(&twist_stamped)) {
+        (true, true) => Err(RobotError::Protocol {
+            what: "the velocity commands".into(),
+            source: format!(
+                "{topic} is read as both `{twist}` and `{twist_stamped}`, so which the robot reads cannot be told: \
+                 set `cmd_vel_stamped` in the robot file's `ros2: (...)`"
+            )
+            .into(),
+        }),
+        (false, true) => {
+            tracing::info!("commands go as {}, which the robot reads", TwistStamped::NAME);
+            Ok(true)
+        }
+        _ => {
+            if readers.is_empty() {
+                tracing::warn!("nothing reads {topic} yet: commands go as {}", Twist::NAME);
+            }
+            Ok(false)
+        }
     }
-    stamped
 }
 
 /// Why the commands would reach none of the readers discovery has seen on

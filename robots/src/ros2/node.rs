@@ -255,8 +255,8 @@ pub struct Node {
     subscriber: rustdds::Subscriber,
     namespace: String,
     domain: u16,
-    /// Every remote endpoint discovery has reported so far.
-    seen: Vec<Endpoint>,
+    /// Every endpoint discovery has reported and not lost since.
+    seen: std::collections::HashMap<rustdds::GUID, Endpoint>,
 }
 
 /// DDS could not set up `what`.
@@ -307,7 +307,7 @@ impl Node {
             participant.create_subscriber(&qos).map_err(|e| setup(in_domain("creating a subscriber"), e))?;
         let namespace = namespace.trim_matches('/');
         let namespace = if namespace.is_empty() { String::new() } else { format!("/{namespace}") };
-        Ok(Node { participant, publisher, subscriber, namespace, domain, seen: Vec::new() })
+        Ok(Node { participant, publisher, subscriber, namespace, domain, seen: Default::default() })
     }
 
     /// The domain joined.
@@ -361,10 +361,20 @@ impl Node {
             let (writer, endpoint) = match event {
                 DomainParticipantStatusEvent::WriterDetected { writer } => (true, writer),
                 DomainParticipantStatusEvent::ReaderDetected { reader } => (false, reader),
+                DomainParticipantStatusEvent::WriterLost { guid, .. }
+                | DomainParticipantStatusEvent::ReaderLost { guid, .. } => {
+                    self.seen.remove(&guid);
+                    continue;
+                }
+                DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
+                    self.seen.retain(|guid, _| guid.prefix != id);
+                    continue;
+                }
                 _ => continue,
             };
             let reliable = endpoint.qos.is_reliable();
-            self.seen.push(Endpoint { writer, topic: endpoint.topic_name, type_name: endpoint.type_name, reliable });
+            let seen = Endpoint { writer, topic: endpoint.topic_name, type_name: endpoint.type_name, reliable };
+            self.seen.insert(endpoint.guid, seen);
         }
     }
 
@@ -372,7 +382,7 @@ impl Node {
     pub fn has_writer(&mut self, name: &str) -> bool {
         self.watch_discovery();
         let dds_topic = format!("rt{}", self.resolve(name));
-        self.seen.iter().any(|e| e.writer && e.topic == dds_topic)
+        self.seen.values().any(|e| e.writer && e.topic == dds_topic)
     }
 
     /// Why a topic this node reads as `M` with `qos` hears nothing from
@@ -381,7 +391,7 @@ impl Node {
     pub fn why_unheard<M: RosMessage>(&mut self, name: &str, qos: Qos) -> Option<String> {
         self.watch_discovery();
         let (ros_name, dds_topic) = (self.resolve(name), format!("rt{}", self.resolve(name)));
-        let writers = self.seen.iter().filter(|e| e.writer && e.topic == dds_topic);
+        let writers = self.seen.values().filter(|e| e.writer && e.topic == dds_topic);
         for writer in writers {
             if writer.type_name != M::dds_name() {
                 return Some(format!(
@@ -407,7 +417,7 @@ impl Node {
         self.watch_discovery();
         let dds_topic = format!("rt{}", self.resolve(name));
         let mut types: Vec<String> =
-            self.seen.iter().filter(|e| !e.writer && e.topic == dds_topic).map(|e| e.type_name.clone()).collect();
+            self.seen.values().filter(|e| !e.writer && e.topic == dds_topic).map(|e| e.type_name.clone()).collect();
         types.sort();
         types.dedup();
         types

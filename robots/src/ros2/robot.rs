@@ -45,6 +45,10 @@ pub struct Ros2Robot {
     /// taken as no scan, so that the robot stops as for a silent scanner
     /// if no usable one follows.
     unusable_scans: Option<(String, Instant)>,
+    /// Whether the reason kept in `unusable_scans` has been said.
+    unusable_said: bool,
+    /// When the readers of the commands were last looked at.
+    readers_checked_at: Instant,
     /// Publishes where the drive's world frame sits in the robot's
     /// odometry frame, for as long as the robot is driven.
     _world_in_odom: Publisher<TFMessage>,
@@ -98,13 +102,11 @@ impl Ros2Robot {
         let cmd_vel = match written {
             Some(written) => written,
             None => {
-                let stamped = cmd_vel::stamped(&mut node, config);
+                let stamped = cmd_vel::stamped(&mut node, config)?;
                 CmdVel::new(&node, config, stamped)?
             }
         };
-        if let Some(why) = cmd_vel::why_unread(&mut node, config, Some(cmd_vel.stamped())) {
-            return Err(RobotError::Protocol { what: "the velocity commands".into(), source: why.into() });
-        }
+        commands_read(&mut node, config, &cmd_vel)?;
         // A scan nobody can hear is said, not left to look like open space.
         if let Some(why) = node.why_unheard::<LaserScan>(&config.scan, config.scan_qos) {
             tracing::warn!("{why}; AvoidCollision sees no scan");
@@ -127,6 +129,8 @@ impl Ros2Robot {
             latest_odom: (first, Instant::now()),
             latest_scan,
             unusable_scans: None,
+            unusable_said: false,
+            readers_checked_at: Instant::now(),
             _world_in_odom: world_in_odom,
             stopped: false,
         })
@@ -167,6 +171,20 @@ impl Ros2Robot {
         LinkLoss::TopicSilent { what, topic: self.node.resolve(topic), for_s: silent.as_secs_f64() }.into()
     }
 }
+
+/// Refuses commands that nothing reads (every reader of them reads another
+/// type): the robot would never move, and the drive would seem to run.
+fn commands_read(node: &mut Node, config: &Ros2Config, cmd_vel: &CmdVel) -> Result<(), RobotError> {
+    match cmd_vel::why_unread(node, config, Some(cmd_vel.stamped())) {
+        Some(why) => Err(RobotError::Protocol { what: "the velocity commands".into(), source: why.into() }),
+        None => Ok(()),
+    }
+}
+
+/// How often, during a drive, discovery is looked at for the readers of
+/// the commands: a base whose reader came late, of the other type, is
+/// found within this.
+const READERS_CHECKED_EVERY: Duration = Duration::from_secs(1);
 
 /// Refuses odometry that is no pose (on `topic`), which steered by would
 /// send the robot anywhere.
@@ -315,6 +333,13 @@ fn ranges_of(scan: &LaserScan, mount: &ScanMount, ranges: &mut Vec<RangeReading>
 impl Robot for Ros2Robot {
     fn sense(&mut self, state: &mut State) -> Result<(), RobotError> {
         let now = Instant::now();
+        if now - self.readers_checked_at >= READERS_CHECKED_EVERY {
+            self.readers_checked_at = now;
+            if let Err(unread) = commands_read(&mut self.node, &self.config, &self.cmd_vel) {
+                let _ = self.publish(Twist::default());
+                return Err(unread);
+            }
+        }
         if let Some(odometry) = self.odom.take_latest()? {
             usable_odometry(&odometry, self.odom.topic())?;
             let (last, at) = &self.latest_odom;
@@ -356,6 +381,7 @@ impl Robot for Ros2Robot {
             }
             Some(Ok((scan, mount))) => {
                 self.unusable_scans = None;
+                self.unusable_said = false;
                 self.latest_scan = Some((scan, mount, now));
             }
             None => {}
@@ -367,7 +393,9 @@ impl Robot for Ros2Robot {
             let topic = self.config.scan.clone();
             let what = match &self.unusable_scans {
                 Some((why, _)) => {
-                    tracing::warn!("the scan on {}: {why}", self.scan.topic());
+                    if !std::mem::replace(&mut self.unusable_said, true) {
+                        tracing::warn!("the scan on {}: {why}", self.scan.topic());
+                    }
                     "usable scan"
                 }
                 None => "scan",

@@ -6,6 +6,7 @@ use super::msg::{Point, Pose, TFMessage, Transform};
 use super::node::{Node, Qos, Subscription};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
+use std::time::{Duration, Instant};
 use ubf_core::RobotError;
 
 /// The most frames kept. Robots have tens; the bound keeps what a stranger
@@ -54,25 +55,22 @@ impl StaticTransforms {
         let mut left_out = None;
         for stamped in message.transforms {
             let (parent, child) = (frame_name(&stamped.header.frame_id), frame_name(&stamped.child_frame_id));
-            let (said_child, said_parent) = (said(child), said(parent));
             let why = if parent.is_empty() || child.is_empty() || parent == child {
-                Some(format!(
-                    "a frame {said_child} in a parent {said_parent}: a frame needs a name, and a parent of another"
-                ))
+                Err("a frame needs a name, and a parent of another".to_owned())
             } else if parent.len() > MOST_NAME_BYTES || child.len() > MOST_NAME_BYTES {
-                Some(format!("frame {said_child} in {said_parent}: a name longer than {MOST_NAME_BYTES} bytes"))
+                Err(format!("a name longer than {MOST_NAME_BYTES} bytes"))
             } else if self.parents.len() >= MOST_FRAMES && !self.parents.contains_key(child) {
-                Some(format!("frame {said_child}: more than {MOST_FRAMES} frames were published, and no more are kept"))
+                Err(format!("more than {MOST_FRAMES} frames were published, and no more are kept"))
             } else {
-                match isometry(&stamped.transform) {
-                    Ok(pose) => {
-                        self.parents.insert(child.to_owned(), (parent.to_owned(), pose));
-                        None
-                    }
-                    Err(why) => Some(format!("frame {said_child} in {said_parent}: {why}")),
-                }
+                isometry(&stamped.transform).map(|pose| {
+                    self.parents.insert(child.to_owned(), (parent.to_owned(), pose));
+                })
             };
-            left_out = left_out.or(why);
+            // The first left out is said; its names are escaped (which
+            // costs, for long ones) only then.
+            if let (Err(why), None) = (why, &left_out) {
+                left_out = Some(format!("frame {} in {}: {why}", said(child), said(parent)));
+            }
         }
         left_out
     }
@@ -104,7 +102,10 @@ impl StaticTransforms {
         if base_root != frame_root {
             let (base_said, frame_said) = (said(base), said(frame));
             let why = match (self.has(base), self.has(frame)) {
-                (false, _) => format!("{base_said}, the robot's body (`base_frame`), is not there"),
+                (false, _) => format!("{base_said}, the robot's body, is not there (is `base_frame` its name?)"),
+                (true, false) if self.parents.len() >= MOST_FRAMES => {
+                    format!("{frame_said} is not there, and {MOST_FRAMES} frames came before it, no more kept")
+                }
                 (true, false) => format!("{frame_said} is not there"),
                 (true, true) => format!("{frame_said} is joined to other frames"),
             };
@@ -156,8 +157,23 @@ pub(super) struct PublishedMounts {
     /// The frame last looked up and what was found, until more
     /// transforms come: the tree is walked once for them, not every tick.
     found: Option<(String, Result<ScanMount, String>)>,
-    /// The mount last used and its frame, to say when it moves.
-    used: Option<(String, ScanMount)>,
+    /// The mount last said and its frame, to say when it moves.
+    said: Option<(String, ScanMount)>,
+    /// When a move was last said: at most one line every
+    /// [`MOVES_SAID_EVERY`], whatever a broadcaster does.
+    move_said_at: Option<Instant>,
+}
+
+/// How often a scanner's moves are said at most.
+const MOVES_SAID_EVERY: Duration = Duration::from_secs(10);
+
+/// Whether `to` is elsewhere than `from`, by more than a republished
+/// mount's rounding: a centimetre, a degree, or the other way up.
+fn moved(from: &ScanMount, to: &ScanMount) -> bool {
+    let turned = ubf_core::angle_difference(from.heading_deg.to_radians(), to.heading_deg.to_radians());
+    (from.x - to.x).hypot(from.y - to.y) > 0.01
+        || turned.abs() > 1f64.to_radians()
+        || from.upside_down != to.upside_down
 }
 
 impl PublishedMounts {
@@ -170,7 +186,8 @@ impl PublishedMounts {
             base_frame: config.base_frame.clone(),
             left_out_said: false,
             found: None,
-            used: None,
+            said: None,
+            move_said_at: None,
         })
     }
 
@@ -200,28 +217,39 @@ impl PublishedMounts {
         if let Some((_, found)) = self.found.as_ref().filter(|(last, _)| last == frame) {
             return found.clone();
         }
-        let topic = self.transforms.topic();
         let found = self.tree.scan_mount(&self.base_frame, frame).map_err(|why| {
             format!(
-                "its scanner's mount was looked up on {topic}, and {why}: write `scan_mount` in the robot file's \
-                 `ros2: (...)` to say where it sits"
+                "its scanner's mount was looked up on {}, and {why}: write `scan_mount` in the robot file's \
+                 `ros2: (...)` to say where it sits",
+                self.transforms.topic()
             )
         });
         if let Ok(mount) = found {
-            let (frame_said, now_at) = (said(frame), placed(&mount));
-            match self.used.as_ref() {
-                Some((used_frame, used)) if used_frame == frame && *used != mount => tracing::warn!(
-                    "the scanner ({frame_said}) moved on {topic} during the drive, from {} to {now_at}: its scans are \
-                     read from there now",
-                    placed(used)
-                ),
-                Some((used_frame, _)) if used_frame == frame => {}
-                _ => tracing::info!("the scanner ({frame_said}) sits at {now_at}, as {topic} places it"),
-            }
-            self.used = Some((frame.to_owned(), mount));
+            self.say_where(frame, mount);
         }
         self.found = Some((frame.to_owned(), found.clone()));
         found
+    }
+
+    /// Says where the scanner (of `frame`) is found to sit: the first
+    /// time, and when it has moved (at most every [`MOVES_SAID_EVERY`]).
+    fn say_where(&mut self, frame: &str, mount: ScanMount) {
+        let (topic, frame_said, now_at, now) = (self.transforms.topic(), said(frame), placed(&mount), Instant::now());
+        match self.said.as_ref() {
+            Some((said_frame, was)) if said_frame == frame => {
+                if !moved(was, &mount) || self.move_said_at.is_some_and(|at| now - at < MOVES_SAID_EVERY) {
+                    return;
+                }
+                tracing::warn!(
+                    "the scanner ({frame_said}) moved on {topic} during the drive, from {} to {now_at}: its scans \
+                     are read from there now",
+                    placed(was)
+                );
+                self.move_said_at = Some(now);
+            }
+            _ => tracing::info!("the scanner ({frame_said}) sits at {now_at}, as {topic} places it"),
+        }
+        self.said = Some((frame.to_owned(), mount));
     }
 }
 
@@ -333,7 +361,10 @@ mod tests {
         let why = tree.scan_mount("base_link", "laser").unwrap_err();
         assert_eq!(why, "it does not join \"laser\" to \"base_link\": \"laser\" is joined to other frames");
         let why = tree.scan_mount("base_footprint", "laser").unwrap_err();
-        assert!(why.ends_with("\"base_footprint\", the robot's body (`base_frame`), is not there"), "{why}");
+        assert!(
+            why.ends_with("\"base_footprint\", the robot's body, is not there (is `base_frame` its name?)"),
+            "{why}"
+        );
     }
 
     fn tree_of_two_robots() -> StaticTransforms {
@@ -402,6 +433,15 @@ mod tests {
         // Closed into a ring, the walk ends.
         tree.parents.insert("f0".into(), (frames[MOST_FRAMES - 1].clone(), Isometry3::identity()));
         assert!(tree.scan_mount("base_link", "f5").unwrap_err().starts_with("its frames loop"));
+    }
+
+    #[test]
+    fn a_mount_moves_by_more_than_a_republished_mount_s_rounding() {
+        let at = ScanMount { x: 0.2, y: 0.0, heading_deg: 179.9, upside_down: false };
+        assert!(!moved(&at, &ScanMount { x: 0.2 + 1e-9, heading_deg: -179.8, ..at }));
+        assert!(moved(&at, &ScanMount { x: 0.22, ..at }));
+        assert!(moved(&at, &ScanMount { heading_deg: 177.0, ..at }));
+        assert!(moved(&at, &ScanMount { upside_down: true, ..at }));
     }
 
     #[test]
