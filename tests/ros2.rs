@@ -708,23 +708,53 @@ code=$?; kill -TERM $sim; wait $sim; exit $code"#;
     assert!(!said.contains("WARN") && !said.contains("ERROR"), "{said}");
 }
 
-#[test]
-fn a_cyclone_teleop_drives_the_simulator_served_on_ros2() {
-    // `ubf simulate --ros2` is a ROS 2 robot: a controller nobody here
-    // wrote (Cyclone DDS, scripts/ros2/teleop.py) drives it forward at
-    // 0.3 m/s for 3 s and hears its odometry move.
+/// How far a Cyclone teleop (scripts/ros2/teleop.py with `teleop_args`)
+/// driving forward at 0.3 m/s for 3 s moves `ubf simulate --ros2` with
+/// `simulate_args`, by the odometry it hears.
+fn teleop_drives_the_simulator(simulate_args: &str, teleop_args: &str) -> Option<f64> {
     install_cyclone();
-    let script = r#""$UBF" simulate "$ROOT/scenarios/goto-open-floor.ron" --ros2 --max-time 60 2>/dev/null & sim=$!
-python3 "$ROOT/scripts/ros2/teleop.py" --linear 0.3 --duration 3
-code=$?; kill -TERM $sim; wait $sim; [ $? -eq 130 ] || code=9; exit $code"#;
-    let Some(out) = in_namespace(script, &[]) else { return };
+    let script = format!(
+        r#""$UBF" simulate "$ROOT/scenarios/goto-open-floor.ron" --ros2 --max-time 60 {simulate_args} 2>/dev/null & sim=$!
+python3 "$ROOT/scripts/ros2/teleop.py" --linear 0.3 --duration 3 {teleop_args}
+code=$?; kill -TERM $sim; wait $sim; [ $? -eq 130 ] || code=9; exit $code"#
+    );
+    let out = in_namespace(&script, &[])?;
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let heard: Value = serde_json::from_slice(&out.stdout).unwrap();
     let (first, last) = (&heard["first"], &heard["last"]);
     let dx = last["x"].as_f64().unwrap() - first["x"].as_f64().unwrap();
     let dy = last["y"].as_f64().unwrap() - first["y"].as_f64().unwrap();
-    // 0.9 m commanded; the Powerbot's acceleration and the first and last
-    // ticks take some of it, the timing of the teleop's loop adds some.
-    assert!((0.6..=1.1).contains(&dx.hypot(dy)), "moved {dx:.3}, {dy:.3}: {heard}");
     assert!(heard["odometry"].as_u64().unwrap() > 20, "{heard}");
+    Some(dx.hypot(dy))
+}
+
+#[test]
+fn a_cyclone_teleop_drives_the_simulator_served_on_ros2() {
+    // `ubf simulate --ros2` is a ROS 2 robot: a controller nobody here
+    // wrote (Cyclone DDS) drives it. 0.9 m commanded; the Powerbot's
+    // acceleration and the first and last ticks take some of it, the
+    // timing of the teleop's loop adds some.
+    let Some(moved) = teleop_drives_the_simulator("", "") else { return };
+    assert!((0.6..=1.1).contains(&moved), "moved {moved:.3} m");
+}
+
+#[test]
+fn a_stamped_teleop_to_a_simulator_serving_twist_is_said() {
+    install_cyclone();
+    let dir = tempfile::tempdir().unwrap();
+    let script = r#""$UBF" simulate "$ROOT/scenarios/goto-open-floor.ron" --ros2 --max-time 60 2>"$OUT/sim.err" & sim=$!
+python3 "$ROOT/scripts/ros2/teleop.py" --linear 0.3 --duration 3 --stamped >/dev/null
+code=$?; kill -TERM $sim; wait $sim; exit $code"#;
+    let Some(out) = in_namespace(script, &[("OUT", dir.path().as_os_str())]) else { return };
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = std::fs::read_to_string(dir.path().join("sim.err")).unwrap();
+    let expected = "a commander sends `geometry_msgs::msg::dds_::TwistStamped_` on /cmd_vel, which is read as \
+                    geometry_msgs/msg/Twist here: serve it with `--cmd-vel-stamped`";
+    assert_eq!(said.matches(expected).count(), 1, "{said}");
+}
+
+#[test]
+fn a_stamped_teleop_drives_the_simulator_served_for_stamped_commands() {
+    let Some(moved) = teleop_drives_the_simulator("--cmd-vel-stamped", "--stamped") else { return };
+    assert!((0.6..=1.1).contains(&moved), "moved {moved:.3} m");
 }

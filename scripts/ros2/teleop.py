@@ -28,7 +28,7 @@ from cyclonedds.pub import DataWriter  # noqa: E402
 from cyclonedds.sub import DataReader  # noqa: E402
 from cyclonedds.topic import Topic  # noqa: E402
 
-from ros2_types import Odometry, Twist, Vector3, qos, ros_topic  # noqa: E402
+from ros2_types import Header, Odometry, Time, Twist, TwistStamped, Vector3, qos, ros_topic  # noqa: E402
 
 
 def pose(odom):
@@ -43,10 +43,22 @@ def main():
     parser.add_argument("--angular", type=float, default=0.0, help="turn rate, rad/s")
     parser.add_argument("--duration", type=float, default=3.0, help="seconds of driving")
     parser.add_argument("--wait", type=float, default=20.0, help="seconds to wait for the first odometry")
+    parser.add_argument("--stamped", action="store_true",
+                        help="publish geometry_msgs/msg/TwistStamped (frame base_link, wall-clock stamps), as Nav2 "
+                             "does from Kilted on")
     args = parser.parse_args()
 
     participant = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
-    cmd = DataWriter(participant, Topic(participant, ros_topic("cmd_vel"), Twist), qos())
+    cmd = DataWriter(participant, Topic(participant, ros_topic("cmd_vel"), TwistStamped if args.stamped else Twist),
+                     qos())
+
+    def command(twist):
+        if not args.stamped:
+            return twist
+        now = time.time()
+        return TwistStamped(header=Header(stamp=Time(sec=int(now), nanosec=int(now % 1 * 1e9)), frame_id="base_link"),
+                            twist=twist)
+
     odom = DataReader(participant, Topic(participant, ros_topic("odom"), Odometry), qos())
     heard = []
 
@@ -62,10 +74,10 @@ def main():
     first = pose(heard[0])
     end = time.monotonic() + args.duration
     while time.monotonic() < end:
-        cmd.write(Twist(linear=Vector3(x=args.linear), angular=Vector3(z=args.angular)))
+        cmd.write(command(Twist(linear=Vector3(x=args.linear), angular=Vector3(z=args.angular))))
         listen()
         time.sleep(0.1)
-    cmd.write(Twist())
+    cmd.write(command(Twist()))
     time.sleep(1.0)  # the robot stops; its last odometry comes in
     listen()
     print(json.dumps({"first": first, "last": pose(heard[-1]), "odometry": len(heard)}))

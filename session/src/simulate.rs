@@ -1,8 +1,8 @@
 //! `ubf simulate SCENARIO --ros2`: the simulator served as a ROS 2 robot,
 //! for another stack (Nav2, a teleop node) to drive. It takes
-//! `geometry_msgs/msg/Twist` on `/cmd_vel` and publishes what a robot's
-//! driver does (`/odom`, `/tf`, `/scan`, camera images), paced at real
-//! time.
+//! `geometry_msgs/msg/Twist` (or `TwistStamped`) on `/cmd_vel` and
+//! publishes what a robot's driver does (`/odom`, `/tf`, `/scan`, camera
+//! images), paced at real time.
 //!
 //! It is the session loop like every other command: the simulated robot,
 //! a paced clock, a ROS 2 publisher as its sink, and for a tree one
@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use ubf_core::{
     Action, Behavior, Controller, Ends, PacedClock, Pose2, RobotError, Session, SessionEnd, State, TracingSink,
 };
-use ubf_robots::ros2::msg::Twist;
+use ubf_robots::ros2::msg::{RosMessage, Twist, TwistStamped};
 use ubf_robots::ros2::{domain_from_env, Node, Qos, Subscription};
 use ubf_robots::sim::SimRobot;
 
@@ -29,23 +29,71 @@ const COMMAND_TIMEOUT: Duration = Duration::from_millis(500);
 /// as the robot's velocity and turn rate, or STOP once no command has come
 /// for half a second.
 pub struct FollowCmdVel {
-    cmd_vel: Subscription<Twist>,
+    cmd_vel: Commands,
     latest: Option<(Twist, Instant)>,
+    /// When discovery was last asked whether a commander sends another
+    /// type, until one was found and said.
+    asked_at: Option<Instant>,
     /// Last, so that it is dropped after its reader.
-    _node: Node,
+    node: Node,
+}
+
+/// How often discovery is asked whether a commander sends another type.
+const ASKED_EVERY: Duration = Duration::from_secs(1);
+
+/// The commands' reader, of the type they come as.
+enum Commands {
+    Twist(Subscription<Twist>),
+    /// Their stamps are not read: a command's age is counted from when it
+    /// came, whatever the commander's clock says.
+    Stamped(Subscription<TwistStamped>),
+}
+
+impl Commands {
+    fn take_latest(&mut self) -> Result<Option<Twist>, RobotError> {
+        match self {
+            Commands::Twist(reader) => reader.take_latest(),
+            Commands::Stamped(reader) => Ok(reader.take_latest()?.map(|stamped| stamped.twist)),
+        }
+    }
 }
 
 impl FollowCmdVel {
-    /// Subscribes `/cmd_vel` in `domain`.
-    pub fn subscribe(domain: u16) -> Result<FollowCmdVel, RobotError> {
+    /// Subscribes `/cmd_vel` in `domain`, as `TwistStamped` if `stamped`.
+    pub fn subscribe(domain: u16, stamped: bool) -> Result<FollowCmdVel, RobotError> {
         let node = Node::join(domain, "")?;
-        let cmd_vel = node.reader::<Twist>("cmd_vel", Qos::Reliable)?;
-        Ok(FollowCmdVel { cmd_vel, latest: None, _node: node })
+        let cmd_vel = match stamped {
+            true => Commands::Stamped(node.reader("cmd_vel", Qos::Reliable)?),
+            false => Commands::Twist(node.reader("cmd_vel", Qos::Reliable)?),
+        };
+        Ok(FollowCmdVel { cmd_vel, latest: None, asked_at: Some(Instant::now()), node })
+    }
+
+    /// Says, once, a commander that sends a type this reader does not
+    /// read (`TwistStamped` to a simulator serving `Twist`): it would
+    /// otherwise drive nothing and hear nothing of why.
+    fn say_other_commanders(&mut self) {
+        if self.asked_at.is_none_or(|at| at.elapsed() < ASKED_EVERY) {
+            return;
+        }
+        self.asked_at = Some(Instant::now());
+        let (read, other, flag) = match self.cmd_vel {
+            Commands::Twist(_) => (Twist::NAME, TwistStamped::dds_name(), "with"),
+            Commands::Stamped(_) => (TwistStamped::NAME, Twist::dds_name(), "without"),
+        };
+        if self.node.writer_types("cmd_vel").contains(&other) {
+            tracing::warn!(
+                "a commander sends `{other}` on /cmd_vel, which is read as {read} here: serve it {flag} \
+                 `--cmd-vel-stamped`"
+            );
+            self.asked_at = None;
+        }
     }
 }
 
 impl Behavior for FollowCmdVel {
     fn gen_action(&mut self, _: &State) -> Action {
+        self.say_other_commanders();
         match self.cmd_vel.take_latest() {
             Ok(Some(twist)) => self.latest = Some((twist, Instant::now())),
             Ok(None) => {}
@@ -84,18 +132,25 @@ pub enum SimulateError {
     Failed(String),
 }
 
-/// Serves `scenario` (its world, robot and start; not its tree) with
-/// `seed` as a ROS 2 robot, `speed` times real time, until `stop` is set or
-/// `max_time_s` of simulated time has passed.
-pub fn serve(
-    scenario: &Scenario,
-    seed: u64,
-    speed: f64,
-    max_time_s: Option<f64>,
-    stop: &AtomicBool,
-) -> Result<Served, SimulateError> {
+/// How a simulation is served.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Serving {
+    /// The seed of its random streams.
+    pub seed: u64,
+    /// Times real time.
+    pub speed: f64,
+    /// When to stop, in simulated seconds, if ever.
+    pub max_time_s: Option<f64>,
+    /// Whether the commands come as `TwistStamped` (Nav2 from Kilted on).
+    pub cmd_vel_stamped: bool,
+}
+
+/// Serves `scenario` (its world, robot and start; not its tree) as a ROS 2
+/// robot, as `serving` says, until `stop` is set or its time is up.
+pub fn serve(scenario: &Scenario, serving: Serving, stop: &AtomicBool) -> Result<Served, SimulateError> {
+    let Serving { seed, speed, max_time_s, cmd_vel_stamped } = serving;
     let domain = domain_from_env().map_err(SimulateError::Ros2)?;
-    let follow = FollowCmdVel::subscribe(domain).map_err(SimulateError::Ros2)?;
+    let follow = FollowCmdVel::subscribe(domain, cmd_vel_stamped).map_err(SimulateError::Ros2)?;
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
     let mut controller = Controller::new(sim, Box::new(follow), Box::new(PacedClock::new(scenario.period_s, speed)));
     controller.add_sink(Box::new(TracingSink));

@@ -435,6 +435,10 @@ enum Command {
         /// Stop after this many simulated seconds.
         #[arg(long, value_parser = parse_seconds)]
         max_time: Option<f64>,
+        /// Take `geometry_msgs/msg/TwistStamped` on `/cmd_vel`, as Nav2
+        /// sends from Kilted on, instead of `Twist`.
+        #[arg(long)]
+        cmd_vel_stamped: bool,
     },
     /// Emulate a Powerbot's controller on a TCP port or a pseudo-terminal,
     /// for trying things out without a robot.
@@ -757,8 +761,8 @@ pub fn main_with(registry: Registry) -> ExitCode {
         Command::Model { action } => experiment::model(&registry, action),
         Command::Experiment { which } => experiment::command(&registry, which),
         Command::Drive { file, options } => robot::drive(&registry, &file, options),
-        Command::Simulate { file, ros2: _, seed, speed, max_time } => {
-            run::simulate(&registry, &file, seed, speed, max_time)
+        Command::Simulate { file, ros2: _, seed, speed, max_time, cmd_vel_stamped } => {
+            run::simulate(&registry, &file, seed, speed, max_time, cmd_vel_stamped)
         }
         Command::EmulatePowerbot { listen, pty, room, sip_period_ms, silence, cut, cuts } => {
             let mut config =

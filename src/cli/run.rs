@@ -116,13 +116,19 @@ pub(super) fn simulate(
     file: &Path,
     seed: Option<u64>,
     speed: f64,
-    max_time: Option<f64>,
+    max_time_s: Option<f64>,
+    cmd_vel_stamped: bool,
 ) -> Outcome {
     let scenario = Scenario::load(registry, file).map_err(CliError::bad_input)?;
     let seed = seed.unwrap_or(scenario.seed);
     let stop = crate::drive::install_stop_flag();
-    eprintln!("serving {} (seed {seed}) as a ROS 2 robot: /cmd_vel in; /odom, /tf, /scan out", scenario.name);
-    let served = ubf_session::simulate::serve(&scenario, seed, speed, max_time, &stop).map_err(CliError::failed)?;
+    let commands = if cmd_vel_stamped { "TwistStamped" } else { "Twist" };
+    eprintln!(
+        "serving {} (seed {seed}) as a ROS 2 robot: /cmd_vel ({commands}) in; /odom, /tf, /scan out",
+        scenario.name
+    );
+    let serving = ubf_session::simulate::Serving { seed, speed, max_time_s, cmd_vel_stamped };
+    let served = ubf_session::simulate::serve(&scenario, serving, &stop).map_err(CliError::failed)?;
     let pose = served.true_pose;
     eprintln!(
         "stopped after {} ticks; the robot stands at ({:.3}, {:.3}) m, {:.1}°",

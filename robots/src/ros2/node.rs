@@ -414,10 +414,24 @@ impl Node {
     /// The types (DDS names) of the readers discovery has seen on topic
     /// `name`, each once.
     pub fn reader_types(&mut self, name: &str) -> Vec<String> {
+        self.endpoint_types(name, false)
+    }
+
+    /// The types (DDS names) of the writers discovery has seen on topic
+    /// `name`, each once.
+    pub fn writer_types(&mut self, name: &str) -> Vec<String> {
+        self.endpoint_types(name, true)
+    }
+
+    fn endpoint_types(&mut self, name: &str, writers: bool) -> Vec<String> {
         self.watch_discovery();
         let dds_topic = format!("rt{}", self.resolve(name));
-        let mut types: Vec<String> =
-            self.seen.values().filter(|e| !e.writer && e.topic == dds_topic).map(|e| e.type_name.clone()).collect();
+        let mut types: Vec<String> = self
+            .seen
+            .values()
+            .filter(|e| e.writer == writers && e.topic == dds_topic)
+            .map(|e| e.type_name.clone())
+            .collect();
         types.sort();
         types.dedup();
         types
