@@ -345,7 +345,10 @@ fn commands_of_a_type_the_base_does_not_read_end_the_drive_before_it_moves() {
     let Some(session) = drive_beside_robot(dir.path(), "--stamped-cmd-vel", &file, None) else { return };
     assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
     let said = stderr(&session);
-    assert!(said.contains("/cmd_vel is read as `geometry_msgs::msg::dds_::TwistStamped_`"), "{said}");
+    assert!(
+        said.contains("/cmd_vel is read as geometry_msgs/msg/TwistStamped, and ubf sends geometry_msgs/msg/Twist"),
+        "{said}"
+    );
     assert!(said.contains("set `cmd_vel_stamped: true`"), "{said}");
     assert_eq!(pose(&session.summary).0, 0.0, "{said}");
 }
@@ -369,11 +372,12 @@ fn a_stamped_reader_that_comes_after_the_drive_began_ends_it_saying_so() {
     // base does not read, so it would never move while the drive ran on.
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 2.0, "ros2: (connect_timeout_s: 1.0),");
-    let robot = "--stamped-cmd-vel --cmd-vel-reader-after 3";
+    let robot = "--stamped-cmd-vel --cmd-vel-reader-after 6";
     let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
     assert_eq!(session.ubf.status.code(), Some(1), "{}", stderr(&session));
     let said = stderr(&session);
     assert!(said.contains("nothing reads /cmd_vel yet: commands go as geometry_msgs/msg/Twist"), "{said}");
+    assert!(said.contains("the robot's reader came after the type was chosen"), "{said}");
     assert!(said.contains("set `cmd_vel_stamped: true`"), "{said}");
 }
 
@@ -454,7 +458,14 @@ fn a_scan_whose_every_beam_is_invalid_stops_the_robot() {
 fn sigterm_leaves_the_robot_with_a_zero_twist() {
     let dir = tempfile::tempdir().unwrap();
     let file = robot_file(dir.path(), 20.0, "");
-    let Some(session) = drive_beside_robot(dir.path(), "", &file, Some("sleep 3; kill -TERM $ubf")) else { return };
+    let Some(session) = drive_beside_robot(
+        dir.path(),
+        "",
+        &file,
+        Some(r#"await_line "$UBF_ERR" $ubf "connected to"; sleep 1.5; kill -TERM $ubf"#),
+    ) else {
+        return;
+    };
     assert_eq!(session.ubf.status.code(), Some(130), "{}", stderr(&session));
     assert!(session.twists.iter().any(|t| !is_zero(&t["twist"])), "it drove before the signal");
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
@@ -474,7 +485,10 @@ fn sigterm_stops_the_robot_while_the_control_loop_hangs() {
     let text = std::fs::read_to_string(&file).unwrap();
     let root = text.lines().find(|line| line.trim_start().starts_with("root:")).unwrap();
     std::fs::write(&file, text.replace(root, hanging)).unwrap();
-    let interrupt = "sleep 3.5; kill -TERM $ubf; sleep 2.5; kill -TERM $ubf";
+    // Timed from the connection, however long connecting takes: the hang
+    // comes 2 s into the drive.
+    let interrupt =
+        r#"await_line "$UBF_ERR" $ubf "connected to"; sleep 3.5; kill -TERM $ubf; sleep 2.5; kill -TERM $ubf"#;
     let Some(session) = drive_beside_robot(dir.path(), "", &file, Some(interrupt)) else { return };
     let said = stderr(&session);
     assert_eq!(session.ubf.status.code(), Some(130), "{said}");
@@ -748,7 +762,7 @@ code=$?; kill -TERM $sim; wait $sim; exit $code"#;
     let Some(out) = in_namespace(script, &[("OUT", dir.path().as_os_str())]) else { return };
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let said = std::fs::read_to_string(dir.path().join("sim.err")).unwrap();
-    let expected = "a commander sends `geometry_msgs::msg::dds_::TwistStamped_` on /cmd_vel, which is read as \
+    let expected = "a commander sends geometry_msgs/msg/TwistStamped on /cmd_vel, which is read as \
                     geometry_msgs/msg/Twist here: serve it with `--cmd-vel-stamped`";
     assert_eq!(said.matches(expected).count(), 1, "{said}");
 }

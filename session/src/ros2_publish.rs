@@ -49,19 +49,14 @@ pub struct Ros2Publisher {
 }
 
 impl Ros2Publisher {
-    /// Joins `domain` under `namespace`, publishing what `shown` asks for,
-    /// stamped with the wall clock (tf2 and RViz drop what is far from
-    /// now).
-    pub fn new(domain: u16, namespace: &str, shown: Shown) -> Result<Ros2Publisher, RobotError> {
+    /// Joins `domain` under `namespace`, publishing what `shown` asks for
+    /// with ubf's world named `world`, stamped with the wall clock (tf2
+    /// and RViz drop what is far from now).
+    pub fn new(domain: u16, namespace: &str, shown: Shown, world: &str) -> Result<Ros2Publisher, RobotError> {
         let node = Node::join(domain, namespace)?;
         let epoch_s =
             std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-        // Beside a ROS 2 robot, whose driver publishes its own `odom`, ubf's
-        // world is the frame the robot places in it.
-        let view = match shown.robot {
-            true => Ros2View::new(shown, epoch_s),
-            false => Ros2View::new(shown, epoch_s).in_world_frame(ubf_robots::ros2::world_frame(namespace)),
-        };
+        let view = Ros2View::new(shown, epoch_s).in_world_frame(world.to_owned());
         Ok(Ros2Publisher { view, writers: BTreeMap::new(), warned: false, node })
     }
 
@@ -125,11 +120,18 @@ impl TickSink for Ros2Publisher {
 }
 
 /// A ROS 2 publisher in `domain` (unset: `ROS_DOMAIN_ID`) under
-/// `namespace`, on a thread of its own: a slow network drops records,
+/// `namespace`, with ubf's world named `world` (`odom` where ubf publishes
+/// the robot's odometry, [`ubf_robots::ros2::world_frame()`] beside a ROS 2
+/// robot's own), on a thread of its own: a slow network drops records,
 /// never a tick.
-pub fn background_publisher(shown: Shown, domain: Option<u16>, namespace: &str) -> Result<BackgroundSink, RobotError> {
+pub fn background_publisher(
+    shown: Shown,
+    domain: Option<u16>,
+    namespace: &str,
+    world: &str,
+) -> Result<BackgroundSink, RobotError> {
     let domain = domain.map_or_else(ubf_robots::ros2::domain_from_env, Ok)?;
-    let publisher = Ros2Publisher::new(domain, namespace, shown)?;
+    let publisher = Ros2Publisher::new(domain, namespace, shown, world)?;
     BackgroundSink::spawn("ROS 2 publisher", publisher, QUEUE).map_err(RobotError::Io)
 }
 

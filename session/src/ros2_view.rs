@@ -7,13 +7,17 @@
 //! moves continuously. The pose the tree steers by, which the wall compass
 //! and egomotion correct in steps, is a topic of its own. Beside a ROS 2
 //! robot, whose driver publishes its own `odom`, ubf's world is a frame of
-//! its own ([`ubf_robots::ros2::world_frame`]), which the robot places.
+//! its own ([`ubf_robots::ros2::world_frame()`]), which the robot places.
 
 use ubf_core::{Pose2, StereoImages, TickRecord, TreeLayout};
 use ubf_robots::ros2::msg::{
     Header, Image, LaserScan, NodeVote, Odometry, Pose, PoseStamped, PoseWithCovariance, RosMessage, TFMessage, Tick,
     Time, Twist, TwistWithCovariance,
 };
+
+/// ubf's world frame where ubf publishes the robot's odometry itself: REP
+/// 105's `odom`.
+pub const ODOM_FRAME: &str = "odom";
 
 /// Where each message goes. Relative names go under a namespace; `/tf` is
 /// absolute, as tf2 expects.
@@ -137,7 +141,7 @@ impl Ros2View {
     /// A view showing `shown`, stamping with controller time plus
     /// `epoch_s`.
     pub fn new(shown: Shown, epoch_s: f64) -> Ros2View {
-        let world = "odom".to_owned();
+        let world = ODOM_FRAME.to_owned();
         Ros2View { shown, epoch_s, layout: TreeLayout::default(), world, frame: 0, goal: None, goal_at: 0.0 }
     }
 

@@ -7,7 +7,7 @@ use crate::plot::{self, PlotError};
 pub use crate::report::{EndReason, RunReport};
 use crate::ros2_log::Ros2Log;
 use crate::ros2_publish::background_publisher;
-use crate::ros2_view::Shown;
+use crate::ros2_view::{Shown, ODOM_FRAME};
 use crate::scenario::Scenario;
 use crate::trajectory::{Columns, TrajectoryWriter};
 use std::net::SocketAddr;
@@ -144,8 +144,8 @@ pub fn run_until(
     controller.set_on_behavior_panic(scenario.on_behavior_panic);
     controller.add_sink(Box::new(TracingSink));
     if live.as_ref().is_some_and(|l| l.ros2) {
-        let publisher =
-            background_publisher(Shown { robot: true, images: true, tree: true }, None, "").map_err(RunError::Ros2)?;
+        let publisher = background_publisher(Shown { robot: true, images: true, tree: true }, None, "", ODOM_FRAME)
+            .map_err(RunError::Ros2)?;
         controller.add_sink(Box::new(publisher));
     }
     // Held until the run ends: dropping it closes the viewers' connections.

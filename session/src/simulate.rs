@@ -9,7 +9,7 @@
 //! behaviour, [`FollowCmdVel`], that obeys the latest `/cmd_vel`.
 
 use crate::ros2_publish::background_publisher;
-use crate::ros2_view::Shown;
+use crate::ros2_view::{Shown, ODOM_FRAME};
 use crate::scenario::Scenario;
 use std::ops::ControlFlow;
 use std::sync::atomic::AtomicBool;
@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use ubf_core::{
     Action, Behavior, Controller, Ends, PacedClock, Pose2, RobotError, Session, SessionEnd, State, TracingSink,
 };
-use ubf_robots::ros2::msg::{RosMessage, Twist, TwistStamped};
+use ubf_robots::ros2::msg::{ros_name, RosMessage, Twist, TwistStamped};
 use ubf_robots::ros2::{domain_from_env, Node, Qos, Subscription};
 use ubf_robots::sim::SimRobot;
 
@@ -78,12 +78,12 @@ impl FollowCmdVel {
         }
         self.asked_at = Some(Instant::now());
         let (read, other, flag) = match self.cmd_vel {
-            Commands::Twist(_) => (Twist::NAME, TwistStamped::dds_name(), "with"),
-            Commands::Stamped(_) => (TwistStamped::NAME, Twist::dds_name(), "without"),
+            Commands::Twist(_) => (Twist::NAME, TwistStamped::NAME, "with"),
+            Commands::Stamped(_) => (TwistStamped::NAME, Twist::NAME, "without"),
         };
-        if self.node.writer_types("cmd_vel").contains(&other) {
+        if self.node.writer_types("cmd_vel").iter().any(|sent| ros_name(sent) == other) {
             tracing::warn!(
-                "a commander sends `{other}` on /cmd_vel, which is read as {read} here: serve it {flag} \
+                "a commander sends {other} on /cmd_vel, which is read as {read} here: serve it {flag} \
                  `--cmd-vel-stamped`"
             );
             self.asked_at = None;
@@ -154,8 +154,8 @@ pub fn serve(scenario: &Scenario, serving: Serving, stop: &AtomicBool) -> Result
     let sim = SimRobot::new(&scenario.robot, &scenario.world, scenario.period_s, seed);
     let mut controller = Controller::new(sim, Box::new(follow), Box::new(PacedClock::new(scenario.period_s, speed)));
     controller.add_sink(Box::new(TracingSink));
-    let publisher = background_publisher(Shown { robot: true, images: true, tree: false }, Some(domain), "")
-        .map_err(SimulateError::Ros2)?;
+    let shown = Shown { robot: true, images: true, tree: false };
+    let publisher = background_publisher(shown, Some(domain), "", ODOM_FRAME).map_err(SimulateError::Ros2)?;
     controller.add_sink(Box::new(publisher));
     let mut session = Session::new(controller, Ends { max_time_s, ..Ends::default() });
     let ended = session.run(stop, |_| ControlFlow::Continue(()));

@@ -4,7 +4,7 @@
 //! that the control loop and an emergency stop share.
 
 use super::config::Ros2Config;
-use super::msg::{Header, RosMessage, Twist, TwistStamped};
+use super::msg::{ros_name, Header, RosMessage, Twist, TwistStamped};
 use super::node::{Node, Publisher, Qos};
 use crate::emergency::EmergencyStop;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -96,11 +96,17 @@ impl Writer {
     }
 }
 
+/// How long the readers of the commands must stay as they are, once one
+/// has been seen, before their type is read off them: discovery reports a
+/// participant's endpoints one by one.
+const READERS_SETTLE: Duration = Duration::from_millis(300);
+
 /// Whether to send `TwistStamped`: as the robot file says, else as the
 /// robot reads its commands, which discovery shows (waiting up to the
-/// connect timeout for a reader): `TwistStamped` if that is what they are
-/// read as, else `Twist`. Read as both, which is the base cannot be told.
-pub(super) fn stamped(node: &mut Node, config: &Ros2Config) -> Result<bool, RobotError> {
+/// connect timeout for a reader): `TwistStamped` if they are read as that
+/// and not as `Twist`, else `Twist`. Read as both, which type the base
+/// reads cannot be told, and the drive does not start.
+pub(super) fn choose_stamped(node: &mut Node, config: &Ros2Config) -> Result<bool, RobotError> {
     if let Some(stamped) = config.cmd_vel_stamped {
         return Ok(stamped);
     }
@@ -110,14 +116,19 @@ pub(super) fn stamped(node: &mut Node, config: &Ros2Config) -> Result<bool, Robo
         std::thread::sleep(Duration::from_millis(10));
         readers = node.reader_types(&config.cmd_vel);
     }
+    if !readers.is_empty() {
+        std::thread::sleep(READERS_SETTLE);
+        readers = node.reader_types(&config.cmd_vel);
+    }
     let topic = node.resolve(&config.cmd_vel);
-    let (twist, twist_stamped) = (Twist::dds_name(), TwistStamped::dds_name());
-    match (readers.contains(&twist), readers.contains(&twist_stamped)) {
+    match (readers.contains(&Twist::dds_name()), readers.contains(&TwistStamped::dds_name())) {
         (true, true) => Err(RobotError::Protocol {
             what: "the velocity commands".into(),
             source: format!(
-                "{topic} is read as both `{twist}` and `{twist_stamped}`, so which the robot reads cannot be told: \
-                 set `cmd_vel_stamped` in the robot file's `ros2: (...)`"
+                "{topic} is read as both {} and {}, so which the robot reads cannot be told: set `cmd_vel_stamped` \
+                 in the robot file's `ros2: (...)`",
+                Twist::NAME,
+                TwistStamped::NAME
             )
             .into(),
         }),
@@ -134,29 +145,49 @@ pub(super) fn stamped(node: &mut Node, config: &Ros2Config) -> Result<bool, Robo
     }
 }
 
+/// What the commands go as, to [`why_unread`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Sent {
+    Twist,
+    Stamped,
+    /// Not chosen yet: either would do.
+    Either,
+}
+
 /// Why the commands would reach none of the readers discovery has seen on
-/// them, if they would not: every reader reads a type other than the one
-/// sent (`Some(stamped)`), or than either (`None`, before it is chosen).
-/// Moving nothing, the drive would only end on its progress check.
-pub(super) fn why_unread(node: &mut Node, config: &Ros2Config, stamped: Option<bool>) -> Option<String> {
+/// them, if they would not: every reader reads another type than the one
+/// sent. Moving nothing, the drive would only end on its progress check.
+pub(super) fn why_unread(node: &mut Node, config: &Ros2Config, sent: Sent) -> Option<String> {
     let readers = node.reader_types(&config.cmd_vel);
-    let (twist, twist_stamped) = (Twist::dds_name(), TwistStamped::dds_name());
-    let sent = match stamped {
-        Some(true) => vec![twist_stamped.clone()],
-        Some(false) => vec![twist.clone()],
-        None => vec![twist.clone(), twist_stamped.clone()],
+    let (twist, stamped) = (Twist::dds_name(), TwistStamped::dds_name());
+    let sent_types = match sent {
+        Sent::Twist => vec![&twist],
+        Sent::Stamped => vec![&stamped],
+        Sent::Either => vec![&twist, &stamped],
     };
-    if readers.is_empty() || readers.iter().any(|read| sent.contains(read)) {
+    if readers.is_empty() || readers.iter().any(|read| sent_types.contains(&read)) {
         return None;
     }
     let topic = node.resolve(&config.cmd_vel);
-    let hint = match stamped {
-        Some(stamped) if readers.contains(&if stamped { twist } else { twist_stamped }) => {
-            format!("set `cmd_vel_stamped: {}` in the robot file's `ros2: (...)`, or leave it unset", !stamped)
-        }
-        _ => "is another robot's driver on this domain?".to_owned(),
+    let other = match sent {
+        Sent::Twist if readers.contains(&stamped) => Some(true),
+        Sent::Stamped if readers.contains(&twist) => Some(false),
+        _ => None,
     };
-    Some(format!("{topic} is read as `{}`, and ubf sends `{}`: {hint}", readers.join("`, `"), sent.join("` or `")))
+    let hint = match (other, config.cmd_vel_stamped) {
+        (Some(other), Some(_)) => format!(
+            "set `cmd_vel_stamped: {other}` in the robot file's `ros2: (...)`, or leave it unset to read the type \
+             off the robot"
+        ),
+        (Some(other), None) => format!(
+            "the robot's reader came after the type was chosen (raise `connect_timeout_s`, or set \
+             `cmd_vel_stamped: {other}` in the robot file's `ros2: (...)`)"
+        ),
+        (None, _) => "is another robot's driver on this domain?".to_owned(),
+    };
+    let read: Vec<String> = readers.iter().map(|read| ros_name(read)).collect();
+    let sent: Vec<String> = sent_types.iter().map(|sent| ros_name(sent)).collect();
+    Some(format!("{topic} is read as {}, and ubf sends {}: {hint}", read.join(", "), sent.join(" or ")))
 }
 
 /// What a signal handler stops a ROS 2 robot with while the control loop

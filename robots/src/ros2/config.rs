@@ -21,8 +21,8 @@ pub struct Ros2Config {
     /// Where velocity commands go.
     pub cmd_vel: String,
     /// Whether they go as `geometry_msgs/msg/TwistStamped` (unset: as the
-    /// robot reads them: stamped if every reader of them discovery has
-    /// seen reads that, else `Twist`).
+    /// robot reads them, by discovery: stamped if they are read as that
+    /// and not as `Twist`, else `Twist`).
     pub cmd_vel_stamped: Option<bool>,
     /// Where odometry comes from.
     pub odom: String,

@@ -9,7 +9,8 @@
 //! - [`config`]: the robot file's `ros2: (...)` settings;
 //! - [`robot`]: [`Ros2Robot`], the [`ubf_core::Robot`] it drives;
 //! - `cmd_vel`: the velocity commands, `Twist` or `TwistStamped`;
-//! - `transforms`: the static transform tree, where the scanner sits.
+//! - `transforms`: the static transform tree, where the scanner sits;
+//! - [`world_frame`](mod@world_frame): the drive's frame beside the robot's odometry.
 
 mod cmd_vel;
 pub mod config;
@@ -17,8 +18,10 @@ pub mod msg;
 pub mod node;
 pub mod robot;
 mod transforms;
+pub mod world_frame;
 
 pub use cmd_vel::Ros2EmergencyStop;
 pub use config::{Ros2Config, ScanMount};
 pub use node::{domain_from_env, Node, Publisher, Qos, Subscription};
-pub use robot::{world_frame, Ros2Robot};
+pub use robot::Ros2Robot;
+pub use world_frame::world_frame;

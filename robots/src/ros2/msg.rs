@@ -22,6 +22,16 @@ pub trait RosMessage: Serialize + for<'de> Deserialize<'de> + Send + 'static {
     }
 }
 
+/// A DDS type name as ROS 2 names the type: `nav_msgs/msg/Odometry` for
+/// `nav_msgs::msg::dds_::Odometry_`; a name of another form as it is.
+pub fn ros_name(dds_name: &str) -> String {
+    let ros = dds_name.strip_suffix('_').and_then(|name| {
+        let (package, name) = name.split_once("::msg::dds_::")?;
+        Some(format!("{package}/msg/{name}"))
+    });
+    ros.unwrap_or_else(|| dds_name.to_owned())
+}
+
 /// `message` as a ROS 2 serialized message: the CDR encapsulation header
 /// (little-endian CDR) and the message, as DDS sends it and rosbag2 stores
 /// it.
@@ -449,6 +459,12 @@ ros_message!(Tick, "ubf_msgs/msg/Tick", "ubf_msgs__Tick.msg");
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ros_names_come_back_from_dds_names() {
+        assert_eq!(ros_name(&Odometry::dds_name()), Odometry::NAME);
+        assert_eq!(ros_name("SomeVendorType"), "SomeVendorType");
+    }
 
     #[test]
     fn dds_names_follow_the_ros2_convention() {

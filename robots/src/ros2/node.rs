@@ -380,9 +380,7 @@ impl Node {
 
     /// Whether discovery has seen a writer on topic `name`.
     pub fn has_writer(&mut self, name: &str) -> bool {
-        self.watch_discovery();
-        let dds_topic = format!("rt{}", self.resolve(name));
-        self.seen.values().any(|e| e.writer && e.topic == dds_topic)
+        !self.writer_types(name).is_empty()
     }
 
     /// Why a topic this node reads as `M` with `qos` hears nothing from

@@ -6,6 +6,7 @@ use super::config::{Ros2Config, ScanMount};
 use super::msg::{LaserScan, Odometry, TFMessage, Twist};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
 use super::transforms::PublishedMounts;
+use super::world_frame;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading, Robot, RobotError, State, Turn};
@@ -13,6 +14,11 @@ use ubf_core::{angle_difference, Command, Limits, LinkLoss, Pose2, RangeReading,
 /// Odometry (and a scan) older than this many control periods is a lost
 /// link: the robot is sent a zero twist at once.
 const STALE_PERIODS: f64 = 3.0;
+
+/// How often, during a drive, discovery is looked at for the readers of
+/// the commands: a base whose reader came late, of the other type, is
+/// found within this.
+const READERS_CHECKED_EVERY: Duration = Duration::from_secs(1);
 
 /// A scan older than this, once scans have come, is a lost sensor: the
 /// robot is stopped rather than steered by what the scanner saw last.
@@ -69,7 +75,9 @@ impl Ros2Robot {
         let mut node = Node::join(domain, &config.namespace)?;
         // A type written is sent at once, so that the robot's reader has
         // matched the writer by the first odometry; one read off the robot
-        // once its odometry (and so its driver) has been heard.
+        // once its odometry (and so its driver) has been heard, and its
+        // first commands may then go unheard until the reader matches: a
+        // tick or two, while a drive starts from rest.
         let written = config.cmd_vel_stamped.map(|stamped| CmdVel::new(&node, config, stamped)).transpose()?;
         let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?.single_writer();
         let mut scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
@@ -86,7 +94,7 @@ impl Ros2Robot {
                     .unreadable()
                     .map(|why| format!("what came on {topic} {why}"))
                     .or_else(|| node.why_unheard::<Odometry>(&config.odom, config.odom_qos))
-                    .or_else(|| cmd_vel::why_unread(&mut node, config, config.cmd_vel_stamped))
+                    .or_else(|| cmd_vel::why_unread(&mut node, config, sent_as(config.cmd_vel_stamped)))
                     .unwrap_or_else(|| {
                         format!(
                             "nothing was published on {topic} in domain {domain}: is the robot's driver running, in \
@@ -102,7 +110,7 @@ impl Ros2Robot {
         let cmd_vel = match written {
             Some(written) => written,
             None => {
-                let stamped = cmd_vel::stamped(&mut node, config)?;
+                let stamped = cmd_vel::choose_stamped(&mut node, config)?;
                 CmdVel::new(&node, config, stamped)?
             }
         };
@@ -114,7 +122,7 @@ impl Ros2Robot {
         let latest_scan = first_scan(&mut node, &mut scan, &mut mounts, config)?;
         let first_odom = first.pose.pose.to_pose2();
         let world_in_odom = node.writer::<TFMessage>(&config.tf_static, Qos::Latched)?;
-        world_in_odom.publish(world_in_odom_frame(&first, origin, &config.namespace))?;
+        world_in_odom.publish(world_frame::in_odom(&first, origin, &config.namespace))?;
         Ok(Ros2Robot {
             node,
             config: config.clone(),
@@ -143,13 +151,7 @@ impl Ros2Robot {
 
     /// The pose odometry gives, in the drive's world frame.
     fn world_pose(&self, odometry: &Odometry) -> Pose2 {
-        Ros2Robot::world_pose_of(&odometry.pose.pose.to_pose2(), &self.first_odom, &self.origin)
-    }
-
-    /// The world pose of odometry's `pose`, where odometry read `first`
-    /// at world pose `origin`.
-    fn world_pose_of(pose: &Pose2, first: &Pose2, origin: &Pose2) -> Pose2 {
-        origin.compose(&pose.relative_to(first))
+        world_frame::world_pose(&odometry.pose.pose.to_pose2(), &self.first_odom, &self.origin)
     }
 
     /// A handle that stops the robot from another thread (Ctrl-C) even
@@ -172,19 +174,27 @@ impl Ros2Robot {
     }
 }
 
-/// Refuses commands that nothing reads (every reader of them reads another
-/// type): the robot would never move, and the drive would seem to run.
-fn commands_read(node: &mut Node, config: &Ros2Config, cmd_vel: &CmdVel) -> Result<(), RobotError> {
-    match cmd_vel::why_unread(node, config, Some(cmd_vel.stamped())) {
-        Some(why) => Err(RobotError::Protocol { what: "the velocity commands".into(), source: why.into() }),
-        None => Ok(()),
+/// What commands of a type written (or not) go as.
+fn sent_as(stamped: Option<bool>) -> cmd_vel::Sent {
+    match stamped {
+        Some(true) => cmd_vel::Sent::Stamped,
+        Some(false) => cmd_vel::Sent::Twist,
+        None => cmd_vel::Sent::Either,
     }
 }
 
-/// How often, during a drive, discovery is looked at for the readers of
-/// the commands: a base whose reader came late, of the other type, is
-/// found within this.
-const READERS_CHECKED_EVERY: Duration = Duration::from_secs(1);
+/// Refuses commands that nothing reads (every reader of them reads another
+/// type): the robot would never move, and the drive would seem to run. A
+/// type read off the robot is a lost link, so that a reconnection reads it
+/// again (a controller that came up late); a type written is a fault.
+fn commands_read(node: &mut Node, config: &Ros2Config, cmd_vel: &CmdVel) -> Result<(), RobotError> {
+    let Some(why) = cmd_vel::why_unread(node, config, sent_as(Some(cmd_vel.stamped()))) else { return Ok(()) };
+    let what = format!("publishing {}", node.resolve(&config.cmd_vel));
+    Err(match config.cmd_vel_stamped {
+        Some(_) => RobotError::Protocol { what, source: why.into() },
+        None => LinkLoss::SendFailed { what, source: why.into() }.into(),
+    })
+}
 
 /// Refuses odometry that is no pose (on `topic`), which steered by would
 /// send the robot anywhere.
@@ -193,33 +203,6 @@ fn usable_odometry(odometry: &Odometry, topic: &str) -> Result<(), RobotError> {
         Some(why) => Err(RobotError::Protocol { what: format!("the odometry on {topic}"), source: why.into() }),
         None => Ok(()),
     }
-}
-
-/// The frame a drive's goal and poses are in (where the robot stood when
-/// the drive began), as ubf names it beside a ROS 2 robot's own `odom`:
-/// `ubf_world`, prefixed by the namespace (`robot1/ubf_world`) as the
-/// frames of several robots are.
-pub fn world_frame(namespace: &str) -> String {
-    match namespace.trim_matches('/') {
-        "" => "ubf_world".into(),
-        namespace => format!("{namespace}/ubf_world"),
-    }
-}
-
-/// Where the drive's world frame sits in the robot's odometry frame, as a
-/// static transform: odometry read `first` where the world pose is
-/// `origin`. With it, RViz and Foxglove draw ubf's goal and poses where
-/// the robot's own transforms put the robot, whatever odometry read when
-/// the drive began.
-fn world_in_odom_frame(first: &Odometry, origin: Pose2, namespace: &str) -> TFMessage {
-    let odom = match first.header.frame_id.as_str() {
-        "" => "odom",
-        frame => frame,
-    };
-    // odometry = first ∘ origin⁻¹ ∘ world, as `Ros2Robot::world_pose` inverted.
-    let world = first.pose.pose.to_pose2().compose(&Pose2::default().relative_to(&origin));
-    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-    TFMessage::planar(now, odom, &world_frame(namespace), &world)
 }
 
 /// Where the scanner sits: as the robot file writes it, or where the
@@ -259,33 +242,41 @@ impl ScanMounts {
     }
 }
 
-/// The robot's first scan and where its scanner sits, if discovery has
-/// seen a scanner: waited for, and its mount looked up (within the
-/// connect timeout), so that the robot never moves by a scan read from
-/// the wrong place. A scanner silent for a second, or a first scan that
-/// says nothing of obstacles, is left to [`Robot::sense`].
+/// How long after the first odometry discovery may take to show the
+/// robot's scanner, if it has one.
+const SCANNER_SEEN_WITHIN: Duration = Duration::from_millis(300);
+
+/// The robot's first scan and where its scanner sits: waited for (a
+/// second, if discovery shows a scanner) and its mount looked up (within
+/// the connect timeout), so that the robot never moves by a scan read from
+/// the wrong place. No scan within a second, or a first scan that says
+/// nothing of obstacles, is left to [`Robot::sense`].
 fn first_scan(
     node: &mut Node,
     scan: &mut Subscription<LaserScan>,
     mounts: &mut ScanMounts,
     config: &Ros2Config,
 ) -> Result<Option<(LaserScan, ScanMount, Instant)>, RobotError> {
-    if !node.has_writer(&config.scan) {
-        return Ok(None);
-    }
     let started = Instant::now();
     let mount_deadline = started + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
-    let mut first = None;
+    // The scan, and when it came: a scanner silent since is stale from then.
+    let mut first: Option<(LaserScan, Instant)> = None;
     loop {
         mounts.update()?;
-        first = scan.take_latest()?.or(first);
+        if let Some(scan) = scan.take_latest()? {
+            first = Some((scan, Instant::now()));
+        }
         let now = Instant::now();
         match &first {
+            // No scanner seen by discovery in the time its endpoints take
+            // to come (a robot without one), or one silent for a second
+            // (left to `sense`).
+            None if now - started >= SCANNER_SEEN_WITHIN && !node.has_writer(&config.scan) => return Ok(None),
             None if now - started >= STALE_SCAN => return Ok(None),
             None => {}
-            Some(taken) if taken.why_unusable().is_some() => return Ok(None),
-            Some(taken) => match mounts.usable(taken) {
-                Ok(mount) => return Ok(first.map(|scan| (scan, mount, now))),
+            Some((taken, _)) if taken.why_unusable().is_some() => return Ok(None),
+            Some((taken, _)) => match mounts.usable(taken) {
+                Ok(mount) => return Ok(first.map(|(scan, at)| (scan, mount, at))),
                 Err(why) if now >= mount_deadline => {
                     return Err(RobotError::Protocol {
                         what: format!("the scan on {}", scan.topic()),
@@ -453,39 +444,6 @@ impl Drop for Ros2Robot {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_world_frame_sits_in_odometry_s_frame_where_the_drive_began() {
-        // Odometry read (3, 1) facing +y where the drive's world pose is
-        // (1, 0) facing +x.
-        let mut first = Odometry::default();
-        first.header.frame_id = "robot1/odom".into();
-        first.pose.pose = super::super::msg::Pose::planar(&Pose2::new(3.0, 1.0, std::f64::consts::FRAC_PI_2));
-        let message = world_in_odom_frame(&first, Pose2::new(1.0, 0.0, 0.0), "/robot1/");
-        let transform = &message.transforms[0];
-        assert_eq!(
-            (transform.header.frame_id.as_str(), transform.child_frame_id.as_str()),
-            ("robot1/odom", "robot1/ubf_world")
-        );
-        let world_in_odom = Pose2::new(
-            transform.transform.translation.x,
-            transform.transform.translation.y,
-            transform.transform.rotation.yaw(),
-        );
-        // A goal 2 m ahead of where the robot stood, (3, 0) in the world,
-        // is 2 m along odometry's +y from (3, 1).
-        let goal = world_in_odom.compose(&Pose2::new(3.0, 0.0, 0.0));
-        assert!((goal.x - 3.0).abs() < 1e-9 && (goal.y - 3.0).abs() < 1e-9, "{goal:?}");
-        // And the world pose of any odometry maps back to it.
-        let robot = Ros2Robot::world_pose_of(
-            &Pose2::new(5.0, 2.0, 0.3),
-            &first.pose.pose.to_pose2(),
-            &Pose2::new(1.0, 0.0, 0.0),
-        );
-        let back = world_in_odom.compose(&robot);
-        assert!((back.x - 5.0).abs() < 1e-9 && (back.y - 2.0).abs() < 1e-9 && (back.theta - 0.3).abs() < 1e-9);
-        assert_eq!(world_frame(""), "ubf_world");
-    }
 
     fn scan(ranges: Vec<f32>) -> LaserScan {
         let increment = std::f32::consts::TAU / ranges.len() as f32;

@@ -224,21 +224,24 @@ impl PublishedMounts {
                 self.transforms.topic()
             )
         });
-        if let Ok(mount) = found {
-            self.say_where(frame, mount);
-        }
-        self.found = Some((frame.to_owned(), found.clone()));
+        // A move held back is looked up again until it has been said.
+        let said = found.as_ref().map_or(true, |mount| self.say_where(frame, *mount));
+        self.found = said.then(|| (frame.to_owned(), found.clone()));
         found
     }
 
     /// Says where the scanner (of `frame`) is found to sit: the first
     /// time, and when it has moved (at most every [`MOVES_SAID_EVERY`]).
-    fn say_where(&mut self, frame: &str, mount: ScanMount) {
+    /// Whether all there is to say has been said: not a move held back.
+    fn say_where(&mut self, frame: &str, mount: ScanMount) -> bool {
         let (topic, frame_said, now_at, now) = (self.transforms.topic(), said(frame), placed(&mount), Instant::now());
         match self.said.as_ref() {
             Some((said_frame, was)) if said_frame == frame => {
-                if !moved(was, &mount) || self.move_said_at.is_some_and(|at| now - at < MOVES_SAID_EVERY) {
-                    return;
+                if !moved(was, &mount) {
+                    return true;
+                }
+                if self.move_said_at.is_some_and(|at| now - at < MOVES_SAID_EVERY) {
+                    return false;
                 }
                 tracing::warn!(
                     "the scanner ({frame_said}) moved on {topic} during the drive, from {} to {now_at}: its scans \
@@ -250,6 +253,7 @@ impl PublishedMounts {
             _ => tracing::info!("the scanner ({frame_said}) sits at {now_at}, as {topic} places it"),
         }
         self.said = Some((frame.to_owned(), mount));
+        true
     }
 }
 

@@ -395,7 +395,14 @@ fn attach_ros2<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig) -
     }
     let (domain, namespace) = config.ros2.as_ref().map_or((None, ""), |r| (r.domain_id, r.namespace.as_str()));
     let shown = Shown { robot: !ros2_robot, images: config.log_images, tree: true };
-    let publisher = crate::ros2_publish::background_publisher(shown, domain, namespace).map_err(DriveError::Ros2)?;
+    // Beside a ROS 2 robot, whose driver publishes its own `odom`, ubf's
+    // world is a frame of its own, which the robot places in it.
+    let world = match ros2_robot {
+        true => ubf_robots::ros2::world_frame(namespace),
+        false => crate::ros2_view::ODOM_FRAME.to_owned(),
+    };
+    let publisher =
+        crate::ros2_publish::background_publisher(shown, domain, namespace, &world).map_err(DriveError::Ros2)?;
     controller.add_sink(Box::new(publisher));
     Ok(())
 }
