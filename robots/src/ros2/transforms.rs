@@ -260,7 +260,10 @@ impl PublishedMounts {
 /// A mount as said: `(0.20, 0.00) m facing 180°, upside down`.
 fn placed(mount: &ScanMount) -> String {
     let turned = if mount.upside_down { ", upside down" } else { "" };
-    format!("({:.2}, {:.2}) m facing {:.0}°{turned}", mount.x, mount.y, mount.heading_deg)
+    // Rounded first: -0.3° would read "-0°"; adding 0 makes -0 plain 0.
+    let (x, y) = ((mount.x * 100.0).round() / 100.0 + 0.0, (mount.y * 100.0).round() / 100.0 + 0.0);
+    let heading = mount.heading_deg.round() + 0.0;
+    format!("({x:.2}, {y:.2}) m facing {heading:.0}°{turned}")
 }
 
 /// A transform as an isometry, unless it is none (the checks odometry's
@@ -446,6 +449,14 @@ mod tests {
         assert!(moved(&at, &ScanMount { x: 0.22, ..at }));
         assert!(moved(&at, &ScanMount { heading_deg: 177.0, ..at }));
         assert!(moved(&at, &ScanMount { upside_down: true, ..at }));
+    }
+
+    #[test]
+    fn a_mount_is_said_without_a_minus_zero() {
+        let ahead = ScanMount { x: 0.2, y: -0.0001, heading_deg: -0.3, upside_down: false };
+        assert_eq!(placed(&ahead), "(0.20, 0.00) m facing 0°");
+        let under = ScanMount { heading_deg: -90.2, upside_down: true, ..ahead };
+        assert_eq!(placed(&under), "(0.20, 0.00) m facing -90°, upside down");
     }
 
     #[test]
