@@ -330,6 +330,11 @@ fn a_base_that_reads_stamped_commands_is_sent_them_and_reaches_its_goal() {
     let (x, y, _) = pose(&session.summary);
     assert!((x - 2.0).hypot(y) <= 0.25, "ended at ({x:.3}, {y:.3})");
     assert!(is_zero(&session.summary["last_twist"]), "last twist {}", session.summary["last_twist"]);
+    assert!(
+        stderr(&session).contains("commands as geometry_msgs/msg/TwistStamped, no scan yet"),
+        "{}",
+        stderr(&session)
+    );
     // In base_link, stamped zero: the base's own clock times them out.
     for line in &session.twists {
         let header = &line["header"];
@@ -634,7 +639,10 @@ fn a_scanner_mount_that_moves_on_tf_static_during_the_drive_is_said() {
     let Some(session) = drive_beside_robot(dir.path(), robot, &file, None) else { return };
     assert_eq!(session.ubf.status.code(), Some(0), "{}", stderr(&session));
     let said = stderr(&session);
-    // Said on the log (with -v, where the mount first found is said too).
+    // Said when connected, for the operator, and when it moved.
+    let connected =
+        r#"commands as geometry_msgs/msg/Twist, scanner ("laser") at (-0.30, 0.00) m facing 180°, by /tf_static"#;
+    assert!(said.contains(connected), "{said}");
     let moved = r#"the scanner ("laser") moved on /tf_static during the drive, from (-0.30, 0.00) m facing 180° to (-0.30, 0.00) m facing -90°"#;
     assert!(said.contains(moved), "{said}");
 }

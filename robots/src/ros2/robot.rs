@@ -3,9 +3,9 @@
 
 use super::cmd_vel::{self, CmdVel, Ros2EmergencyStop};
 use super::config::{Ros2Config, ScanMount};
-use super::msg::{LaserScan, Odometry, TFMessage, Twist};
+use super::msg::{LaserScan, Odometry, RosMessage, TFMessage, Twist, TwistStamped};
 use super::node::{domain_from_env, Node, Publisher, Qos, Subscription};
-use super::transforms::PublishedMounts;
+use super::transforms::{placed, said, PublishedMounts};
 use super::world_frame;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -147,6 +147,20 @@ impl Ros2Robot {
     /// The DDS domain joined.
     pub fn domain(&self) -> u16 {
         self.node.domain()
+    }
+
+    /// What the operator should know of how the robot is driven and read:
+    /// the commands' type, and where the scanner was found to sit.
+    pub fn describe(&self) -> String {
+        let commands = if self.cmd_vel.stamped() { TwistStamped::NAME } else { Twist::NAME };
+        let scanner = match (&self.latest_scan, &self.mounts) {
+            (None, _) => "no scan yet".to_owned(),
+            (Some((_, mount, _)), ScanMounts::Written(_)) => format!("scanner at {} (`scan_mount`)", placed(mount)),
+            (Some((scan, mount, _)), ScanMounts::Published(mounts)) => {
+                format!("scanner ({}) at {}, by {}", said(&scan.header.frame_id), placed(mount), mounts.topic())
+            }
+        };
+        format!("commands as {commands}, {scanner}")
     }
 
     /// The pose odometry gives, in the drive's world frame.

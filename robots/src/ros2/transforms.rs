@@ -40,7 +40,7 @@ fn frame_name(name: &str) -> &str {
 }
 
 /// A frame's name as said: quoted, control characters escaped, cut short.
-fn said(name: &str) -> String {
+pub(super) fn said(name: &str) -> String {
     let name = crate::printable::text(name.as_bytes());
     match name.char_indices().nth(60) {
         Some((cut, _)) => format!("\"{}…\"", &name[..cut]),
@@ -177,6 +177,11 @@ fn moved(from: &ScanMount, to: &ScanMount) -> bool {
 }
 
 impl PublishedMounts {
+    /// The topic the transforms come on.
+    pub(super) fn topic(&self) -> &str {
+        self.transforms.topic()
+    }
+
     /// Reads the robot's static transforms (tf2's static QoS: reliable,
     /// transient local, so that those published long before come too).
     pub(super) fn new(config: &Ros2Config, node: &Node) -> Result<PublishedMounts, RobotError> {
@@ -258,7 +263,7 @@ impl PublishedMounts {
 }
 
 /// A mount as said: `(0.20, 0.00) m facing 180°, upside down`.
-fn placed(mount: &ScanMount) -> String {
+pub(super) fn placed(mount: &ScanMount) -> String {
     let turned = if mount.upside_down { ", upside down" } else { "" };
     // Rounded first: -0.3° would read "-0°"; adding 0 makes -0 plain 0.
     let (x, y) = ((mount.x * 100.0).round() / 100.0 + 0.0, (mount.y * 100.0).round() / 100.0 + 0.0);

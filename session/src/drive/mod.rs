@@ -425,7 +425,7 @@ fn connect_driving(config: &DriveConfig, model: &RobotModel, pose: Pose2) -> Res
         let ros2 = config.ros2.clone().unwrap_or_default();
         let robot = Ros2Robot::connect(&ros2, limits, config.period_s, pose)
             .map_err(|source| DriveError::Connect { connection: config.connection.clone(), source })?;
-        let name = format!("a ROS 2 robot in domain {} ({})", robot.domain(), model.name);
+        let name = format!("a ROS 2 robot in domain {} ({}): {}", robot.domain(), model.name, robot.describe());
         let emergency: Box<dyn EmergencyStop> = Box::new(robot.emergency_stop());
         return Ok(Connected { robot: Box::new(robot), name, emergency: Some(emergency) });
     }
