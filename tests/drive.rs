@@ -61,6 +61,28 @@ fn drives_to_the_goal_and_stops_safely_on_sigterm() {
 }
 
 #[test]
+fn a_drive_whose_stderr_nobody_reads_reaches_its_goal_and_ends_with_its_own_status() {
+    // A pipe whose reader went away: each line said fails. eprintln! made
+    // that a panic (exit 101) at the first line, before the robot moved.
+    let (mut emulator, address, mut emulator_out) = emulator();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("robot.ron");
+    std::fs::write(&file, config(&address, &dir.path().join("log.csv"), "")).unwrap();
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_ubf"))
+        .args(["drive", file.to_str().unwrap(), "--until-goal"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(drive.stderr.take());
+    let status = wait_for(&mut drive, 60.0).expect("the drive ended");
+    assert_eq!(status.code(), Some(0), "the drive ended as it would with its stderr read");
+    let mut line = String::new();
+    emulator_out.read_line(&mut line).unwrap();
+    assert!(line.contains("closed true"), "{line}");
+    emulator.kill().unwrap();
+}
+
+#[test]
 fn bad_configurations_and_unreachable_robots_are_reported() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("robot.ron");

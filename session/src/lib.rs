@@ -22,6 +22,19 @@
 
 #![warn(missing_docs)]
 
+/// Says a line on stderr, as `eprintln!` does, but without panicking when
+/// stderr cannot be written (a pipe whose reader went away): a drive must
+/// still stop its robot, exit on a second interrupt and end with its own
+/// status when its operator's output is gone. A sink that must notice
+/// writes with `write!` and returns the error instead.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use ::std::io::Write as _;
+        let _ = ::std::writeln!(::std::io::stderr(), $($arg)*);
+    }};
+}
+
 pub mod atomic;
 pub mod drive;
 pub mod frames;

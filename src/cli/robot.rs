@@ -84,32 +84,32 @@ pub(super) fn drive(registry: &Registry, file: &Path, options: DriveOptions) -> 
             None => "the frame where it stood when the drive began".to_owned(),
         };
         let (x, y, heading) = (pose.x, pose.y, pose.theta.to_degrees());
-        eprintln!("the robot came to rest at ({x:.3}, {y:.3}) m, {heading:.1}° by its odometry, in {frame}");
+        ubf_session::say!("the robot came to rest at ({x:.3}, {y:.3}) m, {heading:.1}° by its odometry, in {frame}");
     }
     match outcome.logs.as_slice() {
-        [] => eprintln!("no session opened; no log written"),
-        [one] => eprintln!("log in {}", one.display()),
+        [] => ubf_session::say!("no session opened; no log written"),
+        [one] => ubf_session::say!("log in {}", one.display()),
         many => {
             let names: Vec<String> = many.iter().map(|p| p.display().to_string()).collect();
-            eprintln!("logs: {}", names.join(", "));
+            ubf_session::say!("logs: {}", names.join(", "));
         }
     }
     match outcome.end.map_err(CliError::failed)? {
         DriveEnd::Interrupted => {
-            eprintln!("interrupted; stopped");
+            ubf_session::say!("interrupted; stopped");
             Ok(Exit::Interrupted)
         }
         DriveEnd::Stopped => {
-            eprintln!("stopped");
+            ubf_session::say!("stopped");
             Ok(Exit::Success)
         }
         DriveEnd::GoalReached => {
-            eprintln!("at the goal; stopped");
+            ubf_session::say!("at the goal; stopped");
             Ok(Exit::Success)
         }
         DriveEnd::LinkLost => Ok(Exit::Failure),
         DriveEnd::NoProgress => {
-            eprintln!("no progress: the robot stayed on one spot for the progress check's window; stopped");
+            ubf_session::say!("no progress: the robot stayed on one spot for the progress check's window; stopped");
             Ok(Exit::Failure)
         }
     }
@@ -179,7 +179,7 @@ fn serve_clients(
                 Ok((0, _)) => std::thread::sleep(Duration::from_millis(100)),
                 Ok((_, line)) => say(&line),
                 Err(e) => {
-                    eprintln!("client error: {e}");
+                    ubf_session::say!("client error: {e}");
                     std::thread::sleep(Duration::from_millis(100));
                 }
             }
@@ -190,7 +190,7 @@ fn serve_clients(
         std::net::TcpListener::bind(listen).map_err(|e| CliError::bad_input(format!("listening on {listen}: {e}")))?;
     match listener.local_addr() {
         Ok(address) => say(&format!("emulating {what} on tcp://{address}")),
-        Err(e) => eprintln!("warning: {e}"),
+        Err(e) => ubf_session::say!("warning: {e}"),
     }
     // Poll for clients so that Ctrl-C or SIGTERM ends a waiting emulator.
     listener.set_nonblocking(true).map_err(CliError::failed)?;
@@ -202,7 +202,7 @@ fn serve_clients(
                 continue;
             }
             Err(e) => {
-                eprintln!("error: accepting a client: {e}");
+                ubf_session::say!("error: accepting a client: {e}");
                 continue;
             }
         };
@@ -210,7 +210,7 @@ fn serve_clients(
         let _ = stream.set_read_timeout(Some(ubf_robots::arcos::link::READ_TIMEOUT));
         match client(Box::new(stream), &stop) {
             Ok((_, line)) => say(&line),
-            Err(e) => eprintln!("client error: {e}"),
+            Err(e) => ubf_session::say!("client error: {e}"),
         }
     }
     Ok(Exit::Interrupted)

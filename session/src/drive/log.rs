@@ -116,14 +116,14 @@ impl TickSink for DriveMcap {
         if logged >= self.cap_bytes && !self.images_capped {
             self.images_capped = true;
             self.log.log_images(false);
-            eprintln!(
+            crate::say!(
                 "warning: the MCAP log holds {:.0} MB, its cap (log_max_mb); it takes no more images",
                 logged as f64 / 1e6
             );
         }
         if logged >= 2 * self.cap_bytes && !self.full {
             self.full = true;
-            eprintln!(
+            crate::say!(
                 "warning: the MCAP log holds {:.0} MB, twice its cap (log_max_mb); nothing more is written to it \
                  but its report (the CSV log goes on)",
                 logged as f64 / 1e6
@@ -189,7 +189,7 @@ pub(super) fn attach_logs<R: Robot>(
 ) -> Result<(), DriveError> {
     let (file, path) =
         create_fresh_log(&config.log).map_err(|source| DriveError::Log { path: config.log.clone(), source })?;
-    eprintln!("logging to {}", path.display());
+    crate::say!("logging to {}", path.display());
     logs.push(path.clone());
     let camera_pan = config.camera.as_ref().is_some_and(|camera| camera.pan_tilt.is_some());
     let csv = TrajectoryWriter::new(file, &path, Columns { truth: false, hold: true, camera_pan });
@@ -203,7 +203,7 @@ pub(super) fn attach_logs<R: Robot>(
     let drive_log = DriveMcap::new(mcap, model.name.clone(), ending.clone(), config.log_max_mb);
     match BackgroundSink::spawn(format!("MCAP log {}", mcap_path.display()), drive_log, LOG_QUEUE) {
         Ok(sink) => {
-            eprintln!("and to {}", mcap_path.display());
+            crate::say!("and to {}", mcap_path.display());
             logs.push(mcap_path);
             controller.add_sink(Box::new(sink));
         }
@@ -229,7 +229,7 @@ fn attach_rosbag<R: Robot>(controller: &mut Controller<R>, config: &DriveConfig,
         });
     match opened {
         Ok(sink) => {
-            eprintln!("and to {}", dir.display());
+            crate::say!("and to {}", dir.display());
             logs.push(dir);
             controller.add_sink(Box::new(sink));
         }

@@ -80,7 +80,7 @@ fn watch(shared: &Shared, limit: Duration) {
             Some(Err(_)) => "stopping the robot failed",
             None => "no robot to stop",
         };
-        eprintln!(
+        crate::say!(
             "error: the control loop has not ticked for {:.1} s: {what}; the drive goes on only once it ticks again, \
              holding the robot, until it is restarted",
             silent.as_secs_f64()

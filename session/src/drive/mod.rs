@@ -148,9 +148,9 @@ pub fn install_stop_flag() -> Arc<AtomicBool> {
             }
         }
         match stopped {
-            Some(Ok(sent)) => eprintln!("interrupted twice: robot sent {sent}; exiting now"),
-            Some(Err(e)) => eprintln!("interrupted twice: stopping the robot failed ({e}); exiting now"),
-            None => eprintln!("interrupted twice: exiting now"),
+            Some(Ok(sent)) => crate::say!("interrupted twice: robot sent {sent}; exiting now"),
+            Some(Err(e)) => crate::say!("interrupted twice: stopping the robot failed ({e}); exiting now"),
+            None => crate::say!("interrupted twice: exiting now"),
         }
         std::process::exit(130);
     });
@@ -234,7 +234,7 @@ fn drive_sessions(
     let mut pose = Pose2::default();
     if let Some(file) = &config.pose_file {
         if let Some(saved) = pose_file::read(file)? {
-            eprintln!(
+            crate::say!(
                 "resuming in the world frame of {}: the robot at ({:.3}, {:.3}) m, {:.1}°",
                 file.display(),
                 saved.x,
@@ -268,7 +268,7 @@ fn drive_sessions(
                 continue;
             }
         };
-        eprintln!("connected to {name}");
+        crate::say!("connected to {name}");
         service::ready();
         arm_interrupt(emergency);
         // From here the motors are on: every path out goes through shutdown
@@ -349,7 +349,7 @@ fn drive_sessions(
             // (weighed against the noise model's `scale_sigma`), so wheels
             // off in scale still stop the robot a little short or long of
             // its goals until the robot's own distance is calibrated.
-            eprintln!(
+            crate::say!(
                 "the camera measured the wheels: {scale}; calibrate the robot's distance by it if other drives agree"
             );
         }
@@ -374,7 +374,7 @@ fn drive_sessions(
             // for a device that still fails.
             SessionEnd::Failed(ControllerError::Robot(why)) if !why.is_link_loss() => return Err(why.into()),
             SessionEnd::Failed(ControllerError::Robot(why)) => {
-                eprintln!("link lost: {why}");
+                crate::say!("link lost: {why}");
                 if config.on_link_loss == OnLinkLoss::Exit {
                     return Ok(DriveEnd::LinkLost);
                 }

@@ -1,5 +1,6 @@
 //! The live state on stderr while a drive runs.
 
+use std::io::Write;
 use std::time::{Duration, Instant};
 use ubf_core::{TickRecord, TickSink, TreeLayout};
 
@@ -70,12 +71,16 @@ impl TickSink for StatusLine {
         self.start(layout)
     }
 
+    /// Shows the tick. Output that cannot be written (the operator's
+    /// terminal gone) is the sink's error, which stops the drive with the
+    /// robot: no operator is watching it any more.
     fn record(&mut self, record: &TickRecord) -> std::io::Result<()> {
         if self.shown.elapsed() >= self.status.every() {
             self.shown = Instant::now();
+            let mut stderr = std::io::stderr();
             match self.status {
-                Status::Line => eprint!("\r{}\x1b[K", self.line(record)),
-                Status::Lines | Status::Off => eprintln!("{}", self.line(record)),
+                Status::Line => write!(stderr, "\r{}\x1b[K", self.line(record))?,
+                Status::Lines | Status::Off => writeln!(stderr, "{}", self.line(record))?,
             }
         }
         Ok(())
@@ -83,7 +88,7 @@ impl TickSink for StatusLine {
 
     fn finish(&mut self) -> std::io::Result<()> {
         if self.status == Status::Line {
-            eprintln!();
+            writeln!(std::io::stderr())?;
         }
         Ok(())
     }
