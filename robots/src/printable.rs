@@ -14,3 +14,13 @@ pub(crate) fn text(bytes: &[u8]) -> String {
     }
     text
 }
+
+/// [`text`], cut after `most` characters (marked `…`): what a device or a
+/// stranger sent may be of any length, and a log line is read.
+pub(crate) fn text_cut(bytes: &[u8], most: usize) -> String {
+    let text = text(bytes);
+    match text.char_indices().nth(most) {
+        Some((cut, _)) => format!("{}…", &text[..cut]),
+        None => text,
+    }
+}

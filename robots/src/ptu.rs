@@ -270,11 +270,7 @@ fn within_limits(query: &'static str, steps: f64, limits: [i64; 2]) -> Result<()
 /// What the unit said, as it is shown in an error: control characters
 /// escaped (a terminal would obey them), and cut short.
 fn printable(bytes: &[u8]) -> String {
-    let text = crate::printable::text(bytes.trim_ascii());
-    match text.char_indices().nth(MOST_QUOTED_CHARS) {
-        Some((cut, _)) => format!("{}…", &text[..cut]),
-        None => text,
-    }
+    crate::printable::text_cut(bytes.trim_ascii(), MOST_QUOTED_CHARS)
 }
 
 /// The unit's side of the conversation: one command at a time, each

@@ -110,7 +110,7 @@ pub(super) fn choose_stamped(node: &mut Node, config: &Ros2Config) -> Result<boo
     if let Some(stamped) = config.cmd_vel_stamped {
         return Ok(stamped);
     }
-    let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
+    let deadline = Instant::now() + config.connect_timeout();
     let mut readers = node.reader_types(&config.cmd_vel);
     while readers.is_empty() && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(10));

@@ -80,6 +80,14 @@ impl ScanMount {
     }
 }
 
+impl Ros2Config {
+    /// How long each wait of connecting may take: for the first odometry,
+    /// the reader of the commands, the scanner's mount.
+    pub fn connect_timeout(&self) -> std::time::Duration {
+        std::time::Duration::from_secs_f64(self.connect_timeout_s.clamp(0.1, 600.0))
+    }
+}
+
 impl Default for Ros2Config {
     fn default() -> Self {
         Ros2Config {

@@ -82,7 +82,7 @@ impl Ros2Robot {
         let mut odom = node.reader::<Odometry>(&config.odom, config.odom_qos)?.single_writer();
         let mut scan = node.reader::<LaserScan>(&config.scan, config.scan_qos)?.single_writer();
         let mut mounts = ScanMounts::new(config, &node)?;
-        let deadline = Instant::now() + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
+        let deadline = Instant::now() + config.connect_timeout();
         let first = loop {
             if let Some(odometry) = odom.take_latest()? {
                 usable_odometry(&odometry, odom.topic())?;
@@ -272,7 +272,7 @@ fn first_scan(
     config: &Ros2Config,
 ) -> Result<Option<(LaserScan, ScanMount, Instant)>, RobotError> {
     let started = Instant::now();
-    let mount_deadline = started + Duration::from_secs_f64(config.connect_timeout_s.clamp(0.1, 600.0));
+    let mount_deadline = started + config.connect_timeout();
     // The scan, and when it came: a scanner silent since is stale from then.
     let mut first: Option<(LaserScan, Instant)> = None;
     loop {

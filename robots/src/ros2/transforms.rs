@@ -41,11 +41,7 @@ fn frame_name(name: &str) -> &str {
 
 /// A frame's name as said: quoted, control characters escaped, cut short.
 pub(super) fn said(name: &str) -> String {
-    let name = crate::printable::text(name.as_bytes());
-    match name.char_indices().nth(60) {
-        Some((cut, _)) => format!("\"{}…\"", &name[..cut]),
-        None => format!("\"{name}\""),
-    }
+    format!("\"{}\"", crate::printable::text_cut(name.as_bytes(), 60))
 }
 
 impl StaticTransforms {
